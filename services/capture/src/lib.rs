@@ -1,0 +1,1 @@
+//! The capture stage: depth sources into shared memory

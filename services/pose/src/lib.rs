@@ -1,0 +1,1 @@
+//! The pose stage: a 16-joint skeleton from each depth frame by geodesic distances

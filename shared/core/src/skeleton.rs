@@ -1,0 +1,161 @@
+//! The 16 joints of DESIGN.md and the skeleton of one frame.
+
+use nalgebra::Point3;
+use serde::{Deserialize, Serialize};
+
+/// One of the 16 joints, each an anatomical centre inside the body. "Left" is the
+/// person's left. The discriminant is the joint's index in every array and file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+#[repr(u8)]
+pub enum Joint {
+    Head,
+    Neck,
+    Torso,
+    Pelvis,
+    LeftShoulder,
+    LeftElbow,
+    LeftHand,
+    RightShoulder,
+    RightElbow,
+    RightHand,
+    LeftHip,
+    LeftKnee,
+    LeftFoot,
+    RightHip,
+    RightKnee,
+    RightFoot,
+}
+
+impl Joint {
+    pub const COUNT: usize = 16;
+
+    pub const ALL: [Joint; Joint::COUNT] = [
+        Joint::Head,
+        Joint::Neck,
+        Joint::Torso,
+        Joint::Pelvis,
+        Joint::LeftShoulder,
+        Joint::LeftElbow,
+        Joint::LeftHand,
+        Joint::RightShoulder,
+        Joint::RightElbow,
+        Joint::RightHand,
+        Joint::LeftHip,
+        Joint::LeftKnee,
+        Joint::LeftFoot,
+        Joint::RightHip,
+        Joint::RightKnee,
+        Joint::RightFoot,
+    ];
+
+    /// The bones drawn in overlays: pairs of joints.
+    pub const BONES: [(Joint, Joint); 15] = [
+        (Joint::Head, Joint::Neck),
+        (Joint::Neck, Joint::Torso),
+        (Joint::Torso, Joint::Pelvis),
+        (Joint::Neck, Joint::LeftShoulder),
+        (Joint::LeftShoulder, Joint::LeftElbow),
+        (Joint::LeftElbow, Joint::LeftHand),
+        (Joint::Neck, Joint::RightShoulder),
+        (Joint::RightShoulder, Joint::RightElbow),
+        (Joint::RightElbow, Joint::RightHand),
+        (Joint::Pelvis, Joint::LeftHip),
+        (Joint::LeftHip, Joint::LeftKnee),
+        (Joint::LeftKnee, Joint::LeftFoot),
+        (Joint::Pelvis, Joint::RightHip),
+        (Joint::RightHip, Joint::RightKnee),
+        (Joint::RightKnee, Joint::RightFoot),
+    ];
+
+    #[inline]
+    pub fn index(self) -> usize {
+        self as usize
+    }
+
+    /// The snake_case name used in JSON output and CSV headers.
+    pub fn name(self) -> &'static str {
+        match self {
+            Joint::Head => "head",
+            Joint::Neck => "neck",
+            Joint::Torso => "torso",
+            Joint::Pelvis => "pelvis",
+            Joint::LeftShoulder => "left_shoulder",
+            Joint::LeftElbow => "left_elbow",
+            Joint::LeftHand => "left_hand",
+            Joint::RightShoulder => "right_shoulder",
+            Joint::RightElbow => "right_elbow",
+            Joint::RightHand => "right_hand",
+            Joint::LeftHip => "left_hip",
+            Joint::LeftKnee => "left_knee",
+            Joint::LeftFoot => "left_foot",
+            Joint::RightHip => "right_hip",
+            Joint::RightKnee => "right_knee",
+            Joint::RightFoot => "right_foot",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Joint> {
+        Self::ALL.into_iter().find(|j| j.name() == name)
+    }
+}
+
+/// The 16 joint positions of one frame (metres, camera frame) with a confidence in
+/// [0, 1] each.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Skeleton {
+    pub joints: [Point3<f32>; Joint::COUNT],
+    pub confidence: [f32; Joint::COUNT],
+}
+
+impl Skeleton {
+    pub fn new(joints: [Point3<f32>; Joint::COUNT]) -> Self {
+        Self {
+            joints,
+            confidence: [1.0; Joint::COUNT],
+        }
+    }
+
+    #[inline]
+    pub fn get(&self, j: Joint) -> Point3<f32> {
+        self.joints[j.index()]
+    }
+
+    #[inline]
+    pub fn set(&mut self, j: Joint, p: Point3<f32>) {
+        self.joints[j.index()] = p;
+    }
+
+    /// Whether every coordinate and confidence is a finite number.
+    pub fn is_finite(&self) -> bool {
+        self.joints.iter().all(|p| p.iter().all(|c| c.is_finite()))
+            && self.confidence.iter().all(|c| c.is_finite())
+    }
+}
+
+impl std::ops::Index<Joint> for Skeleton {
+    type Output = Point3<f32>;
+    fn index(&self, j: Joint) -> &Point3<f32> {
+        &self.joints[j.index()]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn joint_indices_and_names_round_trip() {
+        for (i, j) in Joint::ALL.into_iter().enumerate() {
+            assert_eq!(j.index(), i);
+            assert_eq!(Joint::from_name(j.name()), Some(j));
+        }
+    }
+
+    #[test]
+    fn every_joint_is_on_some_bone() {
+        for j in Joint::ALL {
+            assert!(Joint::BONES.iter().any(|&(a, b)| a == j || b == j), "{j:?}");
+        }
+    }
+}

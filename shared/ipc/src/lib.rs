@@ -1,0 +1,1 @@
+//! The contracts between airglyph's processes: iceoryx2 services, wire types, stage telemetry

@@ -1,0 +1,1 @@
+//! Synthetic people: bodies, skinning, motion, depth rendering and exact ground truth

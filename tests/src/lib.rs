@@ -1,0 +1,1 @@
+//! System tests that start real airglyph processes
