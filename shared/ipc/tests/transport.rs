@@ -1,0 +1,109 @@
+//! Publisher and subscriber in one process (two nodes): the contracts of the ports.
+//! Multi-process behaviour is tested in the workspace's `tests/` crate.
+
+use airglyph_core::Intrinsics;
+use airglyph_ipc::{DepthHeader, IpcConfig, Pipeline, SkeletonMsg};
+use std::time::Duration;
+
+fn isolated(tag: &str) -> IpcConfig {
+    IpcConfig {
+        root: format!("/tmp/airglyph-test-{}-{tag}/", std::process::id()),
+        prefix: format!("agt{}{tag}_", std::process::id()),
+    }
+}
+
+#[test]
+fn depth_frames_arrive_in_order_and_bad_headers_are_counted() {
+    let cfg = isolated("d");
+    let publisher_side = Pipeline::join_with(cfg.clone(), "pub").unwrap();
+    let subscriber_side = Pipeline::join_with(cfg, "sub").unwrap();
+    let k = Intrinsics::new(4, 3, 10.0, 10.0, 1.5, 1.0);
+    let mut publisher = publisher_side.depth_publisher(12).unwrap();
+    let mut receiver = subscriber_side.depth_receiver().unwrap();
+
+    publisher
+        .publish::<()>(12, |h, px| {
+            h.set_intrinsics(&k);
+            px.iter_mut()
+                .enumerate()
+                .for_each(|(i, p)| *p = i as u16 * 100);
+            Ok(true)
+        })
+        .unwrap();
+    let frame = receiver
+        .recv(Duration::from_secs(1))
+        .unwrap()
+        .expect("a frame");
+    assert_eq!(frame.header().sequence, 0);
+    assert_eq!(frame.pixels()[11], 1100);
+    assert!(frame.header().capture_ns <= frame.header().publish_ns);
+    drop(frame);
+
+    // A header claiming more pixels than its payload holds is refused, not read.
+    let mut bad = DepthHeader {
+        capture_ns: 1,
+        publish_ns: 2,
+        sequence: 1,
+        ..Default::default()
+    };
+    bad.set_intrinsics(&Intrinsics::new(640, 480, 500.0, 500.0, 320.0, 240.0));
+    publisher.publish_raw(bad, &[0u16; 12]).unwrap();
+    assert!(receiver.recv(Duration::from_millis(100)).unwrap().is_none());
+    assert_eq!(receiver.rejected(), 1);
+
+    // Skipping sequence 1 (the refused one) shows as one dropped frame.
+    publisher
+        .publish::<()>(12, |h, _| {
+            h.set_intrinsics(&k);
+            Ok(true)
+        })
+        .unwrap();
+    publisher
+        .publish::<()>(12, |h, _| {
+            h.set_intrinsics(&k);
+            Ok(true)
+        })
+        .unwrap();
+    let f = receiver.recv(Duration::from_secs(1)).unwrap().unwrap();
+    assert_eq!((f.header().sequence, f.dropped), (1, 0));
+}
+
+#[test]
+fn a_slow_subscriber_loses_the_oldest_frames_and_counts_them() {
+    let cfg = isolated("s");
+    let side = Pipeline::join_with(cfg, "both").unwrap();
+    // Subscribed before the capture session began: all its frames were meant for us.
+    let mut receiver = side.depth_receiver().unwrap();
+    let mut publisher = side.depth_publisher(1).unwrap();
+    let k = Intrinsics::new(1, 1, 10.0, 10.0, 0.0, 0.0);
+    for _ in 0..10 {
+        publisher
+            .publish::<()>(1, |h, _| {
+                h.set_intrinsics(&k);
+                Ok(true)
+            })
+            .unwrap();
+    }
+    let newest = receiver.latest(Duration::from_secs(1)).unwrap().unwrap();
+    assert_eq!(newest.header().sequence, 9);
+    assert_eq!(newest.dropped, 9, "sequences 0..=8 never processed");
+}
+
+#[test]
+fn skeletons_with_nan_are_refused() {
+    let side = Pipeline::join_with(isolated("k"), "both").unwrap();
+    let publisher = side.skeleton_publisher().unwrap();
+    let mut receiver = side.skeleton_receiver().unwrap();
+    let mut msg = SkeletonMsg {
+        sequence: 3,
+        ..Default::default()
+    };
+    msg.chain.capture_ns = 1;
+    publisher.send(msg).unwrap();
+    msg.joints[0][0] = f32::NAN;
+    publisher.send(msg).unwrap();
+    let got = receiver.recv(Duration::from_secs(1)).unwrap().unwrap();
+    assert_eq!(got.msg.sequence, 3);
+    assert!(receiver.recv(Duration::from_millis(50)).unwrap().is_none());
+    assert_eq!(receiver.rejected(), 1);
+}
