@@ -514,7 +514,8 @@ impl<T: Message> Receiver<T> {
             return Ok(None);
         };
         while let Some(next) = self.try_recv()? {
-            let dropped = newest.dropped + next.dropped;
+            // The frame we skip is lost to this stage too.
+            let dropped = newest.dropped + next.dropped + 1;
             newest = Received { dropped, ..next };
         }
         Ok(Some(newest))
@@ -616,7 +617,8 @@ impl DepthReceiver {
             return Ok(None);
         };
         while let Some(next) = self.try_recv()? {
-            let dropped = newest.dropped + next.dropped;
+            // The frame we skip is lost to this stage too.
+            let dropped = newest.dropped + next.dropped + 1;
             newest = DepthFrame { dropped, ..next };
         }
         Ok(Some(newest))
