@@ -7,7 +7,7 @@ use clap::{Parser, Subcommand};
 
 /// Recognize gestures drawn in the air in front of a depth camera.
 #[derive(Parser)]
-#[command(name = "airglyph", version, about, long_about = None)]
+#[command(name = "airglyph", version)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -15,19 +15,28 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    // One line a subcommand; its arguments and `run` live in `cmd/<name>.rs`.
+    // One variant a subcommand; its arguments and `run` live in `cmd/<name>.rs`.
+    /// Start the pipeline and print each gesture it recognizes.
+    Run(cmd::run::Args),
+    /// Write a recording (depth PNGs, frames.csv) from any source.
+    Record(cmd::record::Args),
+    /// Show each stage's frame rate, drops and latency, live.
+    Top(cmd::top::Args),
 }
 
 fn main() -> std::process::ExitCode {
     tracing_subscriber::fmt()
         .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env()
-                .unwrap_or_else(|_| "info".into()),
+            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()),
         )
         .with_writer(std::io::stderr)
         .init();
     let cli = Cli::parse();
-    let result: anyhow::Result<()> = match cli.command {};
+    let result: anyhow::Result<()> = match cli.command {
+        Command::Run(a) => cmd::run::run(a),
+        Command::Record(a) => cmd::record::run(a),
+        Command::Top(a) => cmd::top::run(a),
+    };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {

@@ -15,6 +15,7 @@ pub mod clock;
 pub mod config;
 mod error;
 pub mod port;
+pub mod shutdown;
 pub mod stats;
 pub mod wire;
 

@@ -1,1 +1,36 @@
 //! One module a subcommand: its clap `Args` and a `run(args) -> anyhow::Result<()>`.
+
+pub mod record;
+pub mod run;
+pub mod top;
+
+use airglyph_ipc::GestureEventMsg;
+
+/// Prints a gesture event as a line of text or of JSON.
+pub fn print_gesture(event: &GestureEventMsg, json: bool) {
+    let label = event.label().unwrap_or("?");
+    let latency_ms = (event
+        .chain
+        .gesture_publish_ns
+        .saturating_sub(event.chain.capture_ns)) as f64
+        * 1e-6;
+    if json {
+        let line = serde_json::json!({
+            "event": "gesture",
+            "label": label,
+            "score": event.score,
+            "start_sequence": event.start_sequence,
+            "end_sequence": event.end_sequence,
+            "start_ns": event.start_ns,
+            "end_ns": event.end_ns,
+            "hand": if event.hand == 0 { "left" } else { "right" },
+            "latency_ms": latency_ms,
+        });
+        println!("{line}");
+    } else {
+        println!(
+            "{label}  (score {:.2}, frames {}–{}, {:.1} ms after capture)",
+            event.score, event.start_sequence, event.end_sequence, latency_ms
+        );
+    }
+}

@@ -1,0 +1,273 @@
+//! `airglyph run`: starts the stages as child processes, supervises them, prints gestures.
+
+use airglyph_capture::SourceSpec;
+use airglyph_ipc::{shutdown, Pipeline, Stage};
+use anyhow::{bail, Context};
+use std::collections::VecDeque;
+use std::path::PathBuf;
+use std::process::{Child, Command, ExitStatus};
+use std::time::{Duration, Instant};
+
+/// Start the pipeline (capture → pose → gesture) and print each gesture it recognizes.
+///
+/// Each stage is a child process; one that crashes is restarted with backoff (from 100 ms,
+/// doubling to 5 s), and after too many crashes in a row the pipeline stops and says so.
+/// SIGINT/SIGTERM stop every stage cleanly.
+#[derive(clap::Args, Debug, Clone)]
+pub struct Args {
+    /// Where frames come from: synthetic, recording:DIR, v4l2:/dev/videoN or openni2[:URI].
+    #[arg(long, default_value = "synthetic")]
+    pub source: SourceSpec,
+    /// Print one JSON object a line instead of plain text.
+    #[arg(long)]
+    pub json: bool,
+    /// The stages to start, comma-separated (e.g. `capture,pose` to profile pose alone).
+    #[arg(long, value_delimiter = ',', default_value = "capture,pose,gesture")]
+    pub stages: Vec<String>,
+    /// Replay a recording as fast as possible.
+    #[arg(long)]
+    pub fast: bool,
+    /// Replay a recording again and again.
+    #[arg(long = "loop")]
+    pub looping: bool,
+    /// Stop capture after this many frames.
+    #[arg(long)]
+    pub frames: Option<u64>,
+    /// Extra arguments for one stage, as STAGE=ARGS (e.g. `gesture=--model m.json`).
+    #[arg(long = "stage-args", value_name = "STAGE=ARGS")]
+    pub stage_args: Vec<String>,
+    /// Crashes of one stage within a minute after which the pipeline gives up.
+    #[arg(long, default_value_t = 5)]
+    pub max_restarts: usize,
+}
+
+/// The first restart waits this long; each further one twice as long, up to `MAX_BACKOFF`.
+const MIN_BACKOFF: Duration = Duration::from_millis(100);
+const MAX_BACKOFF: Duration = Duration::from_secs(5);
+/// A stage that ran this long without crashing has its backoff reset.
+const HEALTHY_AFTER: Duration = Duration::from_secs(10);
+const CRASH_WINDOW: Duration = Duration::from_secs(60);
+/// How long a stage gets to stop after SIGTERM before SIGKILL.
+const STOP_GRACE: Duration = Duration::from_secs(3);
+
+/// Finds a stage's executable: beside `airglyph`, else on PATH.
+pub fn stage_binary(stage: Stage) -> PathBuf {
+    let name = stage.binary();
+    std::env::current_exe()
+        .ok()
+        .and_then(|exe| exe.parent().map(|d| d.join(&name)))
+        .filter(|p| p.exists())
+        .unwrap_or_else(|| PathBuf::from(name))
+}
+
+/// One supervised stage.
+struct Supervised {
+    stage: Stage,
+    args: Vec<String>,
+    child: Option<Child>,
+    started: Instant,
+    backoff: Duration,
+    restart_at: Option<Instant>,
+    crashes: VecDeque<Instant>,
+    /// Exited by itself with success (a finite source ran out): not restarted.
+    finished: bool,
+}
+
+impl Supervised {
+    fn spawn(&mut self) -> anyhow::Result<()> {
+        let bin = stage_binary(self.stage);
+        let child = Command::new(&bin)
+            .args(&self.args)
+            .spawn()
+            .with_context(|| format!("cannot start {} ({})", self.stage.binary(), bin.display()))?;
+        tracing::debug!(stage = self.stage.name(), pid = child.id(), "started");
+        self.child = Some(child);
+        self.started = Instant::now();
+        self.restart_at = None;
+        Ok(())
+    }
+
+    fn stop(&mut self) {
+        let Some(mut child) = self.child.take() else {
+            return;
+        };
+        // SAFETY: kill(2) on our own child's pid; the child is not reaped yet, so the pid
+        // cannot have been reused.
+        unsafe { libc::kill(child.id() as i32, libc::SIGTERM) };
+        let deadline = Instant::now() + STOP_GRACE;
+        loop {
+            match child.try_wait() {
+                Ok(Some(_)) => return,
+                Ok(None) if Instant::now() < deadline => {
+                    std::thread::sleep(Duration::from_millis(20))
+                }
+                _ => {
+                    tracing::warn!(
+                        stage = self.stage.name(),
+                        "did not stop within 3 s; killing it"
+                    );
+                    let _ = child.kill();
+                    let _ = child.wait();
+                    return;
+                }
+            }
+        }
+    }
+}
+
+fn describe(status: ExitStatus) -> String {
+    use std::os::unix::process::ExitStatusExt;
+    match (status.code(), status.signal()) {
+        (Some(code), _) => format!("exit code {code}"),
+        (None, Some(sig)) => format!("signal {sig}"),
+        _ => "unknown status".into(),
+    }
+}
+
+/// Runs the stages until SIGINT/SIGTERM, a finished source, or a crash loop.
+pub fn run(args: Args) -> anyhow::Result<()> {
+    shutdown::install();
+    let mut stages = Vec::new();
+    for name in &args.stages {
+        let stage = Stage::from_name(name)
+            .filter(|s| Stage::PIPELINE.contains(s))
+            .with_context(|| {
+                format!("unknown stage {name:?}: expected capture, pose or gesture")
+            })?;
+        let mut stage_args = Vec::new();
+        if stage == Stage::Capture {
+            stage_args.extend(["--source".to_owned(), args.source.to_string()]);
+            if args.fast {
+                stage_args.push("--fast".into());
+            }
+            if args.looping {
+                stage_args.push("--loop".into());
+            }
+            if let Some(n) = args.frames {
+                stage_args.extend(["--frames".to_owned(), n.to_string()]);
+            }
+        }
+        for extra in &args.stage_args {
+            let (target, rest) = extra
+                .split_once('=')
+                .with_context(|| format!("--stage-args {extra:?} must be STAGE=ARGS"))?;
+            if target == stage.name() {
+                stage_args.extend(rest.split_whitespace().map(str::to_owned));
+            }
+        }
+        stages.push(Supervised {
+            stage,
+            args: stage_args,
+            child: None,
+            started: Instant::now(),
+            backoff: MIN_BACKOFF,
+            restart_at: None,
+            crashes: VecDeque::new(),
+            finished: false,
+        });
+    }
+    if stages.is_empty() {
+        bail!("no stages to run");
+    }
+
+    let pipeline = Pipeline::join("supervisor")?;
+    let mut gestures = if stages.iter().any(|s| s.stage == Stage::Gesture) {
+        Some(pipeline.gesture_receiver()?)
+    } else {
+        None
+    };
+    // Downstream stages first, so they are subscribed when the first frame is sent.
+    for s in stages.iter_mut().rev() {
+        s.spawn()?;
+    }
+    let outcome = supervise(&mut stages, &pipeline, gestures.as_mut(), &args);
+    for s in stages.iter_mut() {
+        s.stop();
+    }
+    pipeline.cleanup_dead_nodes();
+    outcome
+}
+
+fn supervise(
+    stages: &mut [Supervised],
+    pipeline: &Pipeline,
+    mut gestures: Option<&mut airglyph_ipc::Receiver<airglyph_ipc::GestureEventMsg>>,
+    args: &Args,
+) -> anyhow::Result<()> {
+    while !shutdown::requested() {
+        match gestures.as_deref_mut() {
+            Some(rx) => {
+                if let Some(event) = rx.recv(Duration::from_millis(50))? {
+                    crate::cmd::print_gesture(&event.msg, args.json);
+                }
+            }
+            None => std::thread::sleep(Duration::from_millis(50)),
+        }
+        let now = Instant::now();
+        for s in stages.iter_mut() {
+            if let Some(child) = s.child.as_mut() {
+                let Some(status) = child.try_wait()? else {
+                    continue;
+                };
+                s.child = None;
+                if status.success() {
+                    tracing::info!(stage = s.stage.name(), "finished");
+                    s.finished = true;
+                    continue;
+                }
+                // Free the dead stage's shared memory now, not only when it restarts.
+                pipeline.cleanup_dead_nodes();
+                if s.started.elapsed() > HEALTHY_AFTER {
+                    s.backoff = MIN_BACKOFF;
+                }
+                s.crashes.push_back(now);
+                while s
+                    .crashes
+                    .front()
+                    .is_some_and(|t| now.duration_since(*t) > CRASH_WINDOW)
+                {
+                    s.crashes.pop_front();
+                }
+                if s.crashes.len() > args.max_restarts {
+                    bail!(
+                        "stage {} crashed {} times within a minute ({}); giving up — run `{}` alone to see why",
+                        s.stage.name(),
+                        s.crashes.len(),
+                        describe(status),
+                        s.stage.binary()
+                    );
+                }
+                tracing::warn!(
+                    stage = s.stage.name(),
+                    status = %describe(status),
+                    backoff_ms = s.backoff.as_millis() as u64,
+                    "stage died; restarting"
+                );
+                s.restart_at = Some(now + s.backoff);
+                s.backoff = (s.backoff * 2).min(MAX_BACKOFF);
+            } else if s.restart_at.is_some_and(|t| now >= t) {
+                s.spawn()?;
+                tracing::info!(
+                    stage = s.stage.name(),
+                    restarts = s.crashes.len(),
+                    "stage restarted"
+                );
+            }
+        }
+        // When capture ran out of frames, give the others a moment to finish the last ones.
+        if stages
+            .iter()
+            .any(|s| s.stage == Stage::Capture && s.finished)
+        {
+            std::thread::sleep(Duration::from_millis(500));
+            while let Some(rx) = gestures.as_deref_mut() {
+                match rx.try_recv()? {
+                    Some(event) => crate::cmd::print_gesture(&event.msg, args.json),
+                    None => break,
+                }
+            }
+            return Ok(());
+        }
+    }
+    Ok(())
+}

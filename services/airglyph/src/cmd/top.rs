@@ -1,0 +1,104 @@
+//! `airglyph top`: each stage's telemetry, live.
+
+use airglyph_ipc::wire::Percentiles;
+use airglyph_ipc::{shutdown, Pipeline, Receiver, Stage, StageStatsMsg};
+use std::collections::BTreeMap;
+use std::time::{Duration, Instant};
+
+/// Show each running stage's frame rate, drops and latency percentiles, refreshed every
+/// second from the stages' `airglyph/stats/<stage>` services.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Print one snapshot as a JSON object and exit.
+    #[arg(long)]
+    json: bool,
+    /// With --json: how long to wait for every stage to report.
+    #[arg(long, default_value_t = 2.5)]
+    wait: f64,
+}
+
+fn ms(ns: u64) -> f64 {
+    ns as f64 * 1e-6
+}
+
+fn percentiles_json(p: &Percentiles) -> serde_json::Value {
+    serde_json::json!({"count": p.count, "p50_ms": ms(p.p50), "p90_ms": ms(p.p90), "p99_ms": ms(p.p99), "max_ms": ms(p.max)})
+}
+
+pub fn stats_json(s: &StageStatsMsg) -> serde_json::Value {
+    serde_json::json!({
+        "pid": s.pid,
+        "fps": s.fps,
+        "frames_in": s.frames_in,
+        "frames_out": s.frames_out,
+        "frames_dropped": s.frames_dropped,
+        "frames_rejected": s.frames_rejected,
+        "processing": percentiles_json(&s.processing),
+        "waiting": percentiles_json(&s.waiting),
+        "latency": percentiles_json(&s.latency),
+    })
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    shutdown::install();
+    let pipeline = Pipeline::join("top")?;
+    let mut receivers: Vec<(Stage, Receiver<StageStatsMsg>)> = Stage::PIPELINE
+        .iter()
+        .map(|&s| Ok((s, pipeline.stats_receiver(s)?)))
+        .collect::<anyhow::Result<_>>()?;
+    let mut latest: BTreeMap<&'static str, (Instant, StageStatsMsg)> = BTreeMap::new();
+    let started = Instant::now();
+    loop {
+        for (stage, rx) in receivers.iter_mut() {
+            while let Some(r) = rx.try_recv()? {
+                latest.insert(stage.name(), (Instant::now(), r.msg));
+            }
+        }
+        if args.json {
+            if latest.len() == receivers.len() || started.elapsed().as_secs_f64() >= args.wait {
+                let stages: serde_json::Map<String, serde_json::Value> = latest
+                    .iter()
+                    .map(|(k, (_, s))| (k.to_string(), stats_json(s)))
+                    .collect();
+                println!("{}", serde_json::json!({ "stages": stages }));
+                return Ok(());
+            }
+        } else {
+            print!("\x1b[2J\x1b[H");
+            println!(
+                "{:<8} {:>6} {:>9} {:>8} {:>8}   {:>27}   {:>27}",
+                "stage",
+                "fps",
+                "frames",
+                "dropped",
+                "rejected",
+                "processing p50/p99/max ms",
+                "capture→out p50/p99/max ms"
+            );
+            for stage in Stage::PIPELINE {
+                match latest.get(stage.name()) {
+                    Some((at, s)) if at.elapsed() < Duration::from_secs(3) => println!(
+                        "{:<8} {:>6.1} {:>9} {:>8} {:>8}   {:>9.2}{:>9.2}{:>9.2}   {:>9.2}{:>9.2}{:>9.2}",
+                        stage.name(),
+                        s.fps,
+                        s.frames_out,
+                        s.frames_dropped,
+                        s.frames_rejected,
+                        ms(s.processing.p50),
+                        ms(s.processing.p99),
+                        ms(s.processing.max),
+                        ms(s.latency.p50),
+                        ms(s.latency.p99),
+                        ms(s.latency.max),
+                    ),
+                    _ => println!("{:<8} (not running)", stage.name()),
+                }
+            }
+            println!("\nCtrl-C to quit");
+        }
+        if shutdown::requested() {
+            return Ok(());
+        }
+        std::thread::sleep(Duration::from_millis(if args.json { 50 } else { 1000 }));
+    }
+}

@@ -1,0 +1,108 @@
+//! `airglyph-capture`: publishes depth frames from a source on `airglyph/depth`.
+
+use airglyph_capture::{Pacing, SourceError, SourceOptions, SourceSpec};
+use airglyph_ipc::clock::monotonic_ns;
+use airglyph_ipc::port::PublishError;
+use airglyph_ipc::stats::Telemetry;
+use airglyph_ipc::{shutdown, Pipeline, Stage};
+use anyhow::Context;
+use clap::Parser;
+
+/// The capture stage: reads depth frames from a source and publishes each one, written
+/// once into shared memory, on the iceoryx2 service `airglyph/depth`.
+///
+/// The pipeline it joins is set by AIRGLYPH_IPC_ROOT / AIRGLYPH_IPC_PREFIX (or the
+/// config file named by AIRGLYPH_CONFIG). Normally started by `airglyph run`.
+#[derive(Parser)]
+#[command(name = "airglyph-capture", version)]
+struct Args {
+    /// Where frames come from: synthetic, recording:DIR, v4l2:/dev/videoN or openni2[:URI].
+    #[arg(long, default_value = "synthetic")]
+    source: SourceSpec,
+    /// Replay a recording as fast as possible instead of at its recorded times.
+    #[arg(long)]
+    fast: bool,
+    /// Start a recording again from its first frame when it ends.
+    #[arg(long = "loop")]
+    looping: bool,
+    /// Stop after this many frames.
+    #[arg(long)]
+    frames: Option<u64>,
+}
+
+fn main() -> std::process::ExitCode {
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()),
+        )
+        .with_writer(std::io::stderr)
+        .init();
+    match run(Args::parse()) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("airglyph-capture: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(args: Args) -> anyhow::Result<()> {
+    shutdown::install();
+    let opts = SourceOptions {
+        pacing: if args.fast {
+            Pacing::Fast
+        } else {
+            Pacing::Realtime
+        },
+        looping: args.looping,
+    };
+    let mut source = airglyph_capture::open(&args.source, &opts)
+        .with_context(|| format!("cannot open source {}", args.source))?;
+    let k = source.intrinsics();
+    let pixels = k.width as usize * k.height as usize;
+    let pipeline = Pipeline::join("capture")?;
+    let mut publisher = pipeline.depth_publisher(pixels)?;
+    let mut telemetry = Telemetry::new(&pipeline, Stage::Capture)?;
+    tracing::info!(source = %source.describe(), width = k.width, height = k.height, fps = source.fps(), "capturing");
+
+    let mut skipped = 0u64;
+    while !shutdown::requested() && args.frames.is_none_or(|n| publisher.sequence() < n) {
+        let started = monotonic_ns();
+        let result = publisher.publish(pixels, |header, out| {
+            let frame = source.next_frame(out)?;
+            if let Some(f) = frame {
+                header.set_intrinsics(&k);
+                header.capture_ns = if f.capture_ns == 0 {
+                    monotonic_ns()
+                } else {
+                    f.capture_ns
+                };
+                header.source_ns = f.source_ns;
+                header.source_kind = source.kind() as u32;
+            }
+            Ok::<_, SourceError>(frame.is_some())
+        });
+        match result {
+            Ok(Some(_)) => {
+                let now = monotonic_ns();
+                telemetry.input(0, 0);
+                telemetry.output(now - started, now - started);
+            }
+            Ok(None) => {
+                tracing::info!(frames = publisher.sequence(), skipped, "end of source");
+                break;
+            }
+            Err(PublishError::Source(SourceError::Skipped(reason))) => {
+                skipped += 1;
+                telemetry.set_rejected(skipped);
+                tracing::warn!(skipped, "{reason}");
+            }
+            Err(PublishError::Source(e @ SourceError::Fatal(_))) => return Err(e.into()),
+            Err(e @ PublishError::Transport(_)) => return Err(anyhow::anyhow!("{e}")),
+        }
+        telemetry.tick();
+    }
+    // Let subscribers take the last frames before our shared memory goes away.
+    std::thread::sleep(std::time::Duration::from_millis(100));
+    Ok(())
+}
