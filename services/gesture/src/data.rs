@@ -1,0 +1,306 @@
+//! Trajectory JSONL datasets (DESIGN.md, "Files"): reading (plain or gzip), validation,
+//! strokes joined by the hand's travel, and writer-independent splits.
+
+use rand::seq::SliceRandom;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use serde::Deserialize;
+use std::collections::{BTreeMap, BTreeSet};
+use std::io::{BufRead, BufReader, Read};
+use std::path::{Path, PathBuf};
+
+/// One 2-D point of a trajectory (x right, y down).
+pub type Point = [f32; 2];
+
+/// A trajectory as the classifiers see it: points with a pen-up flag that marks the
+/// hand's travel between two strokes (air-drawn gestures have no pen; the flag is
+/// `false` for every point of a continuous hand trajectory).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Trajectory {
+    pub points: Vec<Point>,
+    /// `pen_up[i]` is true when the segment ending at point `i` is travel between strokes.
+    pub pen_up: Vec<bool>,
+}
+
+impl Trajectory {
+    /// A continuous trajectory (no pen-up travel).
+    pub fn from_points(points: Vec<Point>) -> Self {
+        let pen_up = vec![false; points.len()];
+        Self { points, pen_up }
+    }
+
+    /// The strokes joined by straight travel from each stroke's end to the next start.
+    pub fn from_strokes(strokes: &[Vec<Point>]) -> Self {
+        let mut t = Trajectory::default();
+        for (si, s) in strokes.iter().enumerate() {
+            for (pi, p) in s.iter().enumerate() {
+                t.points.push(*p);
+                t.pen_up.push(si > 0 && pi == 0);
+            }
+        }
+        t
+    }
+
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+}
+
+/// One labelled gesture sample.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sample {
+    pub label: String,
+    pub subject: String,
+    pub strokes: Vec<Vec<Point>>,
+}
+
+impl Sample {
+    pub fn trajectory(&self) -> Trajectory {
+        Trajectory::from_strokes(&self.strokes)
+    }
+}
+
+/// What can be wrong with a dataset; every variant names the file and the line.
+#[derive(Debug, thiserror::Error)]
+pub enum DataError {
+    #[error("{path}: cannot read: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{path}:{line}: not a trajectory JSON object: {msg}")]
+    Json {
+        path: PathBuf,
+        line: usize,
+        msg: String,
+    },
+    #[error("{path}:{line}: {msg}")]
+    Invalid {
+        path: PathBuf,
+        line: usize,
+        msg: String,
+    },
+    #[error("{path}: no samples")]
+    Empty { path: PathBuf },
+}
+
+#[derive(Deserialize)]
+struct RawSample {
+    label: String,
+    #[serde(default)]
+    subject: Option<String>,
+    strokes: Vec<Vec<Vec<f64>>>,
+}
+
+/// Validates one parsed line into a sample. `line` is 1-based.
+fn validate(raw: RawSample, path: &Path, line: usize) -> Result<Sample, DataError> {
+    let invalid = |msg: String| DataError::Invalid {
+        path: path.to_path_buf(),
+        line,
+        msg,
+    };
+    if raw.label.is_empty() {
+        return Err(invalid("empty label".into()));
+    }
+    if raw.strokes.is_empty() {
+        return Err(invalid(format!("sample {:?} has no strokes", raw.label)));
+    }
+    let mut strokes = Vec::with_capacity(raw.strokes.len());
+    for (si, s) in raw.strokes.iter().enumerate() {
+        if s.is_empty() {
+            return Err(invalid(format!(
+                "sample {:?}: stroke {si} is empty",
+                raw.label
+            )));
+        }
+        let mut pts = Vec::with_capacity(s.len());
+        for (pi, p) in s.iter().enumerate() {
+            if p.len() < 2 || p.len() > 3 {
+                return Err(invalid(format!(
+                    "sample {:?}: stroke {si} point {pi} has {} values, expected [x, y] or [x, y, t]",
+                    raw.label,
+                    p.len()
+                )));
+            }
+            if !p.iter().all(|v| v.is_finite()) {
+                return Err(invalid(format!(
+                    "sample {:?}: stroke {si} point {pi} is not a finite number",
+                    raw.label
+                )));
+            }
+            pts.push([p[0] as f32, p[1] as f32]);
+        }
+        strokes.push(pts);
+    }
+    Ok(Sample {
+        label: raw.label,
+        subject: raw.subject.unwrap_or_default(),
+        strokes,
+    })
+}
+
+/// Parses trajectory JSONL from a reader; `path` is only used in error messages.
+/// Unknown fields are ignored; blank lines are skipped.
+pub fn parse_jsonl<R: BufRead>(reader: R, path: &Path) -> Result<Vec<Sample>, DataError> {
+    let mut out = Vec::new();
+    for (i, line) in reader.lines().enumerate() {
+        let line_no = i + 1;
+        let line = line.map_err(|e| DataError::Io {
+            path: path.to_path_buf(),
+            source: e,
+        })?;
+        let trimmed = line.trim();
+        if trimmed.is_empty() {
+            continue;
+        }
+        // serde_json rejects NaN literals; name them plainly.
+        let raw: RawSample = serde_json::from_str(trimmed).map_err(|e| {
+            let msg = if trimmed.contains("NaN") || trimmed.contains("Infinity") {
+                format!("a point is not a finite number (NaN/Infinity): {e}")
+            } else {
+                e.to_string()
+            };
+            DataError::Json {
+                path: path.to_path_buf(),
+                line: line_no,
+                msg,
+            }
+        })?;
+        out.push(validate(raw, path, line_no)?);
+    }
+    Ok(out)
+}
+
+/// Reads a trajectory JSONL file, gzip-compressed or not (detected by its magic bytes).
+pub fn load_jsonl(path: &Path) -> Result<Vec<Sample>, DataError> {
+    let io = |e| DataError::Io {
+        path: path.to_path_buf(),
+        source: e,
+    };
+    let mut file = std::fs::File::open(path).map_err(io)?;
+    let mut magic = [0u8; 2];
+    let n = file.read(&mut magic).map_err(io)?;
+    drop(file);
+    let file = std::fs::File::open(path).map_err(io)?;
+    let samples = if n == 2 && magic == [0x1f, 0x8b] {
+        parse_jsonl(BufReader::new(flate2::read::MultiGzDecoder::new(file)), path)?
+    } else {
+        parse_jsonl(BufReader::new(file), path)?
+    };
+    if samples.is_empty() {
+        return Err(DataError::Empty {
+            path: path.to_path_buf(),
+        });
+    }
+    Ok(samples)
+}
+
+/// Reads several files into one list.
+pub fn load_many<P: AsRef<Path>>(paths: &[P]) -> Result<Vec<Sample>, DataError> {
+    let mut all = Vec::new();
+    for p in paths {
+        all.extend(load_jsonl(p.as_ref())?);
+    }
+    Ok(all)
+}
+
+/// The sorted distinct labels of a set of samples.
+pub fn labels_of(samples: &[Sample]) -> Vec<String> {
+    let set: BTreeSet<&str> = samples.iter().map(|s| s.label.as_str()).collect();
+    set.into_iter().map(str::to_string).collect()
+}
+
+/// Assigns each subject to one of `k` folds (shuffled with `seed`, then balanced by
+/// sample count, greedily largest first); returns the fold of every sample.
+pub fn folds_by_subject(samples: &[Sample], k: usize, seed: u64) -> Vec<usize> {
+    let k = k.max(1);
+    let mut counts: BTreeMap<&str, usize> = BTreeMap::new();
+    for s in samples {
+        *counts.entry(s.subject.as_str()).or_default() += 1;
+    }
+    let mut subjects: Vec<(&str, usize)> = counts.into_iter().collect();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    subjects.shuffle(&mut rng);
+    subjects.sort_by(|a, b| b.1.cmp(&a.1));
+    let mut load = vec![0usize; k];
+    let mut fold_of: BTreeMap<&str, usize> = BTreeMap::new();
+    for (subj, n) in subjects {
+        let f = (0..k).min_by_key(|&f| (load[f], f)).unwrap_or(0);
+        load[f] += n;
+        fold_of.insert(subj, f);
+    }
+    samples
+        .iter()
+        .map(|s| fold_of.get(s.subject.as_str()).copied().unwrap_or(0))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(s: &str) -> Result<Vec<Sample>, DataError> {
+        parse_jsonl(s.as_bytes(), Path::new("mem.jsonl"))
+    }
+
+    #[test]
+    fn reads_and_ignores_unknown_fields() {
+        let v = parse(
+            "{\"label\":\"7\",\"subject\":\"w1\",\"extra\":1,\"strokes\":[[[0,0],[1,1,5]],[[2,2]]]}\n\n",
+        )
+        .unwrap();
+        assert_eq!(v.len(), 1);
+        let t = v[0].trajectory();
+        assert_eq!(t.points.len(), 3);
+        assert_eq!(t.pen_up, vec![false, false, true]);
+    }
+
+    #[test]
+    fn empty_stroke_is_an_error_with_line() {
+        let e = parse("{\"label\":\"1\",\"strokes\":[[[0,0]]]}\n{\"label\":\"7\",\"strokes\":[[]]}")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("mem.jsonl:2"), "{e}");
+        assert!(e.contains("empty"), "{e}");
+    }
+
+    #[test]
+    fn no_strokes_is_an_error() {
+        let e = parse("{\"label\":\"7\",\"strokes\":[]}")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("mem.jsonl:1") && e.contains("no strokes"), "{e}");
+    }
+
+    #[test]
+    fn nan_point_is_an_error() {
+        let e = parse("{\"label\":\"7\",\"strokes\":[[[0,NaN]]]}")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("mem.jsonl:1") && e.contains("NaN"), "{e}");
+    }
+
+    #[test]
+    fn folds_keep_subjects_apart() {
+        let mk = |s: &str| Sample {
+            label: "a".into(),
+            subject: s.into(),
+            strokes: vec![vec![[0.0, 0.0]]],
+        };
+        let samples: Vec<Sample> = (0..40).map(|i| mk(&format!("w{}", i % 7))).collect();
+        let f = folds_by_subject(&samples, 3, 1);
+        for i in 0..samples.len() {
+            for j in 0..samples.len() {
+                if samples[i].subject == samples[j].subject {
+                    assert_eq!(f[i], f[j]);
+                }
+            }
+        }
+        assert!((0..3).all(|k| f.contains(&k)));
+    }
+}

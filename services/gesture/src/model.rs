@@ -1,0 +1,359 @@
+//! Gesture models on disk: versioned JSON recording the training parameters, validated on
+//! load (format, version, labels, shapes, probabilities), and the classification of one
+//! trajectory.
+
+use crate::bezier::bezier_codes;
+use crate::crf::Crf;
+use crate::data::Trajectory;
+use crate::features::{feature_vector, FeatureConfig};
+use crate::hmm::{DiscreteHmm, LogHmm};
+use crate::mlp::Mlp;
+use crate::spot::SpottingModel;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+/// The `format` field of every model file.
+pub const MODEL_FORMAT: &str = "airglyph-gesture-model";
+/// The model file version this build reads and writes.
+pub const MODEL_VERSION: u32 = 1;
+
+/// Why a model could not be loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum ModelError {
+    #[error("{path}: cannot read model: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{path}: not a model JSON file: {msg}")]
+    Json { path: PathBuf, msg: String },
+    #[error("{path}: not an airglyph gesture model (format {found:?}, expected {MODEL_FORMAT:?})")]
+    Format { path: PathBuf, found: String },
+    #[error("{path}: model file version {found} is not supported (this build reads version {MODEL_VERSION}); retrain it with `airglyph train`")]
+    Version { path: PathBuf, found: String },
+    #[error("{path}: invalid model: {msg}")]
+    Invalid { path: PathBuf, msg: String },
+}
+
+/// The training parameters recorded inside a model.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TrainingInfo {
+    pub classifier: String,
+    pub bezier_points: usize,
+    pub samples: usize,
+    pub subjects: usize,
+    pub data: Vec<String>,
+    pub seed: u64,
+    /// Everything else (state counts, epochs, learning rate, …) as JSON.
+    pub parameters: serde_json::Value,
+}
+
+/// One HMM per label.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LabelledHmm {
+    pub label: String,
+    pub hmm: DiscreteHmm,
+}
+
+/// The classifier of a model.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Classifier {
+    /// The seed's pipeline: Bezier points, 8 direction codes, one banded discrete HMM per
+    /// label, decision by Viterbi.
+    Hmm {
+        bezier_points: usize,
+        /// Resting code threshold (fraction of the diagonal; 0 = no resting code).
+        zero_frac: f64,
+        models: Vec<LabelledHmm>,
+        #[serde(skip)]
+        cache: OnceLock<Vec<LogHmm>>,
+    },
+    /// A linear-chain CRF over the same codes.
+    Crf {
+        bezier_points: usize,
+        zero_frac: f64,
+        /// Label of each CRF class, in order.
+        classes: Vec<String>,
+        crf: Crf,
+    },
+    /// The default: an ensemble of small neural networks over resampled trajectory
+    /// features (positions, directions, pen-up) and 8-direction feature maps.
+    Mlp {
+        features: FeatureConfig,
+        /// Label of each network output, in order.
+        classes: Vec<String>,
+        nets: Vec<Mlp>,
+    },
+}
+
+impl Classifier {
+    pub fn name(&self) -> &'static str {
+        match self {
+            Classifier::Hmm { .. } => "hmm",
+            Classifier::Crf { .. } => "crf",
+            Classifier::Mlp { .. } => "mlp",
+        }
+    }
+}
+
+/// A trained gesture model.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Model {
+    pub format: String,
+    pub version: u32,
+    /// The vocabulary: any strings, unique.
+    pub labels: Vec<String>,
+    pub training: TrainingInfo,
+    pub classifier: Classifier,
+    /// HMMs over the stream's direction codes for spotting (absent: no spotting).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spotting: Option<SpottingModel>,
+}
+
+/// The decision on one trajectory.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Classification {
+    /// Index into `Model::labels`.
+    pub class: usize,
+    /// Posterior-like confidence of the decision in [0, 1].
+    pub score: f64,
+}
+
+impl Model {
+    /// Reads and validates a model file.
+    pub fn load(path: &Path) -> Result<Model, ModelError> {
+        let text = std::fs::read_to_string(path).map_err(|e| ModelError::Io {
+            path: path.to_path_buf(),
+            source: e,
+        })?;
+        Self::from_json_str(&text, path)
+    }
+
+    /// Parses and validates model JSON; `path` names it in errors.
+    pub fn from_json_str(text: &str, path: &Path) -> Result<Model, ModelError> {
+        let p = || path.to_path_buf();
+        let v: serde_json::Value = serde_json::from_str(text).map_err(|e| ModelError::Json {
+            path: p(),
+            msg: e.to_string(),
+        })?;
+        let format = v.get("format").and_then(|f| f.as_str()).unwrap_or("");
+        if format != MODEL_FORMAT {
+            return Err(ModelError::Format {
+                path: p(),
+                found: format.to_string(),
+            });
+        }
+        match v.get("version") {
+            Some(serde_json::Value::Number(n)) if n.as_u64() == Some(MODEL_VERSION as u64) => {}
+            other => {
+                return Err(ModelError::Version {
+                    path: p(),
+                    found: other.map_or("(none)".to_string(), |o| o.to_string()),
+                })
+            }
+        }
+        let model: Model = serde_json::from_value(v).map_err(|e| ModelError::Json {
+            path: p(),
+            msg: e.to_string(),
+        })?;
+        model
+            .validate()
+            .map_err(|msg| ModelError::Invalid { path: p(), msg })?;
+        Ok(model)
+    }
+
+    pub fn to_json(&self) -> String {
+        serde_json::to_string(self).unwrap_or_default()
+    }
+
+    pub fn save(&self, path: &Path) -> std::io::Result<()> {
+        std::fs::write(path, self.to_json())
+    }
+
+    /// Index of a label.
+    pub fn label_index(&self, label: &str) -> Option<usize> {
+        self.labels.iter().position(|l| l == label)
+    }
+
+    /// Checks that the model is complete and consistent.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.labels.is_empty() {
+            return Err("the model has no labels".into());
+        }
+        let mut seen = BTreeSet::new();
+        for l in &self.labels {
+            if l.is_empty() {
+                return Err("the model has an empty label".into());
+            }
+            if !seen.insert(l.as_str()) {
+                return Err(format!("label {l:?} appears twice"));
+            }
+        }
+        let check_classes = |classes: &[&str], what: &str| -> Result<(), String> {
+            let mut got = BTreeSet::new();
+            for c in classes {
+                if !seen.contains(c) {
+                    return Err(format!(
+                        "{what} refers to unknown label {c:?} (labels: {})",
+                        self.labels.join(" ")
+                    ));
+                }
+                if !got.insert(*c) {
+                    return Err(format!("{what} has label {c:?} twice"));
+                }
+            }
+            if let Some(missing) = self.labels.iter().find(|l| !got.contains(l.as_str())) {
+                return Err(format!("{what} has no model for label {missing:?}"));
+            }
+            Ok(())
+        };
+        match &self.classifier {
+            Classifier::Hmm {
+                bezier_points,
+                models,
+                ..
+            } => {
+                if *bezier_points < 2 {
+                    return Err(format!("bezier_points {bezier_points} < 2"));
+                }
+                let names: Vec<&str> = models.iter().map(|m| m.label.as_str()).collect();
+                check_classes(&names, "the HMM classifier")?;
+                for m in models {
+                    m.hmm
+                        .validate()
+                        .map_err(|e| format!("HMM of label {:?}: {e}", m.label))?;
+                    if m.hmm.n_symbols() < 8 {
+                        return Err(format!("HMM of label {:?} has fewer than 8 symbols", m.label));
+                    }
+                }
+            }
+            Classifier::Crf {
+                bezier_points,
+                classes,
+                crf,
+                ..
+            } => {
+                if *bezier_points < 2 {
+                    return Err(format!("bezier_points {bezier_points} < 2"));
+                }
+                let names: Vec<&str> = classes.iter().map(String::as_str).collect();
+                check_classes(&names, "the CRF classifier")?;
+                crf.validate()?;
+                if crf.labels != classes.len() || crf.symbols < 8 {
+                    return Err("CRF dimensions do not match its classes".into());
+                }
+            }
+            Classifier::Mlp {
+                features,
+                classes,
+                nets,
+            } => {
+                let names: Vec<&str> = classes.iter().map(String::as_str).collect();
+                check_classes(&names, "the network classifier")?;
+                if nets.is_empty() {
+                    return Err("the network classifier has no networks".into());
+                }
+                if features.points < 2 {
+                    return Err("feature points < 2".into());
+                }
+                for (i, n) in nets.iter().enumerate() {
+                    n.validate().map_err(|e| format!("network {i}: {e}"))?;
+                    if n.inputs() != features.dim() || n.outputs() != classes.len() {
+                        return Err(format!(
+                            "network {i} has {} inputs and {} outputs; expected {} and {}",
+                            n.inputs(),
+                            n.outputs(),
+                            features.dim(),
+                            classes.len()
+                        ));
+                    }
+                }
+            }
+        }
+        if let Some(s) = &self.spotting {
+            let names: Vec<&str> = s.models.iter().map(|m| m.label.as_str()).collect();
+            check_classes(&names, "the spotting model")?;
+            s.validate()?;
+        }
+        Ok(())
+    }
+
+    /// Classifies one trajectory (any units; normalized inside).
+    pub fn classify(&self, t: &Trajectory) -> Classification {
+        let (classes, post): (Vec<usize>, Vec<f64>) = match &self.classifier {
+            Classifier::Hmm {
+                bezier_points,
+                zero_frac,
+                models,
+                cache,
+            } => {
+                let logs = cache.get_or_init(|| models.iter().map(|m| m.hmm.to_log()).collect());
+                let codes = bezier_codes(&t.points, *bezier_points, *zero_frac);
+                let mut buf = Vec::new();
+                let ll: Vec<f64> = logs
+                    .iter()
+                    .map(|h| h.viterbi_score(&codes, &mut buf))
+                    .collect();
+                let idx = models
+                    .iter()
+                    .map(|m| self.label_index(&m.label).unwrap_or(0))
+                    .collect();
+                (idx, softmax(&ll))
+            }
+            Classifier::Crf {
+                bezier_points,
+                zero_frac,
+                classes,
+                crf,
+            } => {
+                let codes = bezier_codes(&t.points, *bezier_points, *zero_frac);
+                let (_, marg) = crf.classify(&codes);
+                let idx = classes
+                    .iter()
+                    .map(|c| self.label_index(c).unwrap_or(0))
+                    .collect();
+                (idx, marg)
+            }
+            Classifier::Mlp {
+                features,
+                classes,
+                nets,
+            } => {
+                let mut f = Vec::with_capacity(features.dim());
+                feature_vector(t, features, &mut f);
+                let mut acc = vec![0.0f64; classes.len()];
+                for n in nets {
+                    for (a, lp) in acc.iter_mut().zip(n.log_probs(&f)) {
+                        *a += (lp as f64).exp() / nets.len() as f64;
+                    }
+                }
+                let idx = classes
+                    .iter()
+                    .map(|c| self.label_index(c).unwrap_or(0))
+                    .collect();
+                (idx, acc)
+            }
+        };
+        let best = (0..post.len())
+            .max_by(|&a, &b| post[a].total_cmp(&post[b]))
+            .unwrap_or(0);
+        Classification {
+            class: classes.get(best).copied().unwrap_or(0),
+            score: post.get(best).copied().unwrap_or(0.0),
+        }
+    }
+}
+
+fn softmax(ll: &[f64]) -> Vec<f64> {
+    let m = ll.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+    if !m.is_finite() {
+        return vec![1.0 / ll.len().max(1) as f64; ll.len()];
+    }
+    let e: Vec<f64> = ll.iter().map(|v| (v - m).exp()).collect();
+    let s: f64 = e.iter().sum();
+    e.iter().map(|v| v / s).collect()
+}

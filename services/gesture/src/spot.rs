@@ -1,0 +1,545 @@
+//! Spotting gestures in a continuous hand trajectory (Lee & Kim, "An HMM-based threshold
+//! model approach for gesture recognition", PAMI 1999).
+//!
+//! The hand's body-frame path is quantized into direction codes at equal chord steps
+//! (plus a resting code when the hand stays still). One left-right HMM per label scores
+//! the codes; the threshold (non-gesture) model is an ergodic HMM made of all the gesture
+//! models' states — each keeps its emissions and self-transition, and moves to any other
+//! state with equal probability — plus one resting state. A single Viterbi pass over
+//! the threshold model and all gesture models (entered from the threshold model) runs on
+//! the stream; where a gesture model's final state beats the threshold model, a gesture
+//! may end there; its start comes from the token that entered the model. When the
+//! candidates stop, the best one is classified by the model's classifier on the hand
+//! points between its start and end (boundaries refined by a few steps) and published.
+
+use crate::data::{Sample, Trajectory};
+use crate::hmm::{DiscreteHmm, HmmTrainConfig};
+use crate::model::{LabelledHmm, Model};
+use crate::tracker::{Hand, HandPoint, HandTracker, TrackerConfig};
+use airglyph_core::Skeleton;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// Direction codes 0..8 and the resting code 8.
+pub const STREAM_SYMBOLS: usize = 9;
+pub const REST_CODE: usize = 8;
+
+/// The HMMs over stream codes, stored in the model file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SpottingModel {
+    /// Chord step as a fraction of the gesture's larger side.
+    pub step: f64,
+    pub models: Vec<LabelledHmm>,
+}
+
+impl SpottingModel {
+    pub fn validate(&self) -> Result<(), String> {
+        if !(self.step > 0.0 && self.step < 1.0) {
+            return Err(format!("spotting step {} is not in (0, 1)", self.step));
+        }
+        for m in &self.models {
+            m.hmm
+                .validate()
+                .map_err(|e| format!("spotting HMM of label {:?}: {e}", m.label))?;
+            if m.hmm.n_symbols() != STREAM_SYMBOLS {
+                return Err(format!(
+                    "spotting HMM of label {:?} has {} symbols, expected {STREAM_SYMBOLS}",
+                    m.label,
+                    m.hmm.n_symbols()
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Trains one banded HMM per label on the stream codes of the samples (each scaled
+    /// so that its larger side is 1).
+    pub fn train(samples: &[Sample], labels: &[String], step: f64, states: usize) -> Self {
+        let cfg = HmmTrainConfig {
+            states,
+            symbols: STREAM_SYMBOLS,
+            band: 1,
+            iterations: 12,
+            emission_prior: 0.3,
+            transition_prior: 0.5,
+            floor: 1e-3,
+        };
+        let models = labels
+            .par_iter()
+            .map(|l| {
+                let seqs: Vec<Vec<usize>> = samples
+                    .iter()
+                    .filter(|s| &s.label == l)
+                    .map(|s| sample_codes(&s.trajectory(), step))
+                    .filter(|c| !c.is_empty())
+                    .collect();
+                LabelledHmm {
+                    label: l.clone(),
+                    hmm: DiscreteHmm::train(&seqs, &cfg),
+                }
+            })
+            .collect();
+        Self { step, models }
+    }
+}
+
+/// Quantizes a path into direction codes at equal chord steps.
+#[derive(Debug, Clone)]
+pub struct Quantizer {
+    pub step: f32,
+    anchor: Option<[f32; 2]>,
+}
+
+impl Quantizer {
+    pub fn new(step: f32) -> Self {
+        Self { step, anchor: None }
+    }
+
+    pub fn reset(&mut self) {
+        self.anchor = None;
+    }
+
+    /// Feeds a point; calls `emit(code)` for every full step the path made.
+    pub fn push(&mut self, p: [f32; 2], mut emit: impl FnMut(usize)) {
+        let Some(mut a) = self.anchor else {
+            self.anchor = Some(p);
+            return;
+        };
+        loop {
+            let (dx, dy) = (p[0] - a[0], p[1] - a[1]);
+            let d = (dx * dx + dy * dy).sqrt();
+            if d < self.step {
+                break;
+            }
+            emit(crate::bezier::direction_code(dx as f64, dy as f64, 8, 0.0));
+            a = [a[0] + dx / d * self.step, a[1] + dy / d * self.step];
+        }
+        self.anchor = Some(a);
+    }
+}
+
+/// The stream codes of a whole trajectory scaled so that its larger side is 1.
+pub fn sample_codes(t: &Trajectory, step: f64) -> Vec<usize> {
+    let (mut x0, mut y0, mut x1, mut y1) = (f32::MAX, f32::MAX, f32::MIN, f32::MIN);
+    for p in &t.points {
+        x0 = x0.min(p[0]);
+        y0 = y0.min(p[1]);
+        x1 = x1.max(p[0]);
+        y1 = y1.max(p[1]);
+    }
+    let s = (x1 - x0).max(y1 - y0).max(1e-6);
+    let mut q = Quantizer::new(step as f32);
+    let mut out = Vec::new();
+    for p in &t.points {
+        q.push([(p[0] - x0) / s, (p[1] - y0) / s], |c| out.push(c));
+    }
+    out
+}
+
+/// Run-time settings of the spotter.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SpotterConfig {
+    /// Expected size of a drawn gesture (its larger side) in shoulder widths.
+    pub gesture_size: f32,
+    /// A resting code is emitted for every this long without a step.
+    pub rest_seconds: f64,
+    /// Log-probability of entering a gesture model from the threshold model.
+    pub enter_log_prob: f64,
+    /// A gesture model must beat the threshold model by this log-likelihood margin.
+    pub margin: f64,
+    /// Codes to wait after the last candidate before deciding.
+    pub hangover: usize,
+    /// Shortest and longest gesture in codes.
+    pub min_codes: usize,
+    pub max_codes: usize,
+    /// Smallest classifier confidence to publish a gesture.
+    pub min_score: f64,
+    /// Boundary refinement: try start/end moved by up to this many codes.
+    pub refine: usize,
+    pub tracker: TrackerConfig,
+}
+
+impl Default for SpotterConfig {
+    fn default() -> Self {
+        Self {
+            gesture_size: 1.0,
+            rest_seconds: 0.3,
+            enter_log_prob: -2.0,
+            margin: 2.0,
+            hangover: 6,
+            min_codes: 6,
+            max_codes: 120,
+            min_score: 0.5,
+            refine: 2,
+            tracker: TrackerConfig::default(),
+        }
+    }
+}
+
+/// A gesture found in the stream.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SpottedGesture {
+    pub label: String,
+    /// Index into the model's labels.
+    pub class: usize,
+    /// The classifier's confidence in [0, 1].
+    pub score: f64,
+    pub start_seq: u64,
+    pub end_seq: u64,
+    pub start_ns: u64,
+    pub end_ns: u64,
+    pub hand: Hand,
+}
+
+/// Why a spotter cannot be built.
+#[derive(Debug, thiserror::Error)]
+pub enum SpotError {
+    #[error("the model has no spotting HMMs (train it with `airglyph train`, which adds them)")]
+    NoSpottingModel,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Obs {
+    /// Index of the hand point at which the code was emitted.
+    point: usize,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Candidate {
+    model: usize,
+    margin: f64,
+    start: usize,
+    end: usize,
+}
+
+/// One gesture model in the Viterbi network.
+struct GestureNet {
+    log_stay: Vec<f64>,
+    log_next: Vec<f64>,
+    log_b: Vec<f64>,
+    score: Vec<f64>,
+    start: Vec<usize>,
+}
+
+/// The streaming spotter: feed it skeletons (or body-frame points), get gestures.
+pub struct Spotter {
+    model: Model,
+    cfg: SpotterConfig,
+    tracker: HandTracker,
+    quant: Quantizer,
+    // Threshold model.
+    thr_stay: Vec<f64>,
+    thr_leave: Vec<f64>,
+    thr_log_b: Vec<f64>,
+    thr: Vec<f64>,
+    nets: Vec<GestureNet>,
+    /// Stream index of the first element of `obs`.
+    obs_base: usize,
+    obs: Vec<Obs>,
+    /// Hand points with their frame sequence and time; index offset `pts_base`.
+    pts_base: usize,
+    pts: Vec<([f32; 2], u64, u64)>,
+    best: Option<Candidate>,
+    last_step_ns: Option<u64>,
+    hand: Hand,
+    /// Codes before this stream index may not start a gesture (after a publication).
+    barrier: usize,
+}
+
+const NEG: f64 = f64::NEG_INFINITY;
+
+impl Spotter {
+    pub fn new(model: Model, cfg: SpotterConfig) -> Result<Spotter, SpotError> {
+        let sm = model.spotting.clone().ok_or(SpotError::NoSpottingModel)?;
+        let m = STREAM_SYMBOLS;
+        let mut thr_stay = Vec::new();
+        let mut thr_leave = Vec::new();
+        let mut thr_log_b = Vec::new();
+        let mut nets = Vec::new();
+        for lm in &sm.models {
+            let h = &lm.hmm;
+            let n = h.n_states();
+            let mut log_stay = Vec::with_capacity(n);
+            let mut log_next = Vec::with_capacity(n);
+            for i in 0..n {
+                let stay = h.a[i][i];
+                log_stay.push(stay.ln());
+                log_next.push(if i + 1 < n { h.a[i][i + 1].ln() } else { NEG });
+                let s = stay.clamp(0.05, 0.9);
+                thr_stay.push(s.ln());
+                thr_leave.push((1.0 - s).ln());
+                for k in 0..m {
+                    thr_log_b.push(h.b[i][k].ln());
+                }
+            }
+            let mut log_b = Vec::with_capacity(n * m);
+            for i in 0..n {
+                for k in 0..m {
+                    log_b.push(h.b[i][k].ln());
+                }
+            }
+            nets.push(GestureNet {
+                log_stay,
+                log_next,
+                log_b,
+                score: vec![NEG; n],
+                start: vec![0; n],
+            });
+        }
+        // The resting state.
+        thr_stay.push(0.9f64.ln());
+        thr_leave.push(0.1f64.ln());
+        for k in 0..m {
+            thr_log_b.push(if k == REST_CODE { 0.9f64.ln() } else { (0.1 / 8.0f64).ln() });
+        }
+        let nthr = thr_stay.len();
+        let step = (sm.step as f32) * cfg.gesture_size;
+        Ok(Spotter {
+            tracker: HandTracker::new(cfg.tracker),
+            quant: Quantizer::new(step),
+            thr: vec![0.0; nthr],
+            thr_stay,
+            thr_leave,
+            thr_log_b,
+            nets,
+            model,
+            cfg,
+            obs_base: 0,
+            obs: Vec::new(),
+            pts_base: 0,
+            pts: Vec::new(),
+            best: None,
+            last_step_ns: None,
+            hand: Hand::Right,
+            barrier: 0,
+        })
+    }
+
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+
+    pub fn config(&self) -> &SpotterConfig {
+        &self.cfg
+    }
+
+    /// Forgets the stream (e.g. the person was lost).
+    pub fn reset(&mut self) {
+        self.tracker.reset();
+        self.quant.reset();
+        self.thr.iter_mut().for_each(|v| *v = 0.0);
+        for n in &mut self.nets {
+            n.score.iter_mut().for_each(|v| *v = NEG);
+        }
+        self.best = None;
+        self.last_step_ns = None;
+        self.barrier = self.obs_base + self.obs.len();
+    }
+
+    /// Feeds one skeleton (frame `seq`, capture time `time_ns`). Unusable skeletons
+    /// (no person, non-finite joints) are skipped.
+    pub fn push(&mut self, skeleton: &Skeleton, seq: u64, time_ns: u64) -> Option<SpottedGesture> {
+        let p = self.tracker.update(skeleton, time_ns)?;
+        self.push_point(p, seq, time_ns)
+    }
+
+    /// Feeds one body-frame hand point (shoulder widths, x right, y down).
+    pub fn push_point(&mut self, p: HandPoint, seq: u64, time_ns: u64) -> Option<SpottedGesture> {
+        if !(p.x.is_finite() && p.y.is_finite()) {
+            return None;
+        }
+        if p.hand != self.hand {
+            self.hand = p.hand;
+            self.quant.reset();
+        }
+        self.pts.push(([p.x, p.y], seq, time_ns));
+        let pidx = self.pts_base + self.pts.len() - 1;
+        let mut codes = Vec::new();
+        self.quant.push([p.x, p.y], |c| codes.push(c));
+        if codes.is_empty() {
+            let last = *self.last_step_ns.get_or_insert(time_ns);
+            if time_ns.saturating_sub(last) as f64 * 1e-9 >= self.cfg.rest_seconds {
+                codes.push(REST_CODE);
+            }
+        }
+        let mut out = None;
+        for c in codes {
+            self.last_step_ns = Some(time_ns);
+            if let Some(g) = self.step(c, pidx) {
+                out = Some(g);
+            }
+        }
+        self.trim();
+        out
+    }
+
+    fn trim(&mut self) {
+        let keep = self.cfg.max_codes + 4 * self.cfg.hangover + 32;
+        if self.obs.len() > 2 * keep {
+            let drop = self.obs.len() - keep;
+            self.obs.drain(..drop);
+            self.obs_base += drop;
+        }
+        let first_pt = self
+            .obs
+            .first()
+            .map_or(self.pts_base + self.pts.len().saturating_sub(1), |o| o.point)
+            .saturating_sub(1);
+        if first_pt > self.pts_base + 256 {
+            let drop = first_pt - self.pts_base;
+            self.pts.drain(..drop.min(self.pts.len()));
+            self.pts_base += drop.min(self.pts.len() + drop);
+        }
+    }
+
+    /// One Viterbi step over the network with code `o`.
+    fn step(&mut self, o: usize, pidx: usize) -> Option<SpottedGesture> {
+        let m = STREAM_SYMBOLS;
+        let t = self.obs_base + self.obs.len();
+        self.obs.push(Obs { point: pidx });
+        let g_prev = self.thr.iter().cloned().fold(NEG, f64::max);
+        // Threshold model: self-transition or a uniform jump from any other state.
+        let nthr = self.thr.len();
+        let (mut b1, mut b1i, mut b2) = (NEG, usize::MAX, NEG);
+        for i in 0..nthr {
+            let v = self.thr[i] + self.thr_leave[i];
+            if v > b1 {
+                b2 = b1;
+                b1 = v;
+                b1i = i;
+            } else if v > b2 {
+                b2 = v;
+            }
+        }
+        let ljump = -((nthr - 1).max(1) as f64).ln();
+        for j in 0..nthr {
+            let other = if j == b1i { b2 } else { b1 };
+            let v = (self.thr[j] + self.thr_stay[j]).max(other + ljump);
+            self.thr[j] = v + self.thr_log_b[j * m + o];
+        }
+        let g = self.thr.iter().cloned().fold(NEG, f64::max);
+        // Gesture models, entered from the threshold model.
+        let enter = g_prev + self.cfg.enter_log_prob;
+        let mut cand: Option<Candidate> = None;
+        for (mi, net) in self.nets.iter_mut().enumerate() {
+            let n = net.score.len();
+            for s in (0..n).rev() {
+                let stay = net.score[s] + net.log_stay[s];
+                let (from, fstart) = if s > 0 {
+                    (net.score[s - 1] + net.log_next[s - 1], net.start[s - 1])
+                } else if o != REST_CODE && t >= self.barrier {
+                    (enter, t)
+                } else {
+                    (NEG, t)
+                };
+                let (v, st) = if stay >= from {
+                    (stay, net.start[s])
+                } else {
+                    (from, fstart)
+                };
+                net.score[s] = v + net.log_b[s * m + o];
+                net.start[s] = st;
+            }
+            // Prune tokens that are too long.
+            for s in 0..n {
+                if t - net.start[s] > self.cfg.max_codes {
+                    net.score[s] = NEG;
+                }
+            }
+            let margin = net.score[n - 1] - g;
+            let len = t + 1 - net.start[n - 1];
+            if margin > self.cfg.margin
+                && len >= self.cfg.min_codes
+                && cand.is_none_or(|c| margin > c.margin)
+            {
+                cand = Some(Candidate {
+                    model: mi,
+                    margin,
+                    start: net.start[n - 1],
+                    end: t,
+                });
+            }
+        }
+        // Keep scores bounded.
+        for v in self.thr.iter_mut() {
+            *v -= g;
+        }
+        for net in self.nets.iter_mut() {
+            net.score.iter_mut().for_each(|v| *v -= g);
+        }
+        if let Some(c) = cand {
+            if self.best.is_none_or(|b| c.margin > b.margin) {
+                self.best = Some(c);
+            }
+        }
+        let b = self.best?;
+        if t < b.end + self.cfg.hangover {
+            return None;
+        }
+        self.best = None;
+        self.barrier = b.end + 1;
+        for net in self.nets.iter_mut() {
+            for s in 0..net.score.len() {
+                if net.start[s] <= b.end {
+                    net.score[s] = NEG;
+                }
+            }
+        }
+        self.publish(b)
+    }
+
+    /// The hand points of codes start..=end (stream indices), or None if trimmed.
+    fn segment(&self, start: usize, end: usize) -> Option<(usize, usize)> {
+        let o0 = start.checked_sub(self.obs_base)?;
+        let o1 = end.checked_sub(self.obs_base)?;
+        // The code at `start` describes the step that ended at its point; the segment
+        // starts at the previous code's point.
+        let p0 = if o0 > 0 {
+            self.obs[o0 - 1].point
+        } else {
+            self.obs.get(o0)?.point.saturating_sub(1)
+        };
+        let p1 = self.obs.get(o1)?.point;
+        let i0 = p0.checked_sub(self.pts_base)?;
+        let i1 = p1.checked_sub(self.pts_base)?;
+        (i1 < self.pts.len() && i0 < i1).then_some((i0, i1))
+    }
+
+    fn publish(&self, c: Candidate) -> Option<SpottedGesture> {
+        let r = self.cfg.refine as isize;
+        let mut best: Option<(f64, usize, usize, usize)> = None;
+        for ds in -r..=r {
+            for de in -r..=r {
+                let s = c.start as isize + ds;
+                let e = c.end as isize + de;
+                if s < 0 || e <= s || (e as usize) >= self.obs_base + self.obs.len() {
+                    continue;
+                }
+                let Some((i0, i1)) = self.segment(s as usize, e as usize) else {
+                    continue;
+                };
+                let pts: Vec<[f32; 2]> = self.pts[i0..=i1].iter().map(|p| p.0).collect();
+                let cl = self.model.classify(&Trajectory::from_points(pts));
+                if best.is_none_or(|b| cl.score > b.0) {
+                    best = Some((cl.score, cl.class, i0, i1));
+                }
+            }
+        }
+        let (score, class, i0, i1) = best?;
+        if score < self.cfg.min_score {
+            return None;
+        }
+        let _ = c.model;
+        Some(SpottedGesture {
+            label: self.model.labels[class].clone(),
+            class,
+            score,
+            start_seq: self.pts[i0].1,
+            end_seq: self.pts[i1].1,
+            start_ns: self.pts[i0].2,
+            end_ns: self.pts[i1].2,
+            hand: self.hand,
+        })
+    }
+}
+

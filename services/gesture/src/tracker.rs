@@ -1,0 +1,294 @@
+//! From skeletons to the drawing hand's trajectory in a body frame: origin between the
+//! shoulders, scaled by the shoulder width, projected on the body's frontal plane, so a
+//! gesture does not depend on where the person stands or how tall they are; smoothed by
+//! the One Euro filter (Casiez, Roussel, Vogel, CHI 2012).
+
+use airglyph_core::{Joint, Skeleton};
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+/// Which hand draws.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Hand {
+    Left,
+    Right,
+}
+
+impl Hand {
+    pub fn name(self) -> &'static str {
+        match self {
+            Hand::Left => "left",
+            Hand::Right => "right",
+        }
+    }
+}
+
+/// One Euro filter for one coordinate.
+#[derive(Debug, Clone)]
+pub struct OneEuro {
+    pub min_cutoff: f64,
+    pub beta: f64,
+    pub d_cutoff: f64,
+    x: Option<f64>,
+    dx: f64,
+    t: f64,
+}
+
+fn alpha(cutoff: f64, dt: f64) -> f64 {
+    let tau = 1.0 / (2.0 * std::f64::consts::PI * cutoff);
+    1.0 / (1.0 + tau / dt)
+}
+
+impl OneEuro {
+    pub fn new(min_cutoff: f64, beta: f64, d_cutoff: f64) -> Self {
+        Self {
+            min_cutoff,
+            beta,
+            d_cutoff,
+            x: None,
+            dx: 0.0,
+            t: 0.0,
+        }
+    }
+
+    /// Filters `x` observed at time `t` seconds.
+    pub fn filter(&mut self, x: f64, t: f64) -> f64 {
+        let Some(prev) = self.x else {
+            self.x = Some(x);
+            self.t = t;
+            return x;
+        };
+        let dt = (t - self.t).max(1e-4);
+        self.t = t;
+        let dx = (x - prev) / dt;
+        self.dx += alpha(self.d_cutoff, dt) * (dx - self.dx);
+        let cutoff = self.min_cutoff + self.beta * self.dx.abs();
+        let v = prev + alpha(cutoff, dt) * (x - prev);
+        self.x = Some(v);
+        v
+    }
+
+    pub fn reset(&mut self) {
+        self.x = None;
+        self.dx = 0.0;
+    }
+}
+
+/// Hand tracker settings.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TrackerConfig {
+    /// One Euro parameters for body-frame coordinates (shoulder widths).
+    pub min_cutoff: f64,
+    pub beta: f64,
+    pub d_cutoff: f64,
+    /// Joints below this confidence make the frame unusable.
+    pub min_confidence: f32,
+    /// A fixed drawing hand, or None to pick the raised/forward one.
+    pub hand: Option<Hand>,
+    /// The other hand must lead by this much (metres) for this many frames to switch.
+    pub switch_margin: f32,
+    pub switch_frames: u32,
+}
+
+impl Default for TrackerConfig {
+    fn default() -> Self {
+        Self {
+            min_cutoff: 1.5,
+            beta: 0.5,
+            d_cutoff: 1.0,
+            min_confidence: 0.2,
+            hand: None,
+            switch_margin: 0.05,
+            switch_frames: 5,
+        }
+    }
+}
+
+/// A point of the hand trajectory in the body frame: x to the person's right, y down,
+/// in shoulder widths from the point between the shoulders.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HandPoint {
+    pub x: f32,
+    pub y: f32,
+    pub hand: Hand,
+}
+
+/// Turns skeletons into the drawing hand's smoothed body-frame trajectory.
+#[derive(Debug, Clone)]
+pub struct HandTracker {
+    cfg: TrackerConfig,
+    hand: Hand,
+    lead: u32,
+    fx: OneEuro,
+    fy: OneEuro,
+}
+
+impl HandTracker {
+    pub fn new(cfg: TrackerConfig) -> Self {
+        Self {
+            hand: cfg.hand.unwrap_or(Hand::Right),
+            cfg,
+            lead: 0,
+            fx: OneEuro::new(cfg.min_cutoff, cfg.beta, cfg.d_cutoff),
+            fy: OneEuro::new(cfg.min_cutoff, cfg.beta, cfg.d_cutoff),
+        }
+    }
+
+    pub fn hand(&self) -> Hand {
+        self.hand
+    }
+
+    pub fn reset(&mut self) {
+        self.fx.reset();
+        self.fy.reset();
+        self.lead = 0;
+    }
+
+    /// The body-frame hand point of one skeleton at `time_ns`, or None when the
+    /// skeleton is unusable (non-finite, low confidence, degenerate shoulders).
+    pub fn update(&mut self, s: &Skeleton, time_ns: u64) -> Option<HandPoint> {
+        let needed = [
+            Joint::LeftShoulder,
+            Joint::RightShoulder,
+            Joint::Neck,
+            Joint::Pelvis,
+        ];
+        if !s.is_finite()
+            || needed
+                .iter()
+                .any(|j| s.confidence[j.index()] < self.cfg.min_confidence)
+        {
+            return None;
+        }
+        let ls = s[Joint::LeftShoulder].coords;
+        let rs = s[Joint::RightShoulder].coords;
+        let width = (rs - ls).norm();
+        if width < 0.05 {
+            return None;
+        }
+        let origin = (ls + rs) * 0.5;
+        let ex: Vector3<f32> = (rs - ls) / width;
+        let down = s[Joint::Pelvis].coords - s[Joint::Neck].coords;
+        let ey = down - ex * ex.dot(&down);
+        if ey.norm() < 1e-3 {
+            return None;
+        }
+        let ey = ey.normalize();
+        // Pick the drawing hand: the one further forward (towards the camera) and higher.
+        if self.cfg.hand.is_none() {
+            let lead = |h: Joint, sh: Vector3<f32>| {
+                let p = s[h].coords;
+                (sh.z - p.z) - ey.dot(&(p - origin)) * 0.5
+            };
+            let (l, r) = (lead(Joint::LeftHand, ls), lead(Joint::RightHand, rs));
+            let (mine, other) = match self.hand {
+                Hand::Left => (l, r),
+                Hand::Right => (r, l),
+            };
+            if other > mine + self.cfg.switch_margin {
+                self.lead += 1;
+                if self.lead >= self.cfg.switch_frames {
+                    self.hand = match self.hand {
+                        Hand::Left => Hand::Right,
+                        Hand::Right => Hand::Left,
+                    };
+                    self.lead = 0;
+                    self.fx.reset();
+                    self.fy.reset();
+                }
+            } else {
+                self.lead = 0;
+            }
+        }
+        let hj = match self.hand {
+            Hand::Left => Joint::LeftHand,
+            Hand::Right => Joint::RightHand,
+        };
+        if s.confidence[hj.index()] < self.cfg.min_confidence {
+            return None;
+        }
+        let d = s[hj].coords - origin;
+        let x = ex.dot(&d) / width;
+        let y = ey.dot(&d) / width;
+        let t = time_ns as f64 * 1e-9;
+        Some(HandPoint {
+            x: self.fx.filter(x as f64, t) as f32,
+            y: self.fy.filter(y as f64, t) as f32,
+            hand: self.hand,
+        })
+    }
+}
+
+/// A skeleton of a person facing the camera at `distance` metres with the right hand at
+/// body-frame point (x, y) (shoulder widths; x to the person's right, y down) and the
+/// left hand hanging. For tests and synthetic streams.
+pub fn skeleton_with_hand(x: f32, y: f32, distance: f32) -> Skeleton {
+    use nalgebra::Point3;
+    let sw = 0.36f32;
+    let z = distance;
+    // Facing the camera: the person's right is the camera's left (−x); y down.
+    let mut j = [Point3::new(0.0, 0.0, z); Joint::COUNT];
+    let set = |j: &mut [Point3<f32>; Joint::COUNT], k: Joint, p: [f32; 3]| {
+        j[k.index()] = Point3::new(p[0], p[1], p[2]);
+    };
+    set(&mut j, Joint::Head, [0.0, -0.55, z]);
+    set(&mut j, Joint::Neck, [0.0, -0.35, z]);
+    set(&mut j, Joint::Torso, [0.0, -0.1, z]);
+    set(&mut j, Joint::Pelvis, [0.0, 0.2, z]);
+    set(&mut j, Joint::LeftShoulder, [sw / 2.0, -0.3, z]);
+    set(&mut j, Joint::RightShoulder, [-sw / 2.0, -0.3, z]);
+    set(&mut j, Joint::LeftElbow, [0.22, -0.05, z]);
+    set(&mut j, Joint::LeftHand, [0.24, 0.2, z]);
+    set(&mut j, Joint::RightHand, [-x * sw, -0.3 + y * sw, z - 0.35]);
+    set(&mut j, Joint::RightElbow, [-0.2 - x * sw * 0.3, -0.1, z - 0.15]);
+    set(&mut j, Joint::LeftHip, [0.1, 0.22, z]);
+    set(&mut j, Joint::RightHip, [-0.1, 0.22, z]);
+    set(&mut j, Joint::LeftKnee, [0.1, 0.65, z]);
+    set(&mut j, Joint::RightKnee, [-0.1, 0.65, z]);
+    set(&mut j, Joint::LeftFoot, [0.1, 1.05, z]);
+    set(&mut j, Joint::RightFoot, [-0.1, 1.05, z]);
+    Skeleton::new(j)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn body_frame_is_independent_of_distance_and_picks_the_raised_hand() {
+        let mut a = HandTracker::new(TrackerConfig::default());
+        let mut b = HandTracker::new(TrackerConfig::default());
+        let pa = a.update(&skeleton_with_hand(0.4, -0.2, 2.0), 0).unwrap();
+        let pb = b.update(&skeleton_with_hand(0.4, -0.2, 3.5), 0).unwrap();
+        assert_eq!(pa.hand, Hand::Right);
+        assert!((pa.x - 0.4).abs() < 1e-4 && (pa.y + 0.2).abs() < 1e-4, "{pa:?}");
+        assert!((pa.x - pb.x).abs() < 1e-4 && (pa.y - pb.y).abs() < 1e-4);
+    }
+
+    #[test]
+    fn unusable_skeletons_give_none() {
+        let mut t = HandTracker::new(TrackerConfig::default());
+        let mut s = skeleton_with_hand(0.0, 0.0, 2.0);
+        s.joints[Joint::LeftShoulder.index()].x = f32::NAN;
+        assert!(t.update(&s, 0).is_none());
+        let mut s = skeleton_with_hand(0.0, 0.0, 2.0);
+        s.confidence[Joint::RightShoulder.index()] = 0.0;
+        assert!(t.update(&s, 0).is_none());
+    }
+
+    #[test]
+    fn one_euro_smooths_jitter_and_follows_motion() {
+        let mut f = OneEuro::new(1.0, 0.5, 1.0);
+        let mut last = 0.0;
+        for i in 0..300 {
+            let noise = if i % 2 == 0 { 0.01 } else { -0.01 };
+            last = f.filter(noise, i as f64 / 30.0);
+        }
+        assert!(last.abs() < 0.005);
+        for i in 300..330 {
+            last = f.filter((i - 300) as f64 * 0.05, i as f64 / 30.0);
+        }
+        assert!(last > 1.0, "{last}");
+    }
+}

@@ -1,0 +1,234 @@
+//! Training a model from samples: the seed's HMMs, the CRF, or the default network
+//! ensemble; spotting HMMs are added to every model.
+
+use crate::bezier::bezier_codes;
+use crate::crf::{Crf, CrfTrainConfig};
+use crate::data::{labels_of, Sample};
+use crate::features::{augment, feature_vector, FeatureConfig};
+use crate::hmm::{DiscreteHmm, HmmTrainConfig};
+use crate::mlp::{Mlp, MlpTrainConfig};
+use crate::model::{Classifier, LabelledHmm, Model, TrainingInfo, MODEL_FORMAT, MODEL_VERSION};
+use crate::spot::SpottingModel;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeSet;
+use std::sync::OnceLock;
+
+/// Which classifier to train.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ClassifierKind {
+    /// The seed's pipeline.
+    Hmm,
+    Crf,
+    /// The default.
+    Mlp,
+}
+
+impl ClassifierKind {
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "hmm" | "seed" => Some(Self::Hmm),
+            "crf" => Some(Self::Crf),
+            "mlp" | "default" => Some(Self::Mlp),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Hmm => "hmm",
+            Self::Crf => "crf",
+            Self::Mlp => "mlp",
+        }
+    }
+}
+
+/// Everything `train` needs besides the samples.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TrainConfig {
+    pub classifier: ClassifierKind,
+    pub bezier_points: usize,
+    /// Resting code for the Bezier codes (fraction of the diagonal; 0 = none).
+    pub zero_frac: f64,
+    pub hmm: HmmTrainConfig,
+    pub crf: CrfTrainConfig,
+    pub mlp: MlpTrainConfig,
+    pub features: FeatureConfig,
+    /// Networks in the ensemble.
+    pub ensemble: usize,
+    /// Augmentation strength (0 = none).
+    pub augment: f32,
+    /// Add spotting HMMs.
+    pub spotting: bool,
+    pub spotting_step: f64,
+    pub spotting_states: usize,
+    pub seed: u64,
+    /// Data file names, recorded in the model.
+    pub data: Vec<String>,
+}
+
+impl Default for TrainConfig {
+    fn default() -> Self {
+        Self {
+            classifier: ClassifierKind::Mlp,
+            bezier_points: 15,
+            zero_frac: 0.0,
+            hmm: HmmTrainConfig::default(),
+            crf: CrfTrainConfig::default(),
+            mlp: MlpTrainConfig::default(),
+            features: FeatureConfig::default(),
+            ensemble: 1,
+            augment: 1.0,
+            spotting: true,
+            spotting_step: 0.1,
+            spotting_states: 10,
+            seed: 1,
+            data: Vec::new(),
+        }
+    }
+}
+
+/// Why training failed.
+#[derive(Debug, thiserror::Error)]
+pub enum TrainError {
+    #[error("no training samples")]
+    NoSamples,
+    #[error("only one label ({0:?}); a classifier needs at least two")]
+    OneLabel(String),
+}
+
+/// Progress of training: (units done, units total).
+pub type Progress<'a> = &'a (dyn Fn(u64, u64) + Sync);
+
+/// Trains a model on the samples.
+pub fn train(samples: &[Sample], cfg: &TrainConfig, progress: Progress) -> Result<Model, TrainError> {
+    if samples.is_empty() {
+        return Err(TrainError::NoSamples);
+    }
+    let labels = labels_of(samples);
+    if labels.len() < 2 {
+        return Err(TrainError::OneLabel(labels[0].clone()));
+    }
+    let class_of: Vec<usize> = samples
+        .iter()
+        .map(|s| labels.iter().position(|l| *l == s.label).unwrap_or(0))
+        .collect();
+    let subjects: BTreeSet<&str> = samples.iter().map(|s| s.subject.as_str()).collect();
+    let classifier = match cfg.classifier {
+        ClassifierKind::Hmm => {
+            let codes: Vec<Vec<usize>> = samples
+                .par_iter()
+                .map(|s| bezier_codes(&s.trajectory().points, cfg.bezier_points, cfg.zero_frac))
+                .collect();
+            let symbols = if cfg.zero_frac > 0.0 { 9 } else { 8 };
+            let hcfg = HmmTrainConfig {
+                symbols,
+                ..cfg.hmm
+            };
+            let done = std::sync::atomic::AtomicU64::new(0);
+            let models = labels
+                .par_iter()
+                .enumerate()
+                .map(|(c, l)| {
+                    let seqs: Vec<Vec<usize>> = codes
+                        .iter()
+                        .zip(&class_of)
+                        .filter(|(_, &k)| k == c)
+                        .map(|(s, _)| s.clone())
+                        .collect();
+                    let hmm = DiscreteHmm::train(&seqs, &hcfg);
+                    let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                    progress(d, labels.len() as u64);
+                    LabelledHmm {
+                        label: l.clone(),
+                        hmm,
+                    }
+                })
+                .collect();
+            Classifier::Hmm {
+                bezier_points: cfg.bezier_points,
+                zero_frac: cfg.zero_frac,
+                models,
+                cache: OnceLock::new(),
+            }
+        }
+        ClassifierKind::Crf => {
+            let codes: Vec<Vec<usize>> = samples
+                .par_iter()
+                .map(|s| bezier_codes(&s.trajectory().points, cfg.bezier_points, cfg.zero_frac))
+                .collect();
+            let symbols = if cfg.zero_frac > 0.0 { 9 } else { 8 };
+            let total = cfg.crf.iterations as u64;
+            let crf = Crf::train(&codes, &class_of, labels.len(), symbols, &cfg.crf, |it| {
+                progress(it as u64 + 1, total)
+            });
+            Classifier::Crf {
+                bezier_points: cfg.bezier_points,
+                zero_frac: cfg.zero_frac,
+                classes: labels.clone(),
+                crf,
+            }
+        }
+        ClassifierKind::Mlp => {
+            let trajs: Vec<_> = samples.iter().map(|s| s.trajectory()).collect();
+            let fcfg = cfg.features;
+            let total = (cfg.mlp.epochs * cfg.ensemble.max(1)) as u64;
+            let mut nets = Vec::new();
+            for e in 0..cfg.ensemble.max(1) {
+                let seed = cfg.seed.wrapping_mul(1000).wrapping_add(e as u64);
+                let strength = cfg.augment;
+                let feats = |epoch: usize, i: usize| {
+                    let mut f = Vec::with_capacity(fcfg.dim());
+                    if epoch == usize::MAX || strength <= 0.0 {
+                        feature_vector(&trajs[i], &fcfg, &mut f);
+                    } else {
+                        let mut rng = ChaCha8Rng::seed_from_u64(
+                            seed ^ ((epoch as u64) << 32) ^ (i as u64).wrapping_mul(0x9E37_79B9),
+                        );
+                        feature_vector(&augment(&trajs[i], &mut rng, strength), &fcfg, &mut f);
+                    }
+                    f
+                };
+                let mcfg = MlpTrainConfig { seed, ..cfg.mlp };
+                let net = Mlp::train(
+                    trajs.len(),
+                    fcfg.dim(),
+                    &class_of,
+                    labels.len(),
+                    &mcfg,
+                    feats,
+                    |ep| progress((e * cfg.mlp.epochs + ep + 1) as u64, total),
+                );
+                nets.push(net);
+            }
+            Classifier::Mlp {
+                features: fcfg,
+                classes: labels.clone(),
+                nets,
+            }
+        }
+    };
+    let spotting = cfg
+        .spotting
+        .then(|| SpottingModel::train(samples, &labels, cfg.spotting_step, cfg.spotting_states));
+    let parameters = serde_json::to_value(cfg).unwrap_or(serde_json::Value::Null);
+    Ok(Model {
+        format: MODEL_FORMAT.to_string(),
+        version: MODEL_VERSION,
+        labels,
+        training: TrainingInfo {
+            classifier: cfg.classifier.name().to_string(),
+            bezier_points: cfg.bezier_points,
+            samples: samples.len(),
+            subjects: subjects.len(),
+            data: cfg.data.clone(),
+            seed: cfg.seed,
+            parameters,
+        },
+        classifier,
+        spotting,
+    })
+}
