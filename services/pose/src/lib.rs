@@ -1,1 +1,70 @@
 //! The pose stage: a 16-joint skeleton from each depth frame by geodesic distances
+//! (Handrich, Rashid & Al-Hamadi, seed §16.3). A plain, deterministic library: no IPC.
+//!
+//! # Use
+//!
+//! ```no_run
+//! use airglyph_core::{DepthImage, Intrinsics, Joint};
+//! use airglyph_pose::{PoseConfig, PoseEstimator};
+//!
+//! let k = Intrinsics::default(); // Kinect v1, 640×480
+//! let mut est = PoseEstimator::new(k, PoseConfig::default());
+//! let frame = DepthImage::empty(640, 480);
+//! let r = est.estimate(frame.view()); // one call a frame, in order
+//! if r.person_found {
+//!     let hand = r.skeleton[Joint::RightHand]; // metres, camera frame
+//!     let c = r.skeleton.confidence[Joint::RightHand.index()];
+//!     println!("{hand:?} {c}");
+//! }
+//! ```
+//!
+//! * [`PoseEstimator::new`]`(intrinsics: Intrinsics, config: PoseConfig) -> PoseEstimator`
+//! * [`PoseEstimator::estimate`]`(&mut self, depth: DepthView<'_>) -> PoseResult`:
+//!   `PoseResult { person_found: bool, skeleton: Skeleton }`. Never panics, never NaN;
+//!   with no person the skeleton is all zeros with confidence 0. The estimator keeps
+//!   state between frames (torso registration, last limb fits): one estimator per
+//!   camera stream; [`PoseEstimator::reset`] after a gap. Frames whose size differs
+//!   from the intrinsics are handled with the intrinsics scaled to them.
+//! * [`PoseEstimator::step_times`] gives the time of each step of the last frame.
+//!
+//! # Method, in the order of the steps
+//!
+//! 1. [`segment`]: back-projection (airglyph-core), depth band, floor plane by RANSAC
+//!    removed, blobs split at depth jumps, the largest person-shaped blob kept (planar,
+//!    too small or too large blobs are walls, tables, noise).
+//! 2. [`torso`]: distance transform of the mask ([`dt`]); the torso region is where it
+//!    is at least half its maximum; PCA of its points gives a first frame; a torso model
+//!    is registered by mutual closest points (< 0.1 m) and Horn's quaternion closed form
+//!    ([`geom`]), started from the last frame's pose and redone from PCA when the
+//!    residual is too large. Neck, shoulders, pelvis and hips are fixed points of the
+//!    torso frame.
+//! 3. [`graph`]: 8-neighbours joined when closer than a threshold scaled by the pixel
+//!    footprint z/f; edges bridging occluding foreground along rows and columns; stray
+//!    components joined to the rest, nearest first.
+//! 4. [`dijkstra`]: geodesic distances from the torso centre with a radix heap; five
+//!    maxima, each joined to the root by a zero-weight edge and the search continued
+//!    incrementally.
+//! 5. [`limbs`]: maxima assigned to the five limb roots by least total cost (geodesic
+//!    cost from the limb root, distance to the limb's last extremity, side of the body);
+//!    a limb without a maximum keeps its last fit with lowered confidence. Target points
+//!    within d_e (5 cm arms, 10 cm legs and head) of the geodesic path (Eq. 16.10); a
+//!    two-joint chain fitted by weighted closed-form rotations (ω_succ = 0.05) until the
+//!    error stops falling.
+//!
+//! [`metrics`] holds the evaluation against ground truth (Eq. 16.20–16.22, share within
+//! 10 cm, mAP at 10 cm), [`overlay`] draws skeletons on depth images.
+
+pub mod config;
+pub mod dijkstra;
+pub mod dt;
+mod estimator;
+pub mod geom;
+pub mod graph;
+pub mod limbs;
+pub mod metrics;
+pub mod overlay;
+pub mod segment;
+pub mod torso;
+
+pub use config::{Limb, PoseConfig};
+pub use estimator::{Debug, PoseEstimator, PoseResult, StepTimes};

@@ -1,0 +1,226 @@
+//! Every tunable number of the estimator, with the seed's values where it gives them.
+
+use airglyph_core::Joint;
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+/// Settings of [`crate::PoseEstimator`]. `PoseConfig::default()` is what the pose stage
+/// and the evaluation use; all lengths are metres.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct PoseConfig {
+    // --- person segmentation ---
+    /// Depth band in which a person is looked for.
+    pub near: f32,
+    pub far: f32,
+    /// Whether to find and remove a floor plane (RANSAC on the lower image half).
+    pub remove_floor: bool,
+    /// Points closer to the floor plane than this are floor.
+    pub floor_margin: f32,
+    /// Neighbouring pixels belong to one blob when their depths differ by less than
+    /// `max(blob_jump_min, blob_jump_px * pixel footprint)`.
+    pub blob_jump_min: f32,
+    pub blob_jump_px: f32,
+    /// Physical area (m², the surface seen) a blob needs to be a person.
+    pub min_person_area: f32,
+    pub max_person_area: f32,
+    /// Vertical extent a blob needs to be a person.
+    pub min_person_height: f32,
+    /// Largest horizontal extent of a person (arms spread).
+    pub max_person_width: f32,
+
+    // --- torso ---
+    /// Torso region: pixels whose distance-transform value is at least this share of the
+    /// maximum (seed Eq. 16.2, with the inequality the right way round).
+    pub torso_dt_share: f32,
+    /// Mutual closest points farther apart than this are not correspondences (seed: 0.1 m).
+    pub icp_max_dist: f32,
+    pub icp_iterations: usize,
+    /// Registration whose RMS residual exceeds this is redone from the PCA initialisation.
+    pub icp_reinit_residual: f32,
+    /// Half-axes of the elliptic-cylinder torso model (lateral, front-back) and its
+    /// vertical extent below/above the torso joint.
+    pub torso_half_width: f32,
+    pub torso_half_depth: f32,
+    pub torso_bottom: f32,
+    pub torso_top: f32,
+    /// Key points in the torso frame: x = person's left, y = up, z = forward (out of the
+    /// chest), origin the torso joint. Order: neck, pelvis, left shoulder, right
+    /// shoulder, left hip, right hip.
+    pub torso_keypoints: [[f32; 3]; 6],
+
+    // --- geodesic graph ---
+    /// 8-neighbours are joined when closer than `max(edge_min, edge_px * footprint)`
+    /// (times √2 for diagonals).
+    pub edge_min: f32,
+    pub edge_px: f32,
+    /// Longest bridge over occluding foreground, and how much nearer the camera the
+    /// occluder must be.
+    pub bridge_max: f32,
+    pub bridge_occluder: f32,
+    /// Components smaller than this many nodes are dropped rather than joined.
+    pub min_component: usize,
+    /// A geodesic maximum must be at least this far (geodesically) from every source
+    /// found before it.
+    pub min_extremity: f32,
+
+    // --- limbs ---
+    /// Target points: within `d_e` of the geodesic path (seed Eq. 16.10).
+    pub d_e_arm: f32,
+    pub d_e_leg: f32,
+    pub d_e_head: f32,
+    /// Weight of successor-segment points in a parent rotation (seed: 0.05).
+    pub omega_succ: f32,
+    pub chain_iterations: usize,
+    /// Bone lengths: upper arm, forearm (elbow to palm centre), thigh, shin, neck to head.
+    pub upper_arm: f32,
+    pub forearm: f32,
+    pub thigh: f32,
+    pub shin: f32,
+    pub neck_to_head: f32,
+    /// The seen surface lies in front of a limb's axis: target points are pushed back
+    /// along their viewing ray by this much (arm, leg, head).
+    pub surface_offset_arm: f32,
+    pub surface_offset_leg: f32,
+    pub surface_offset_head: f32,
+    /// Cost of leaving a limb without a maximum in the assignment (metres of geodesic
+    /// cost), and the weight of the distance to the limb's last extremity.
+    pub unassigned_cost: f32,
+    pub temporal_weight: f32,
+    /// Confidence multiplier per frame for a limb that keeps its last fit.
+    pub occluded_decay: f32,
+}
+
+impl Default for PoseConfig {
+    fn default() -> Self {
+        Self {
+            near: 0.3,
+            far: 6.0,
+            remove_floor: true,
+            floor_margin: 0.03,
+            blob_jump_min: 0.05,
+            blob_jump_px: 8.0,
+            min_person_area: 0.05,
+            max_person_area: 2.0,
+            min_person_height: 0.4,
+            max_person_width: 2.4,
+
+            torso_dt_share: 0.5,
+            icp_max_dist: 0.1,
+            icp_iterations: 12,
+            icp_reinit_residual: 0.035,
+            torso_half_width: 0.16,
+            torso_half_depth: 0.11,
+            torso_bottom: -0.30,
+            torso_top: 0.20,
+            torso_keypoints: [
+                [0.0, 0.24, 0.0],    // neck
+                [0.0, -0.22, 0.0],   // pelvis
+                [0.18, 0.19, 0.0],   // left shoulder
+                [-0.18, 0.19, 0.0],  // right shoulder
+                [0.09, -0.30, 0.0],  // left hip
+                [-0.09, -0.30, 0.0], // right hip
+            ],
+
+            edge_min: 0.012,
+            edge_px: 6.0,
+            bridge_max: 0.35,
+            bridge_occluder: 0.05,
+            min_component: 8,
+            min_extremity: 0.12,
+
+            d_e_arm: 0.05,
+            d_e_leg: 0.10,
+            d_e_head: 0.10,
+            omega_succ: 0.05,
+            chain_iterations: 12,
+            upper_arm: 0.28,
+            forearm: 0.30,
+            thigh: 0.43,
+            shin: 0.43,
+            neck_to_head: 0.20,
+            surface_offset_arm: 0.03,
+            surface_offset_leg: 0.05,
+            surface_offset_head: 0.07,
+            unassigned_cost: 0.8,
+            temporal_weight: 1.0,
+            occluded_decay: 0.7,
+        }
+    }
+}
+
+/// The five limbs, each a chain from a torso key point to an extremity.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Limb {
+    Head,
+    LeftArm,
+    RightArm,
+    LeftLeg,
+    RightLeg,
+}
+
+impl Limb {
+    pub const ALL: [Limb; 5] = [
+        Limb::Head,
+        Limb::LeftArm,
+        Limb::RightArm,
+        Limb::LeftLeg,
+        Limb::RightLeg,
+    ];
+
+    /// Root, middle and end joint (the head has no middle joint: root neck, end head).
+    pub fn joints(self) -> (Joint, Option<Joint>, Joint) {
+        match self {
+            Limb::Head => (Joint::Neck, None, Joint::Head),
+            Limb::LeftArm => (Joint::LeftShoulder, Some(Joint::LeftElbow), Joint::LeftHand),
+            Limb::RightArm => (
+                Joint::RightShoulder,
+                Some(Joint::RightElbow),
+                Joint::RightHand,
+            ),
+            Limb::LeftLeg => (Joint::LeftHip, Some(Joint::LeftKnee), Joint::LeftFoot),
+            Limb::RightLeg => (Joint::RightHip, Some(Joint::RightKnee), Joint::RightFoot),
+        }
+    }
+
+    pub fn index(self) -> usize {
+        self as usize
+    }
+}
+
+impl PoseConfig {
+    /// Bone lengths (root→middle, middle→end) of a limb; the head has one bone.
+    pub fn bones(&self, limb: Limb) -> (f32, f32) {
+        match limb {
+            Limb::Head => (self.neck_to_head, 0.0),
+            Limb::LeftArm | Limb::RightArm => (self.upper_arm, self.forearm),
+            Limb::LeftLeg | Limb::RightLeg => (self.thigh, self.shin),
+        }
+    }
+
+    pub fn d_e(&self, limb: Limb) -> f32 {
+        match limb {
+            Limb::Head => self.d_e_head,
+            Limb::LeftArm | Limb::RightArm => self.d_e_arm,
+            Limb::LeftLeg | Limb::RightLeg => self.d_e_leg,
+        }
+    }
+
+    pub fn surface_offset(&self, limb: Limb) -> f32 {
+        match limb {
+            Limb::Head => self.surface_offset_head,
+            Limb::LeftArm | Limb::RightArm => self.surface_offset_arm,
+            Limb::LeftLeg | Limb::RightLeg => self.surface_offset_leg,
+        }
+    }
+
+    /// The rest direction of a limb in the torso frame, for a first fit with no data.
+    pub fn rest_direction(&self, limb: Limb) -> Vector3<f32> {
+        match limb {
+            Limb::Head => Vector3::y(),
+            Limb::LeftArm => Vector3::new(0.2, -1.0, 0.0).normalize(),
+            Limb::RightArm => Vector3::new(-0.2, -1.0, 0.0).normalize(),
+            Limb::LeftLeg | Limb::RightLeg => -Vector3::y(),
+        }
+    }
+}

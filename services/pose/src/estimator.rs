@@ -1,0 +1,507 @@
+//! The whole estimator: segmentation → torso → graph → geodesic maxima → limbs.
+
+use crate::config::{Limb, PoseConfig};
+use crate::dijkstra::{Dijkstra, Graph, INF};
+use crate::graph::{GeoGraph, NONE};
+use crate::limbs::{assign, fit_chain, Chain};
+use crate::segment::{Plane, Segmenter};
+use crate::torso::{keypoints, TorsoEstimator, TorsoPose};
+use airglyph_core::{DepthView, Intrinsics, Joint, Skeleton};
+use nalgebra::{Point3, Vector3};
+use std::time::Instant;
+
+/// What [`PoseEstimator::estimate`] returns for one frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PoseResult {
+    /// Whether a person was found. When false, `skeleton` holds zeros with confidence 0.
+    pub person_found: bool,
+    /// 16 joints, metres, camera frame of DESIGN.md; a confidence in [0, 1] each.
+    /// Always finite.
+    pub skeleton: Skeleton,
+}
+
+/// Time spent in each step of the last frame, seconds.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StepTimes {
+    pub segment: f64,
+    pub torso: f64,
+    pub graph: f64,
+    pub geodesic: f64,
+    pub limbs: f64,
+}
+
+/// Intermediate results of the last frame, for overlays and diagnostics.
+#[derive(Debug, Clone, Default)]
+pub struct Debug {
+    /// Pixels of the geodesic maxima, in the order found.
+    pub maxima: Vec<u32>,
+    /// For each limb, the maximum assigned to it (index into `maxima`).
+    pub assignment: [Option<usize>; 5],
+    /// Target points of each limb.
+    pub targets: [Vec<Point3<f32>>; 5],
+    /// Nodes of the graph, components joined, bridges.
+    pub nodes: usize,
+    pub bridges: usize,
+    pub joins: usize,
+    /// Torso registration residual (m) and whether it was re-initialised.
+    pub torso_residual: f32,
+    pub torso_reinit: bool,
+    pub floor: Option<Plane>,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct LimbState {
+    /// Middle and end joint, and the extremity, in the torso frame.
+    mid: Point3<f32>,
+    end: Point3<f32>,
+    extremity: Option<Point3<f32>>,
+    confidence: f32,
+}
+
+/// Estimates a 16-joint skeleton from each depth frame (seed §16.3). Keeps state from
+/// frame to frame (the torso registration, the last fit of each limb), so feed it the
+/// frames of one camera in order; [`PoseEstimator::reset`] forgets it.
+pub struct PoseEstimator {
+    k: Intrinsics,
+    cfg: PoseConfig,
+    seg: Segmenter,
+    torso: TorsoEstimator,
+    graph: GeoGraph,
+    dij: Dijkstra,
+    dist0: Vec<u32>,
+    pred0: Vec<u32>,
+    points: Vec<Point3<f32>>,
+    mask: Vec<bool>,
+    stamp: Vec<u32>,
+    stamp_now: u32,
+    path: Vec<u32>,
+    prev_torso: Option<TorsoPose>,
+    prev_floor: Option<Plane>,
+    prev_centroid: Option<Point3<f32>>,
+    limbs: [Option<LimbState>; 5],
+    times: StepTimes,
+    debug: Debug,
+}
+
+impl PoseEstimator {
+    /// An estimator for frames of the camera `intrinsics` describes. Frames of another
+    /// size are handled by scaling the intrinsics to them.
+    pub fn new(intrinsics: Intrinsics, config: PoseConfig) -> Self {
+        Self {
+            k: intrinsics,
+            torso: TorsoEstimator::new(&config),
+            cfg: config,
+            seg: Segmenter::default(),
+            graph: GeoGraph::default(),
+            dij: Dijkstra::default(),
+            dist0: Vec::new(),
+            pred0: Vec::new(),
+            points: Vec::new(),
+            mask: Vec::new(),
+            stamp: Vec::new(),
+            stamp_now: 0,
+            path: Vec::new(),
+            prev_torso: None,
+            prev_floor: None,
+            prev_centroid: None,
+            limbs: [None; 5],
+            times: StepTimes::default(),
+            debug: Debug::default(),
+        }
+    }
+
+    pub fn config(&self) -> &PoseConfig {
+        &self.cfg
+    }
+
+    pub fn intrinsics(&self) -> &Intrinsics {
+        &self.k
+    }
+
+    /// Forgets everything learned from earlier frames.
+    pub fn reset(&mut self) {
+        self.prev_torso = None;
+        self.prev_floor = None;
+        self.prev_centroid = None;
+        self.limbs = [None; 5];
+    }
+
+    /// Time of each step in the last frame.
+    pub fn step_times(&self) -> StepTimes {
+        self.times
+    }
+
+    /// Intermediate results of the last frame.
+    pub fn debug(&self) -> &Debug {
+        &self.debug
+    }
+
+    /// The person mask of the last frame (row-major, one flag a pixel).
+    pub fn mask(&self) -> &[bool] {
+        &self.mask
+    }
+
+    /// The skeleton of one depth frame. Never panics and never returns NaN.
+    pub fn estimate(&mut self, depth: DepthView) -> PoseResult {
+        let lost = PoseResult {
+            person_found: false,
+            skeleton: Skeleton {
+                joints: [Point3::origin(); Joint::COUNT],
+                confidence: [0.0; Joint::COUNT],
+            },
+        };
+        match self.estimate_inner(depth) {
+            Some(s) if s.is_finite() => PoseResult {
+                person_found: true,
+                skeleton: s,
+            },
+            _ => {
+                self.reset();
+                lost
+            }
+        }
+    }
+
+    fn estimate_inner(&mut self, depth: DepthView) -> Option<Skeleton> {
+        let (w, h) = (depth.width() as usize, depth.height() as usize);
+        if w < 8 || h < 8 {
+            return None;
+        }
+        let k = if depth.width() != self.k.width || depth.height() != self.k.height {
+            self.k.scaled_to(depth.width(), depth.height())
+        } else {
+            self.k
+        };
+        if k.validate().is_err() {
+            return None;
+        }
+        let cfg_owned = self.cfg.clone();
+        let cfg = &cfg_owned;
+        self.debug = Debug::default();
+        let t0 = Instant::now();
+
+        // 1. The person's pixels.
+        let seg = self.seg.run(
+            &depth,
+            &k,
+            cfg,
+            self.prev_floor,
+            self.prev_centroid,
+            &mut self.points,
+            &mut self.mask,
+        );
+        self.prev_floor = seg.floor;
+        self.debug.floor = seg.floor;
+        let t1 = Instant::now();
+        self.times.segment = (t1 - t0).as_secs_f64();
+        if !seg.found {
+            return None;
+        }
+        self.prev_centroid = Some(seg.centroid);
+
+        // 2. Torso: distance transform + PCA, then model registration.
+        let up_hint = seg.floor.map(|p| p.n).unwrap_or(-Vector3::y());
+        let fit = self.torso.fit(
+            &self.points,
+            &self.mask,
+            w,
+            h,
+            cfg,
+            self.prev_torso,
+            up_hint,
+        )?;
+        let torso = fit.pose;
+        self.debug.torso_residual = fit.residual;
+        self.debug.torso_reinit = fit.reinitialised;
+        // A new registration means the old limb fits are in an unrelated frame.
+        let torso_conf = if fit.residual.is_finite() {
+            (1.0 - fit.residual / (2.0 * cfg.icp_reinit_residual)).clamp(0.2, 1.0)
+        } else {
+            0.2
+        };
+        self.prev_torso = Some(torso);
+        let kp = keypoints(&torso, cfg);
+        let t2 = Instant::now();
+        self.times.torso = (t2 - t1).as_secs_f64();
+
+        // 3. The geodesic graph.
+        self.graph.build(&self.points, &self.mask, w, h, &k, cfg);
+        self.debug.nodes = self.graph.node_count();
+        self.debug.bridges = self.graph.bridges.len();
+        self.debug.joins = self.graph.joins.len();
+        let centre = Point3::from(torso.t);
+        let root = self
+            .graph
+            .nearest_node(&k, &centre, 12)
+            .or_else(|| {
+                let a = self.graph.node_of_pixel[fit.core_pixel];
+                (a != NONE && self.graph.comp[a as usize] != NONE).then_some(a)
+            })?;
+        let t3 = Instant::now();
+        self.times.graph = (t3 - t2).as_secs_f64();
+
+        // 4. Dijkstra from the torso centre, then five maxima, each made a source.
+        let n = self.graph.node_count();
+        self.dij.reset(n);
+        self.dij.add_source(root);
+        self.dij.run(&self.graph);
+        self.dist0.clear();
+        self.dist0.extend_from_slice(&self.dij.dist);
+        self.pred0.clear();
+        self.pred0.extend_from_slice(&self.dij.pred);
+        let min_ext = (cfg.min_extremity * 1000.0) as u32;
+        let mut maxima: Vec<u32> = Vec::with_capacity(5);
+        for _ in 0..5 {
+            let mut best = (0u32, NONE);
+            for (a, &d) in self.dij.dist.iter().enumerate() {
+                if d != INF && d > best.0 {
+                    best = (d, a as u32);
+                }
+            }
+            if best.1 == NONE || best.0 < min_ext {
+                break;
+            }
+            maxima.push(best.1);
+            self.dij.add_source(best.1);
+            self.dij.run(&self.graph);
+        }
+        self.debug.maxima = maxima
+            .iter()
+            .map(|&m| self.graph.pixel_of_node[m as usize])
+            .collect();
+        let t4 = Instant::now();
+        self.times.geodesic = (t4 - t3).as_secs_f64();
+
+        // 5. Maxima to limbs by least total cost.
+        let roots = [kp[0], kp[2], kp[3], kp[4], kp[5]];
+        let inv = torso.inverse();
+        let mut cost: Vec<[f32; 5]> = Vec::with_capacity(maxima.len());
+        let mut cuts: Vec<[usize; 5]> = Vec::with_capacity(maxima.len());
+        let mut paths: Vec<Vec<u32>> = Vec::with_capacity(maxima.len());
+        for &m in &maxima {
+            self.path.clear();
+            let mut a = m;
+            let mut guard = 0;
+            while a != NONE && guard < n {
+                self.path.push(a);
+                a = self.pred0[a as usize];
+                guard += 1;
+            }
+            let dm = self.dist0[m as usize] as f32 * 1e-3;
+            let mut row = [f32::INFINITY; 5];
+            let mut cut = [0usize; 5];
+            for l in Limb::ALL {
+                let r = roots[l.index()];
+                let mut best = (f32::INFINITY, 0usize);
+                for (pi, &p) in self.path.iter().enumerate() {
+                    let g = dm - self.dist0[p as usize] as f32 * 1e-3
+                        + (self.graph.pos[p as usize] - r).norm();
+                    if g < best.0 {
+                        best = (g, pi);
+                    }
+                }
+                let (l1, l2) = cfg.bones(l);
+                let reach = l1 + l2 + 0.15;
+                let mut c = best.0;
+                if c > 1.3 * reach {
+                    c += 2.0 * (c - 1.3 * reach);
+                }
+                if let Some(prev) = self.limbs[l.index()].and_then(|s| s.extremity) {
+                    let pm = self.graph.pos[m as usize];
+                    c += cfg.temporal_weight * (inv.apply(&pm) - prev).norm();
+                }
+                // An extremity lies on its own side of the body.
+                let local = inv.apply(&self.graph.pos[m as usize]);
+                c += match l {
+                    Limb::LeftArm | Limb::LeftLeg => (-local.x).max(0.0),
+                    Limb::RightArm | Limb::RightLeg => local.x.max(0.0),
+                    Limb::Head => (-local.y).max(0.0),
+                };
+                row[l.index()] = c;
+                cut[l.index()] = best.1;
+            }
+            cost.push(row);
+            cuts.push(cut);
+            paths.push(self.path.clone());
+        }
+        let assignment = assign(&cost, cfg.unassigned_cost);
+        self.debug.assignment = assignment;
+
+        // 6. Target points and chain fitting per limb.
+        let mut skel = Skeleton::new([Point3::origin(); Joint::COUNT]);
+        skel.set(Joint::Torso, centre);
+        skel.set(Joint::Neck, kp[0]);
+        skel.set(Joint::Pelvis, kp[1]);
+        skel.set(Joint::LeftShoulder, kp[2]);
+        skel.set(Joint::RightShoulder, kp[3]);
+        skel.set(Joint::LeftHip, kp[4]);
+        skel.set(Joint::RightHip, kp[5]);
+        for j in [
+            Joint::Torso,
+            Joint::Neck,
+            Joint::Pelvis,
+            Joint::LeftShoulder,
+            Joint::RightShoulder,
+            Joint::LeftHip,
+            Joint::RightHip,
+        ] {
+            skel.confidence[j.index()] = torso_conf;
+        }
+        let f = 0.5 * (k.fx + k.fy);
+        for l in Limb::ALL {
+            let li = l.index();
+            let root_p = roots[li];
+            let (l1, l2) = cfg.bones(l);
+            let (jr, jm, je) = l.joints();
+            let _ = jr;
+            let prev = self.limbs[li];
+            let chain = match assignment[li] {
+                Some(mi) => {
+                    let path = &paths[mi];
+                    let cut = cuts[mi][li];
+                    let targets = self.gather_targets(&path[..=cut.min(path.len() - 1)], l, f);
+                    let mut cands: Vec<Chain> = Vec::with_capacity(2);
+                    // From the geodesic path: the middle joint where the path is one
+                    // upper bone from the root.
+                    let ext = self.graph.pos[maxima[mi] as usize];
+                    let ext_b = ext + ext.coords.normalize() * cfg.surface_offset(l);
+                    let mut mid_guess = ext_b;
+                    if l2 > 0.0 {
+                        for &p in path[..=cut.min(path.len() - 1)].iter().rev() {
+                            let q = self.graph.pos[p as usize];
+                            if (q - root_p).norm() >= l1 {
+                                mid_guess = q + q.coords.normalize() * cfg.surface_offset(l);
+                                break;
+                            }
+                        }
+                    }
+                    let l2_eff = if l2 > 0.0 { l2 } else { 0.0 };
+                    let c0 = if l2 > 0.0 {
+                        Chain::towards(root_p, mid_guess - root_p, ext_b, l1, l2_eff)
+                    } else {
+                        let d = (ext_b - root_p).try_normalize(1e-6).unwrap_or(torso.r * Vector3::y());
+                        Chain { root: root_p, mid: root_p + d * l1, end: root_p + d * l1 }
+                    };
+                    cands.push(c0);
+                    if let Some(s) = prev {
+                        let mid = torso.apply(&s.mid);
+                        let end = torso.apply(&s.end);
+                        let c = if l2 > 0.0 {
+                            Chain::towards(root_p, mid - root_p, end, l1, l2)
+                        } else {
+                            let d = (end - root_p).try_normalize(1e-6).unwrap_or(torso.r * Vector3::y());
+                            Chain { root: root_p, mid: root_p + d * l1, end: root_p + d * l1 }
+                        };
+                        cands.push(c);
+                    }
+                    let mut best: Option<(Chain, f32)> = None;
+                    for c in cands {
+                        let (fitc, e) = fit_chain(c, &targets, cfg.omega_succ, cfg.chain_iterations);
+                        if best.is_none_or(|(_, be)| e < be) {
+                            best = Some((fitc, e));
+                        }
+                    }
+                    let (fitc, e) = best.unwrap_or((c0, 0.0));
+                    let rms = e.sqrt();
+                    let conf = ((1.0 - rms / 0.06).clamp(0.1, 1.0))
+                        * (targets.len() as f32 / 30.0).min(1.0).max(0.2);
+                    self.debug.targets[li] = targets;
+                    self.limbs[li] = Some(LimbState {
+                        mid: inv.apply(&fitc.mid),
+                        end: inv.apply(&fitc.end),
+                        extremity: Some(inv.apply(&ext)),
+                        confidence: conf,
+                    });
+                    (fitc, conf)
+                }
+                None => {
+                    // Occluded: keep the last fit (in the torso frame), trusted less.
+                    let s = prev.unwrap_or_else(|| {
+                        let d = cfg.rest_direction(l);
+                        let r_local = inv.apply(&root_p);
+                        LimbState {
+                            mid: r_local + d * l1,
+                            end: r_local + d * (l1 + l2),
+                            extremity: None,
+                            confidence: 0.2 / cfg.occluded_decay.max(1e-3),
+                        }
+                    });
+                    let conf = (s.confidence * cfg.occluded_decay).clamp(0.0, 1.0);
+                    self.limbs[li] = Some(LimbState {
+                        confidence: conf,
+                        ..s
+                    });
+                    let mid = torso.apply(&s.mid);
+                    let end = torso.apply(&s.end);
+                    (Chain { root: root_p, mid, end }, conf)
+                }
+            };
+            let (c, conf) = chain;
+            if let Some(jm) = jm {
+                skel.set(jm, c.mid);
+                skel.confidence[jm.index()] = conf;
+            }
+            skel.set(je, c.end);
+            skel.confidence[je.index()] = conf;
+        }
+        let t5 = Instant::now();
+        self.times.limbs = (t5 - t4).as_secs_f64();
+        Some(skel)
+    }
+
+    /// Target points of a limb (seed Eq. 16.10): the person's points within `d_e` of
+    /// the geodesic path from the extremity to the limb root, no nearer the torso centre
+    /// (geodesically) than the path's end, pushed back along their viewing ray by the
+    /// limb's surface offset.
+    fn gather_targets(&mut self, path: &[u32], l: Limb, f: f32) -> Vec<Point3<f32>> {
+        let cfg = &self.cfg;
+        let g = &self.graph;
+        let d_e = cfg.d_e(l);
+        let off = cfg.surface_offset(l);
+        let mut out = Vec::new();
+        if path.is_empty() {
+            return out;
+        }
+        self.stamp_now = self.stamp_now.wrapping_add(1);
+        if self.stamp_now == 0 || self.stamp.len() != g.node_count() {
+            self.stamp.clear();
+            self.stamp.resize(g.node_count(), 0);
+            self.stamp_now = 1;
+        }
+        let floor_d = self.dist0[path[path.len() - 1] as usize].saturating_sub((d_e * 1000.0) as u32);
+        let spacing = (d_e * 500.0) as u32;
+        let mut last_d = u32::MAX;
+        let (w, h) = (g.width as i32, g.height as i32);
+        for (pi, &p) in path.iter().enumerate() {
+            let dp = self.dist0[p as usize];
+            if pi + 1 != path.len() && last_d != u32::MAX && last_d.saturating_sub(dp) < spacing {
+                continue;
+            }
+            last_d = dp;
+            let c = g.pos[p as usize];
+            let px = g.pixel_of_node[p as usize] as i32;
+            let (u, v) = (px % w, px / w);
+            let r = ((d_e * f / c.z).ceil() as i32).clamp(1, 200);
+            let step = if r > 10 { 2 } else { 1 };
+            let d2 = d_e * d_e;
+            let mut vv = (v - r).max(0);
+            while vv <= (v + r).min(h - 1) {
+                let mut uu = (u - r).max(0);
+                while uu <= (u + r).min(w - 1) {
+                    let b = g.node_of_pixel[(vv * w + uu) as usize];
+                    if b != NONE && self.stamp[b as usize] != self.stamp_now {
+                        let q = g.pos[b as usize];
+                        let db = self.dist0[b as usize];
+                        if db != INF && db >= floor_d && (q - c).norm_squared() < d2 {
+                            self.stamp[b as usize] = self.stamp_now;
+                            out.push(q + q.coords.normalize() * off);
+                        }
+                    }
+                    uu += step;
+                }
+                vv += step;
+            }
+        }
+        out
+    }
+}

@@ -1,0 +1,328 @@
+//! The person's pixels: depth band, floor plane removed (RANSAC), blobs split at depth
+//! jumps, the largest person-shaped blob kept.
+
+use crate::config::PoseConfig;
+use crate::geom::Moments;
+use airglyph_core::{DepthView, Intrinsics};
+use nalgebra::{Point3, Vector3};
+
+/// A plane `n · x + d = 0` with unit normal pointing up, out of the floor.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Plane {
+    pub n: Vector3<f32>,
+    pub d: f32,
+}
+
+impl Plane {
+    #[inline]
+    pub fn height(&self, p: &Point3<f32>) -> f32 {
+        self.n.dot(&p.coords) + self.d
+    }
+}
+
+/// What segmentation found in one frame.
+#[derive(Debug, Clone, Default)]
+pub struct Segmentation {
+    /// Whether a person-shaped blob was found.
+    pub found: bool,
+    /// Pixel count of the person.
+    pub pixels: usize,
+    /// Centroid of the person's points.
+    pub centroid: Point3<f32>,
+    /// Bounding box of the person in the image (u0, v0, u1, v1), inclusive.
+    pub bbox: (u32, u32, u32, u32),
+    /// The floor found in this frame, if any.
+    pub floor: Option<Plane>,
+}
+
+/// Deterministic xorshift generator (the estimator must not depend on a global seed).
+#[derive(Debug, Clone)]
+pub struct XorShift(u64);
+
+impl XorShift {
+    pub fn new(seed: u64) -> Self {
+        Self(seed.max(1))
+    }
+    #[inline]
+    pub fn next_u32(&mut self) -> u32 {
+        let mut x = self.0;
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        self.0 = x;
+        (x >> 32) as u32
+    }
+    #[inline]
+    pub fn below(&mut self, n: usize) -> usize {
+        (self.next_u32() as u64 * n as u64 >> 32) as usize
+    }
+}
+
+/// Reusable buffers of the segmentation step.
+#[derive(Debug, Default)]
+pub struct Segmenter {
+    labels: Vec<u32>,
+    stack: Vec<u32>,
+    samples: Vec<Point3<f32>>,
+}
+
+struct Blob {
+    label: u32,
+    pixels: usize,
+    area: f32,
+    moments: Moments,
+    min: Vector3<f32>,
+    max: Vector3<f32>,
+    bbox: (u32, u32, u32, u32),
+    hmin: f32,
+    hmax: f32,
+}
+
+impl Segmenter {
+    /// Back-projects `depth` into `points` (z = 0 where there is no data or the depth is
+    /// outside the band) and marks the person's pixels in `mask`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn run(
+        &mut self,
+        depth: &DepthView,
+        k: &Intrinsics,
+        cfg: &PoseConfig,
+        prev_floor: Option<Plane>,
+        prev_centroid: Option<Point3<f32>>,
+        points: &mut Vec<Point3<f32>>,
+        mask: &mut Vec<bool>,
+    ) -> Segmentation {
+        let (w, h) = (depth.width() as usize, depth.height() as usize);
+        let n = w * h;
+        points.clear();
+        points.resize(n, Point3::origin());
+        mask.clear();
+        mask.resize(n, false);
+        let px = depth.pixels();
+        let (near_mm, far_mm) = (cfg.near * 1000.0, cfg.far * 1000.0);
+        for v in 0..h {
+            for u in 0..w {
+                let i = v * w + u;
+                let d = px[i] as f32;
+                if d > 0.0 && d >= near_mm && d <= far_mm {
+                    points[i] = k.back_project(u as f32, v as f32, d * 1e-3);
+                }
+            }
+        }
+        let floor = if cfg.remove_floor {
+            self.find_floor(points, w, h, cfg, prev_floor)
+        } else {
+            None
+        };
+        if let Some(pl) = floor {
+            for p in points.iter_mut() {
+                if p.z > 0.0 && pl.height(p) < cfg.floor_margin {
+                    *p = Point3::origin();
+                }
+            }
+        }
+        let mut seg = Segmentation {
+            floor,
+            ..Default::default()
+        };
+
+        // Connected components split at depth jumps.
+        self.labels.clear();
+        self.labels.resize(n, u32::MAX);
+        let mut blobs: Vec<Blob> = Vec::new();
+        let f = 0.5 * (k.fx + k.fy);
+        for start in 0..n {
+            if points[start].z <= 0.0 || self.labels[start] != u32::MAX {
+                continue;
+            }
+            let label = blobs.len() as u32;
+            let mut b = Blob {
+                label,
+                pixels: 0,
+                area: 0.0,
+                moments: Moments::default(),
+                min: Vector3::repeat(f32::MAX),
+                max: Vector3::repeat(f32::MIN),
+                bbox: (u32::MAX, u32::MAX, 0, 0),
+                hmin: f32::MAX,
+                hmax: f32::MIN,
+            };
+            self.labels[start] = label;
+            self.stack.clear();
+            self.stack.push(start as u32);
+            while let Some(i) = self.stack.pop() {
+                let i = i as usize;
+                let p = points[i];
+                let (u, v) = ((i % w) as u32, (i / w) as u32);
+                b.pixels += 1;
+                let fp = p.z / f;
+                b.area += fp * fp;
+                // Moments on a sparse subset are enough for the shape test.
+                if (u + v) % 3 == 0 {
+                    b.moments.add(&p);
+                }
+                b.min = b.min.inf(&p.coords);
+                b.max = b.max.sup(&p.coords);
+                b.bbox = (
+                    b.bbox.0.min(u),
+                    b.bbox.1.min(v),
+                    b.bbox.2.max(u),
+                    b.bbox.3.max(v),
+                );
+                if let Some(pl) = floor {
+                    let hh = pl.height(&p);
+                    b.hmin = b.hmin.min(hh);
+                    b.hmax = b.hmax.max(hh);
+                }
+                let jump = (cfg.blob_jump_px * fp).max(cfg.blob_jump_min);
+                let mut visit = |j: usize| {
+                    let q = points[j];
+                    if q.z > 0.0 && self.labels[j] == u32::MAX && (q.z - p.z).abs() < jump {
+                        self.labels[j] = label;
+                        self.stack.push(j as u32);
+                    }
+                };
+                if u > 0 {
+                    visit(i - 1);
+                }
+                if (u as usize) + 1 < w {
+                    visit(i + 1);
+                }
+                if v > 0 {
+                    visit(i - w);
+                }
+                if (v as usize) + 1 < h {
+                    visit(i + w);
+                }
+            }
+            blobs.push(b);
+        }
+
+        // The largest blob that could be a person.
+        let mut best: Option<(f32, usize)> = None;
+        for (bi, b) in blobs.iter().enumerate() {
+            if b.area < cfg.min_person_area || b.area > cfg.max_person_area {
+                continue;
+            }
+            let height = if floor.is_some() {
+                b.hmax - b.hmin.max(0.0)
+            } else {
+                b.max.y - b.min.y
+            };
+            if height < cfg.min_person_height {
+                continue;
+            }
+            let width = (b.max.x - b.min.x).max(0.0);
+            if width > cfg.max_person_width || height > 2.6 {
+                continue;
+            }
+            // A wall or a table top is flat; a person is not.
+            if let Some(pca) = b.moments.pca() {
+                let z = pca.mean.z;
+                let noise = 0.004 + 0.0015 * z * z;
+                if pca.std[2] < noise && pca.std[1] > 0.25 {
+                    continue;
+                }
+            }
+            let mut score = b.area;
+            if let Some(c) = prev_centroid {
+                if (b.moments.mean() - c).norm() < 0.5 {
+                    score *= 1.5;
+                }
+            }
+            if best.is_none_or(|(s, _)| score > s) {
+                best = Some((score, bi));
+            }
+        }
+        if let Some((_, bi)) = best {
+            let b = &blobs[bi];
+            for i in 0..n {
+                mask[i] = self.labels[i] == b.label;
+            }
+            seg.found = true;
+            seg.pixels = b.pixels;
+            seg.centroid = b.moments.mean();
+            seg.bbox = b.bbox;
+        }
+        seg
+    }
+
+    /// RANSAC for a floor-like plane (normal within 50° of the image's up) among the
+    /// points of the lower two thirds of the image.
+    fn find_floor(
+        &mut self,
+        points: &[Point3<f32>],
+        w: usize,
+        h: usize,
+        cfg: &PoseConfig,
+        prev: Option<Plane>,
+    ) -> Option<Plane> {
+        self.samples.clear();
+        let step = (((w * h) as f32 / 6000.0).sqrt().floor() as usize).max(1);
+        for v in (h / 3..h).step_by(step) {
+            for u in (0..w).step_by(step) {
+                let p = points[v * w + u];
+                if p.z > 0.0 {
+                    self.samples.push(p);
+                }
+            }
+        }
+        let s = &self.samples;
+        if s.len() < 50 {
+            return None;
+        }
+        let tol = cfg.floor_margin.max(0.02);
+        let count = |pl: &Plane| s.iter().filter(|p| pl.height(p).abs() < tol).count();
+        let mut best: Option<(usize, Plane)> = prev.map(|pl| (count(&pl), pl));
+        let mut rng = XorShift::new(0x9e37_79b9_7f4a_7c15);
+        for _ in 0..60 {
+            let a = s[rng.below(s.len())];
+            let b = s[rng.below(s.len())];
+            let c = s[rng.below(s.len())];
+            let nrm = (b - a).cross(&(c - a));
+            let len = nrm.norm();
+            if len < 1e-6 {
+                continue;
+            }
+            let mut nrm = nrm / len;
+            // Up is −y in the camera frame.
+            if nrm.y > 0.0 {
+                nrm = -nrm;
+            }
+            if -nrm.y < 0.64 {
+                continue;
+            }
+            let pl = Plane {
+                n: nrm,
+                d: -nrm.dot(&a.coords),
+            };
+            let c = count(&pl);
+            if best.is_none_or(|(bc, _)| c > bc) {
+                best = Some((c, pl));
+            }
+        }
+        let (c, pl) = best?;
+        if c < (s.len() / 20).max(40) {
+            return None;
+        }
+        // Least-squares refinement on the inliers.
+        let mut m = Moments::default();
+        for p in s.iter().filter(|p| pl.height(p).abs() < tol) {
+            m.add(p);
+        }
+        let pca = m.pca()?;
+        let mut nrm: Vector3<f32> = pca.axes.column(2).into_owned();
+        if nrm.y > 0.0 {
+            nrm = -nrm;
+        }
+        if -nrm.y < 0.64 || !nrm.iter().all(|c| c.is_finite()) {
+            return Some(pl);
+        }
+        // Most of the floor must be below the person: the plane's points lie low in
+        // the image, which the sampling region already ensures.
+        Some(Plane {
+            n: nrm,
+            d: -nrm.dot(&pca.mean.coords),
+        })
+    }
+}
