@@ -1,1 +1,501 @@
-//! Synthetic people: bodies, skinning, motion, depth rendering and exact ground truth
+//! Synthetic people: bodies, skinning, motion, depth rendering and exact ground truth.
+//!
+//! A [`Synthesizer`] renders a person into 16-bit depth frames (millimetres, 0 = no
+//! data) with the pinhole intrinsics of airglyph-core, and reports the 16 ground-truth
+//! joints of DESIGN.md for every frame, at anatomical joint centres inside the body
+//! (head = skull centre, hand = palm centre, foot = ankle, torso = mid-chest on the
+//! spine, pelvis = between the hips), in the camera frame.
+//!
+//! ```no_run
+//! use airglyph_synth::{SceneConfig, Synthesizer, MotionSpec, ScriptedPose, Background};
+//! let cfg = SceneConfig {
+//!     motion: MotionSpec::Pose(ScriptedPose::PointAtCamera),
+//!     background: Background::FloorAndWall,
+//!     sensor_noise: true,
+//!     ..SceneConfig::default()
+//! };
+//! let mut synth = Synthesizer::new(cfg)?;
+//! let k = synth.intrinsics();
+//! let mut depth = vec![0u16; (k.width * k.height) as usize];
+//! let truth = synth.render_into(0, &mut depth)?;
+//! println!("head at {:?}", truth.skeleton.get(airglyph_core::Joint::Head));
+//! # Ok::<(), airglyph_synth::SynthError>(())
+//! ```
+//!
+//! Pieces, each usable alone:
+//! - [`Body`]: a skinned mesh. [`BodySpec::Procedural`] is built in (ellipsoids and
+//!   tapered capsules rigidly bound to 19 bones; height and build are parameters);
+//!   [`BodySpec::MakeHuman`] loads the MakeHuman CC0 body with its `cmu_mb` rig and
+//!   weights from the asset cache that `scripts/fetch-assets` fills (linear blend
+//!   skinning, 4 bones a vertex).
+//! - [`Pose`] on the canonical skeleton ([`Bone`], 19 bones, T-pose reference): what
+//!   every motion source produces and every body consumes.
+//! - [`MotionSpec`]: scripted poses ([`ScriptedPose`], the hard cases of the seed
+//!   paper), BVH clips (three naming conventions, rest-pose offsets handled), and
+//!   air-drawing of symbols ([`DrawSpec`]) with ground-truth gesture boundaries.
+//! - [`raster::Raster`]: the z-buffer rasterizer; [`sensor`]: the Kinect-like noise.
+//! - [`write_recording`]: a whole recording on disk (airglyph-core's format, plus
+//!   `joints.csv` and, for air-drawing, `gestures.csv`).
+//!
+//! Everything is deterministic given [`SceneConfig::seed`].
+//!
+//! Frames: frame `i` is at time `i / fps`; [`Synthesizer::len`] is `None` for endless
+//! motion (scripted poses, repeating air-drawing: the live demo) and `Some(n)` for a
+//! clip or a finite list of symbols. Frames past the end hold the last pose.
+
+pub mod body;
+pub mod bvh;
+pub mod canon;
+pub mod draw;
+pub mod error;
+pub mod glyphs;
+pub mod makehuman;
+pub mod motion;
+pub mod poses;
+pub mod raster;
+pub mod sensor;
+
+pub use body::{Affine, Body, ProceduralBody};
+pub use canon::{Bone, Pose, TposeSkeleton};
+pub use error::SynthError;
+pub use motion::{DrawSpec, GestureTruth, MotionSpec};
+pub use poses::ScriptedPose;
+
+use airglyph_core::recording::{RecordingInfo, RecordingWriter};
+use airglyph_core::{DepthImage, DepthView, Intrinsics, Joint, Skeleton};
+use nalgebra::{Matrix3, Point3, Vector3};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// Which body to render.
+#[derive(Debug, Clone, PartialEq)]
+pub enum BodySpec {
+    /// The built-in procedural person.
+    Procedural(ProceduralBody),
+    /// The MakeHuman body; `assets` is the folder holding `mpfb2/` (None: see
+    /// [`makehuman::default_assets_dir`]).
+    MakeHuman { assets: Option<PathBuf> },
+}
+
+/// What surrounds the person.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Background {
+    /// The person alone, as in the seed paper.
+    #[default]
+    None,
+    /// A floor under the person and a wall 1.5 m behind them.
+    FloorAndWall,
+}
+
+/// Where the person stands relative to the camera. The camera looks horizontally (then
+/// tilted down by `camera_tilt_deg`) at the person, who faces it when `yaw_deg` = 0.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Placement {
+    /// From the camera to the person's hips, along the floor, metres.
+    pub distance_m: f32,
+    /// Camera height above the floor, metres.
+    pub camera_height_m: f32,
+    /// Camera pitch down, degrees.
+    pub camera_tilt_deg: f32,
+    /// The person's turn to their left, degrees.
+    pub yaw_deg: f32,
+    /// The person's offset to the camera's right, metres.
+    pub lateral_m: f32,
+    /// From the person to the wall behind (with [`Background::FloorAndWall`]), metres.
+    pub wall_behind_m: f32,
+}
+
+impl Default for Placement {
+    fn default() -> Self {
+        Self {
+            distance_m: 2.7,
+            camera_height_m: 1.0,
+            camera_tilt_deg: 0.0,
+            yaw_deg: 0.0,
+            lateral_m: 0.0,
+            wall_behind_m: 1.5,
+        }
+    }
+}
+
+/// Everything that defines a synthetic scene.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneConfig {
+    pub body: BodySpec,
+    pub motion: MotionSpec,
+    pub intrinsics: Intrinsics,
+    pub fps: f32,
+    /// Apply the Kinect-like sensor model ([`sensor`]).
+    pub sensor_noise: bool,
+    pub background: Background,
+    pub placement: Placement,
+    pub seed: u64,
+}
+
+impl Default for SceneConfig {
+    fn default() -> Self {
+        Self {
+            body: BodySpec::Procedural(ProceduralBody::default()),
+            motion: MotionSpec::Poses,
+            intrinsics: Intrinsics::default(),
+            fps: 30.0,
+            sensor_noise: false,
+            background: Background::None,
+            placement: Placement::default(),
+            seed: 0,
+        }
+    }
+}
+
+/// The ground truth of one rendered frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameTruth {
+    pub index: usize,
+    /// `index / fps` in nanoseconds.
+    pub capture_ns: u64,
+    /// The 16 joints, camera frame, metres (confidence 1).
+    pub skeleton: Skeleton,
+    /// Per joint: it projects inside the image onto its own body part (no other part of
+    /// the body hides it).
+    pub visible: [bool; Joint::COUNT],
+    /// The symbol being air-drawn in this frame, if any.
+    pub gesture: Option<GestureTruth>,
+}
+
+/// Renders frames of a scene. Holds its scratch buffers: reuse one for many frames.
+pub struct Synthesizer {
+    cfg: SceneConfig,
+    body: Body,
+    motion: motion::Motion,
+    camera: Affine,
+    background: Option<Vec<u16>>,
+    raster: raster::Raster,
+    xf: Vec<Affine>,
+    skinned: Vec<Point3<f32>>,
+    labels: Vec<u8>,
+}
+
+impl Synthesizer {
+    /// Builds the body, the motion and the background; checks every parameter.
+    pub fn new(cfg: SceneConfig) -> Result<Self, SynthError> {
+        cfg.intrinsics
+            .validate()
+            .map_err(|e| SynthError::Config(format!("intrinsics: {e}")))?;
+        if !(cfg.fps.is_finite() && cfg.fps > 0.0 && cfg.fps <= 1000.0) {
+            return Err(SynthError::Config(format!(
+                "fps {} must be in (0, 1000]",
+                cfg.fps
+            )));
+        }
+        let pl = &cfg.placement;
+        let finite = [
+            pl.distance_m,
+            pl.camera_height_m,
+            pl.camera_tilt_deg,
+            pl.yaw_deg,
+            pl.lateral_m,
+            pl.wall_behind_m,
+        ]
+        .iter()
+        .all(|v| v.is_finite());
+        if !finite || pl.distance_m < 0.5 || pl.distance_m > 20.0 || pl.wall_behind_m < 0.3 {
+            return Err(SynthError::Config(format!(
+                "placement {pl:?}: distances must be finite, 0.5–20 m to the person and ≥ 0.3 m to the wall"
+            )));
+        }
+        let body = match &cfg.body {
+            BodySpec::Procedural(p) => Body::procedural(p)?,
+            BodySpec::MakeHuman { assets } => {
+                let dir = assets.clone().unwrap_or_else(makehuman::default_assets_dir);
+                makehuman::load(&dir)?
+            }
+        };
+        let motion = motion::Motion::new(&cfg.motion, body.tpose(), cfg.fps, cfg.seed)?;
+        let camera = camera_from_body(pl);
+        let background = match cfg.background {
+            Background::None => None,
+            Background::FloorAndWall => Some(floor_and_wall(&cfg.intrinsics, pl)),
+        };
+        let n = (cfg.intrinsics.width * cfg.intrinsics.height) as usize;
+        Ok(Self {
+            cfg,
+            body,
+            motion,
+            camera,
+            background,
+            raster: raster::Raster::new(),
+            xf: Vec::new(),
+            skinned: Vec::new(),
+            labels: vec![raster::NO_LABEL; n],
+        })
+    }
+
+    pub fn config(&self) -> &SceneConfig {
+        &self.cfg
+    }
+
+    pub fn intrinsics(&self) -> Intrinsics {
+        self.cfg.intrinsics
+    }
+
+    pub fn fps(&self) -> f32 {
+        self.cfg.fps
+    }
+
+    pub fn body(&self) -> &Body {
+        &self.body
+    }
+
+    /// Frames in the motion, or `None` when it never ends.
+    pub fn len(&self) -> Option<usize> {
+        self.motion.len()
+    }
+
+    /// Whether the motion has no frame at all (never: a clip has at least one).
+    pub fn is_empty(&self) -> bool {
+        self.len() == Some(0)
+    }
+
+    /// Every air-drawn symbol of a finite motion with its frames.
+    pub fn gestures(&self) -> Vec<GestureTruth> {
+        self.motion.gestures()
+    }
+
+    /// The transform from the body frame to the camera frame.
+    pub fn camera_from_body(&self) -> Affine {
+        self.camera
+    }
+
+    /// The pose (canonical skeleton, body frame) of frame `index`.
+    pub fn pose(&self, index: usize) -> Pose {
+        self.motion.pose(index)
+    }
+
+    /// Per pixel of the last rendered frame, the canonical [`Bone`] whose surface it shows
+    /// (`Bone as u8`), or [`raster::NO_LABEL`] for background and empty pixels.
+    pub fn labels(&self) -> &[u8] {
+        &self.labels
+    }
+
+    /// Renders frame `index` into `depth` (row-major, `width × height`, millimetres,
+    /// 0 = no data) and returns its ground truth.
+    pub fn render_into(
+        &mut self,
+        index: usize,
+        depth: &mut [u16],
+    ) -> Result<FrameTruth, SynthError> {
+        let k = self.cfg.intrinsics;
+        let n = (k.width * k.height) as usize;
+        if depth.len() != n {
+            return Err(SynthError::Config(format!(
+                "depth buffer has {} pixels, the {}x{} camera needs {n}",
+                depth.len(),
+                k.width,
+                k.height
+            )));
+        }
+        let pose = self.motion.pose(index);
+        self.body.bone_transforms(&pose, &mut self.xf);
+        for a in &mut self.xf {
+            *a = a.then(&self.camera);
+        }
+        self.body.skin(&self.xf, &mut self.skinned);
+        match &self.background {
+            Some(bg) => depth.copy_from_slice(bg),
+            None => depth.fill(0),
+        }
+        self.labels.fill(raster::NO_LABEL);
+        self.raster.rasterize(
+            &k,
+            &self.skinned,
+            &self.body.tris,
+            &self.body.tri_label,
+            true,
+            depth,
+            Some(&mut self.labels),
+        );
+        let joints = self.body.joints_from(&self.xf);
+        let mut visible = [false; Joint::COUNT];
+        for j in Joint::ALL {
+            visible[j.index()] = self.joint_visible(j, &joints[j.index()]);
+        }
+        if self.cfg.sensor_noise {
+            sensor::apply(&k, depth, self.cfg.seed, index);
+        }
+        Ok(FrameTruth {
+            index,
+            capture_ns: (index as f64 * 1e9 / self.cfg.fps as f64).round() as u64,
+            skeleton: Skeleton::new(joints),
+            visible,
+            gesture: self.motion.gesture(index),
+        })
+    }
+
+    /// Renders frame `index` into a new image.
+    pub fn render(&mut self, index: usize) -> (DepthImage, FrameTruth) {
+        let k = self.cfg.intrinsics;
+        let mut img = DepthImage::empty(k.width, k.height);
+        let truth = self
+            .render_into(index, img.pixels_mut())
+            .expect("buffer sized from the intrinsics");
+        (img, truth)
+    }
+
+    fn joint_visible(&self, j: Joint, p: &Point3<f32>) -> bool {
+        let k = &self.cfg.intrinsics;
+        let Some((u, v)) = k.project(p) else {
+            return false;
+        };
+        let (u, v) = (u.round(), v.round());
+        if u < 0.0 || v < 0.0 || u >= k.width as f32 || v >= k.height as f32 {
+            return false;
+        }
+        let l = self.labels[v as usize * k.width as usize + u as usize];
+        l != raster::NO_LABEL && own_bones(j).iter().any(|b| *b as u8 == l)
+    }
+}
+
+/// The body parts around a joint: if one of them is what the camera sees at the joint's
+/// pixel, the joint is not hidden by another part of the body.
+pub fn own_bones(j: Joint) -> &'static [Bone] {
+    use Bone::*;
+    match j {
+        Joint::Head => &[Head, Neck],
+        Joint::Neck => &[Neck, Chest, Head, LeftCollar, RightCollar],
+        Joint::Torso => &[Chest, Spine],
+        Joint::Pelvis => &[Hips, Spine, LeftThigh, RightThigh],
+        Joint::LeftShoulder => &[LeftCollar, LeftUpperArm, Chest],
+        Joint::LeftElbow => &[LeftUpperArm, LeftForearm],
+        Joint::LeftHand => &[LeftHand, LeftForearm],
+        Joint::RightShoulder => &[RightCollar, RightUpperArm, Chest],
+        Joint::RightElbow => &[RightUpperArm, RightForearm],
+        Joint::RightHand => &[RightHand, RightForearm],
+        Joint::LeftHip => &[Hips, LeftThigh],
+        Joint::LeftKnee => &[LeftThigh, LeftShin],
+        Joint::LeftFoot => &[LeftShin, LeftFoot],
+        Joint::RightHip => &[Hips, RightThigh],
+        Joint::RightKnee => &[RightThigh, RightShin],
+        Joint::RightFoot => &[RightShin, RightFoot],
+    }
+}
+
+/// Body frame (y up, facing +z, floor y = 0) to camera frame (x right, y down, z
+/// forward) for a placement.
+pub fn camera_from_body(pl: &Placement) -> Affine {
+    let yaw = poses::yaw(pl.yaw_deg.to_radians());
+    let ry = *yaw.to_rotation_matrix().matrix();
+    let flip = Matrix3::from_diagonal(&Vector3::new(1.0, -1.0, -1.0));
+    let t = pl.camera_tilt_deg.to_radians();
+    let tilt = Matrix3::new(1.0, 0.0, 0.0, 0.0, t.cos(), -t.sin(), 0.0, t.sin(), t.cos());
+    Affine {
+        m: tilt * flip * ry,
+        t: tilt * Vector3::new(pl.lateral_m, pl.camera_height_m, pl.distance_m),
+    }
+}
+
+/// The floor (y = 0) and a wall behind the person, rendered analytically per pixel.
+fn floor_and_wall(k: &Intrinsics, pl: &Placement) -> Vec<u16> {
+    let c = camera_from_body(&Placement {
+        yaw_deg: 0.0,
+        ..*pl
+    });
+    // Camera centre and ray directions in the body frame.
+    let rt = c.m.transpose();
+    let origin = -(rt * c.t);
+    let wall_z = -pl.wall_behind_m;
+    let mut out = vec![0u16; (k.width * k.height) as usize];
+    for v in 0..k.height {
+        for u in 0..k.width {
+            let ray_cam = Vector3::new((u as f32 - k.cx) / k.fx, (v as f32 - k.cy) / k.fy, 1.0);
+            let d = rt * ray_cam;
+            let mut best = f32::INFINITY;
+            if d.y < -1e-6 {
+                best = best.min(-origin.y / d.y);
+            }
+            if d.z < -1e-6 {
+                best = best.min((wall_z - origin.z) / d.z);
+            }
+            if best.is_finite() && best > 0.0 && best < 8.0 {
+                out[(v * k.width + u) as usize] = (best * 1000.0).round() as u16;
+            }
+        }
+    }
+    out
+}
+
+/// What [`write_recording`] wrote.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RecordingSummary {
+    pub frames: usize,
+    pub gestures: Vec<GestureTruth>,
+}
+
+/// Renders `frames` frames (fewer if the motion is shorter) into a new recording in
+/// `dir`: airglyph-core's format with `joints.csv`, and `gestures.csv`
+/// (`label,start_frame,end_frame`) when the motion air-draws. `progress` is called
+/// after every frame with the number written so far.
+pub fn write_recording(
+    cfg: SceneConfig,
+    frames: usize,
+    dir: &Path,
+    mut progress: impl FnMut(usize),
+) -> Result<RecordingSummary, SynthError> {
+    let source = format!("synthetic:{}", describe(&cfg));
+    let mut synth = Synthesizer::new(cfg)?;
+    let n = synth.len().map_or(frames, |len| len.min(frames));
+    let k = synth.intrinsics();
+    let mut writer =
+        RecordingWriter::create(dir, RecordingInfo::new(k, synth.fps(), source), true)?;
+    let mut depth = vec![0u16; (k.width * k.height) as usize];
+    for i in 0..n {
+        let truth = synth.render_into(i, &mut depth)?;
+        let view = DepthView::new(k.width, k.height, &depth).expect("sized from intrinsics");
+        writer.write_frame(view, truth.capture_ns, Some(&truth.skeleton))?;
+        progress(i + 1);
+    }
+    let gestures: Vec<GestureTruth> = synth
+        .gestures()
+        .into_iter()
+        .filter(|g| g.end_frame < n)
+        .collect();
+    if matches!(synth.cfg.motion, MotionSpec::Draw(_)) {
+        write_gestures_csv(&dir.join("gestures.csv"), &gestures)?;
+    }
+    Ok(RecordingSummary {
+        frames: n,
+        gestures,
+    })
+}
+
+/// Writes `gestures.csv`: a header `label,start_frame,end_frame`, then one row a
+/// gesture (frames inclusive).
+pub fn write_gestures_csv(path: &Path, gestures: &[GestureTruth]) -> Result<(), SynthError> {
+    let mut f =
+        std::io::BufWriter::new(std::fs::File::create(path).map_err(|e| SynthError::io(path, e))?);
+    let mut text = String::from("label,start_frame,end_frame\n");
+    for g in gestures {
+        text.push_str(&format!("{},{},{}\n", g.label, g.start_frame, g.end_frame));
+    }
+    f.write_all(text.as_bytes())
+        .and_then(|_| f.flush())
+        .map_err(|e| SynthError::io(path, e))
+}
+
+fn describe(cfg: &SceneConfig) -> String {
+    let body = match &cfg.body {
+        BodySpec::Procedural(p) => format!("procedural-{:.2}m-{:.2}", p.height_m, p.build),
+        BodySpec::MakeHuman { .. } => "makehuman".into(),
+    };
+    let motion = match &cfg.motion {
+        MotionSpec::Poses => "poses".to_string(),
+        MotionSpec::Pose(p) => format!("pose:{}", p.name()),
+        MotionSpec::Bvh(p) => format!(
+            "bvh:{}",
+            p.file_name()
+                .map(|f| f.to_string_lossy())
+                .unwrap_or_default()
+        ),
+        MotionSpec::Draw(d) => format!("draw:{}", d.symbols),
+    };
+    format!("{body}/{motion}")
+}

