@@ -1,1 +1,132 @@
-//! System tests that start real airglyph processes
+//! Helpers for system tests: isolated pipelines, the workspace's binaries, recordings.
+
+use airglyph_core::recording::{RecordingInfo, RecordingWriter};
+use airglyph_core::{DepthImage, Intrinsics};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command};
+use std::sync::atomic::{AtomicU32, Ordering};
+
+/// A pipeline of its own: a fresh iceoryx2 root and /dev/shm prefix, so tests run side
+/// by side without seeing each other.
+pub struct Isolated {
+    pub root: PathBuf,
+    pub prefix: String,
+}
+
+impl Isolated {
+    pub fn new() -> Self {
+        static N: AtomicU32 = AtomicU32::new(0);
+        let n = N.fetch_add(1, Ordering::SeqCst);
+        let prefix = format!("agsys{}x{n}_", std::process::id());
+        let root = std::env::temp_dir().join(format!("airglyph-sys-{}-{n}/", std::process::id()));
+        Self { root, prefix }
+    }
+
+    /// A command for one of the workspace's binaries, joined to this pipeline.
+    pub fn command(&self, binary: &str) -> Command {
+        let mut cmd = Command::new(binary_path(binary));
+        cmd.env("AIRGLYPH_IPC_ROOT", format!("{}/", self.root.display()))
+            .env("AIRGLYPH_IPC_PREFIX", &self.prefix)
+            .env("RUST_LOG", "warn");
+        cmd
+    }
+
+    /// The files of this pipeline under /dev/shm.
+    pub fn shm_files(&self) -> Vec<String> {
+        let mut files: Vec<String> = std::fs::read_dir("/dev/shm")
+            .map(|d| {
+                d.filter_map(|e| e.ok())
+                    .map(|e| e.file_name().to_string_lossy().into_owned())
+                    .filter(|n| n.starts_with(&self.prefix))
+                    .collect()
+            })
+            .unwrap_or_default();
+        files.sort();
+        files
+    }
+}
+
+impl Default for Isolated {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Where cargo put a binary of this workspace (beside the test's own `deps/` folder).
+pub fn binary_path(name: &str) -> PathBuf {
+    let exe = std::env::current_exe().expect("test executable path");
+    let dir = exe
+        .parent()
+        .and_then(Path::parent)
+        .expect("target/<profile>/deps/..");
+    let path = dir.join(name);
+    assert!(
+        path.exists(),
+        "{} is not built: run `cargo build --workspace` (scripts/test does)",
+        path.display()
+    );
+    path
+}
+
+/// A deterministic 100-frame-like recording: every pixel differs between frames, so a
+/// lost, repeated or reordered frame cannot go unnoticed.
+pub fn write_ramp_recording(dir: &Path, frames: usize, width: u32, height: u32) {
+    let k = Intrinsics::new(
+        width,
+        height,
+        200.0,
+        200.0,
+        width as f32 / 2.0 - 0.5,
+        height as f32 / 2.0 - 0.5,
+    );
+    let mut w =
+        RecordingWriter::create(dir, RecordingInfo::new(k, 30.0, "test-ramp"), false).unwrap();
+    for i in 0..frames {
+        w.write_frame(
+            ramp(width, height, i).view(),
+            5_000_000_000 + i as u64 * 33_333_333,
+            None,
+        )
+        .unwrap();
+    }
+}
+
+pub fn ramp(width: u32, height: u32, frame: usize) -> DepthImage {
+    let px = (0..width * height)
+        .map(|p| (500 + (p as usize * 7 + frame * 131) % 4000) as u16)
+        .collect();
+    DepthImage::new(width, height, px).unwrap()
+}
+
+/// Sends SIGTERM (or another signal) to a child.
+pub fn signal(child: &Child, sig: i32) {
+    // SAFETY: kill(2) on a child we have not reaped.
+    unsafe { libc::kill(child.id() as i32, sig) };
+}
+
+/// The pids of a process's direct children whose command name starts with `name`.
+pub fn children_named(parent: u32, name: &str) -> Vec<u32> {
+    let mut out = Vec::new();
+    for entry in std::fs::read_dir("/proc").into_iter().flatten().flatten() {
+        let Ok(pid) = entry.file_name().to_string_lossy().parse::<u32>() else {
+            continue;
+        };
+        let Ok(stat) = std::fs::read_to_string(format!("/proc/{pid}/stat")) else {
+            continue;
+        };
+        // pid (comm) state ppid ...
+        let (Some(open), Some(close)) = (stat.find('('), stat.rfind(')')) else {
+            continue;
+        };
+        let comm = &stat[open + 1..close];
+        let ppid = stat[close + 2..]
+            .split(' ')
+            .nth(1)
+            .and_then(|p| p.parse::<u32>().ok());
+        // comm is cut to 15 bytes by the kernel.
+        if ppid == Some(parent) && name.starts_with(comm) && !comm.is_empty() {
+            out.push(pid);
+        }
+    }
+    out
+}

@@ -103,8 +103,36 @@ fn service_name(name: &str) -> Result<ServiceName, IpcError> {
 
 /// One process's membership of a pipeline: its iceoryx2 node.
 pub struct Pipeline {
-    node: Node<Ipc>,
+    /// Always `Some` until drop, which must release the node before looking for others.
+    node: Option<Node<Ipc>>,
     config: IpcConfig,
+}
+
+impl Drop for Pipeline {
+    fn drop(&mut self) {
+        drop(self.node.take());
+        let Ok(iox) = self.config.iceoryx2() else {
+            return;
+        };
+        let mut alive = 0;
+        let listed = Node::<Ipc>::list(&iox, |state| {
+            match state {
+                NodeState::Alive(_) => alive += 1,
+                NodeState::Dead(dead) => {
+                    let _ = dead.try_remove_stale_resources();
+                }
+                NodeState::Inaccessible(_) | NodeState::Undefined(_) => alive += 1,
+            }
+            CallbackProgression::Continue
+        });
+        // iceoryx2 keeps a 4-byte node counter per domain in /dev/shm for ever; the last
+        // process of a pipeline removes it so a stopped pipeline leaves nothing behind.
+        if listed.is_ok() && alive == 0 {
+            // SAFETY: no node of this domain is alive (just listed); a process that starts
+            // right now recreates the counter, which only seeds its node id.
+            let _ = unsafe { iceoryx2::testing::remove_global_mgmt_segment::<Ipc>(&iox) };
+        }
+    }
 }
 
 impl Pipeline {
@@ -131,7 +159,10 @@ impl Pipeline {
                 node: node_name.into(),
                 reason: format!("{e:?}"),
             })?;
-        let pipeline = Self { node, config };
+        let pipeline = Self {
+            node: Some(node),
+            config,
+        };
         let cleaned = pipeline.cleanup_dead_nodes();
         if cleaned > 0 {
             tracing::info!(
@@ -142,13 +173,17 @@ impl Pipeline {
         Ok(pipeline)
     }
 
+    fn node(&self) -> &Node<Ipc> {
+        self.node.as_ref().expect("the node lives until drop")
+    }
+
     pub fn config(&self) -> &IpcConfig {
         &self.config
     }
 
     /// Removes the stale resources of every dead node of this pipeline; returns how many.
     pub fn cleanup_dead_nodes(&self) -> usize {
-        let state = self.node.try_cleanup_dead_nodes();
+        let state = self.node().try_cleanup_dead_nodes();
         state.cleanups as usize
     }
 
@@ -158,7 +193,7 @@ impl Pipeline {
         name: &str,
     ) -> Result<iceoryx2::service::builder::publish_subscribe::Builder<P, H, Ipc>, IpcError> {
         Ok(self
-            .node
+            .node()
             .service_builder(&service_name(name)?)
             .publish_subscribe::<P>()
             .user_header::<H>()
@@ -170,7 +205,7 @@ impl Pipeline {
     }
 
     fn event(&self, name: &str) -> Result<event::PortFactory<Ipc>, IpcError> {
-        self.node
+        self.node()
             .service_builder(&service_name(name)?)
             .event()
             .open_or_create()
@@ -440,6 +475,15 @@ impl<T: Message> Publisher<T> {
     }
 }
 
+/// Blocks until the publisher signals or `ns` pass. A signal (SIGINT/SIGTERM) only
+/// wakes the caller early, so it can look at [`crate::shutdown::requested`].
+fn wait(listener: &Listener<Ipc>, ns: u64) -> Result<(), IpcError> {
+    match listener.timed_wait(|_| {}, Duration::from_nanos(ns)) {
+        Ok(_) | Err(iceoryx2::port::listener::ListenerWaitError::InterruptSignal) => Ok(()),
+        Err(e) => Err(IpcError::service("wait", e)),
+    }
+}
+
 /// What a receiver hands out: a validated message and how many were lost before it.
 #[derive(Debug)]
 pub struct Received<T> {
@@ -477,9 +521,7 @@ impl<T: Message> Receiver<T> {
             if now >= deadline {
                 return Ok(None);
             }
-            self.listener
-                .timed_wait(|_| {}, Duration::from_nanos(deadline - now))
-                .map_err(|e| IpcError::service("wait", e))?;
+            wait(&self.listener, deadline - now)?;
         }
     }
 
@@ -604,9 +646,7 @@ impl DepthReceiver {
             if now >= deadline {
                 return Ok(None);
             }
-            self.listener
-                .timed_wait(|_| {}, Duration::from_nanos(deadline - now))
-                .map_err(|e| IpcError::service(DEPTH.name, e))?;
+            wait(&self.listener, deadline - now)?;
         }
     }
 

@@ -1,0 +1,250 @@
+//! The pipeline's foundation with real processes: replay, supervision, recording.
+
+use airglyph_core::recording::Recording;
+use airglyph_system_tests::{children_named, ramp, signal, write_ramp_recording, Isolated};
+use std::io::{BufRead, BufReader};
+use std::process::{Child, ChildStdout, Stdio};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+/// Streams the probe's JSON lines to a channel.
+fn lines(stdout: ChildStdout) -> mpsc::Receiver<serde_json::Value> {
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+            if let Ok(v) = serde_json::from_str(&line) {
+                if tx.send(v).is_err() {
+                    break;
+                }
+            }
+        }
+    });
+    rx
+}
+
+fn start_probe(p: &Isolated, extra: &[&str]) -> (Child, mpsc::Receiver<serde_json::Value>) {
+    let mut child = p
+        .command("airglyph-probe")
+        .args(extra)
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let rx = lines(child.stdout.take().unwrap());
+    let ready = rx
+        .recv_timeout(Duration::from_secs(10))
+        .expect("probe ready");
+    assert_eq!(ready["ready"], true);
+    (child, rx)
+}
+
+fn stop(mut child: Child) -> std::process::ExitStatus {
+    signal(&child, libc::SIGTERM);
+    let deadline = Instant::now() + Duration::from_secs(5);
+    while Instant::now() < deadline {
+        if let Some(status) = child.try_wait().unwrap() {
+            return status;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.kill().unwrap();
+    panic!("process {} ignored SIGTERM for 5 s", child.id());
+}
+
+#[test]
+fn capture_replays_a_recording_to_another_process_bit_exact_in_order() {
+    let p = Isolated::new();
+    let tmp = tempfile::tempdir().unwrap();
+    let (src, got) = (tmp.path().join("src"), tmp.path().join("got"));
+    write_ramp_recording(&src, 100, 64, 48);
+
+    let (probe, rx) = start_probe(&p, &["--out", got.to_str().unwrap(), "--frames", "100"]);
+    let capture = p
+        .command("airglyph-capture")
+        .args(["--source", &format!("recording:{}", src.display())])
+        .status()
+        .unwrap();
+    assert!(capture.success());
+    let meta: Vec<serde_json::Value> = rx.iter().take(100).collect();
+    stop(probe);
+
+    assert_eq!(meta.len(), 100, "every frame arrives");
+    let original = Recording::open(&src).unwrap();
+    let received = Recording::open(&got).unwrap();
+    assert_eq!(received.len(), 100);
+    for (i, m) in meta.iter().enumerate() {
+        assert_eq!(m["sequence"], i as u64, "in order");
+        assert_eq!(m["dropped"], 0);
+        let (capture_ns, publish_ns, receive_ns) = (
+            m["capture_ns"].as_u64().unwrap(),
+            m["publish_ns"].as_u64().unwrap(),
+            m["receive_ns"].as_u64().unwrap(),
+        );
+        assert!(capture_ns <= publish_ns && publish_ns <= receive_ns, "{m}");
+        assert_eq!(
+            m["source_ns"].as_u64().unwrap(),
+            original.capture_ns(i),
+            "the recorded time travels along"
+        );
+        assert_eq!(
+            received.read_frame(i).unwrap(),
+            original.read_frame(i).unwrap(),
+            "frame {i} bit-exact"
+        );
+    }
+    // Paced at 30 fps: 100 frames span about 3.3 s.
+    let span = meta[99]["capture_ns"].as_u64().unwrap() - meta[0]["capture_ns"].as_u64().unwrap();
+    assert!(
+        (3_200_000_000..4_500_000_000).contains(&span),
+        "paced by frames.csv: {span} ns"
+    );
+    assert!(p.shm_files().is_empty(), "left behind: {:?}", p.shm_files());
+}
+
+#[test]
+fn a_killed_capture_stage_is_restarted_and_leaves_no_shared_memory() {
+    let p = Isolated::new();
+    let tmp = tempfile::tempdir().unwrap();
+    let src = tmp.path().join("src");
+    write_ramp_recording(&src, 30, 32, 24);
+
+    let (probe, rx) = start_probe(&p, &["--idle", "30"]);
+    let supervisor = p
+        .command("airglyph")
+        .args([
+            "run",
+            "--stages",
+            "capture",
+            "--loop",
+            "--source",
+            &format!("recording:{}", src.display()),
+        ])
+        .spawn()
+        .unwrap();
+    let first = rx
+        .recv_timeout(Duration::from_secs(10))
+        .expect("frames flow");
+    let captures = children_named(supervisor.id(), "airglyph-capture");
+    assert_eq!(captures.len(), 1, "one capture child: {captures:?}");
+    let before_kill = p.shm_files();
+    assert!(!before_kill.is_empty());
+
+    // SAFETY: kill(2) on the capture child we just found.
+    unsafe { libc::kill(captures[0] as i32, libc::SIGKILL) };
+    let killed_at = Instant::now();
+    // Drain what was sent before the kill, then wait for the new session's first frame.
+    let restarted = loop {
+        let m = rx
+            .recv_timeout(Duration::from_secs(5))
+            .expect("frames again after the restart");
+        if m["session"] != first["session"] {
+            break m;
+        }
+    };
+    let gap = killed_at.elapsed();
+    assert!(gap < Duration::from_secs(2), "frames again after {gap:?}");
+    assert_eq!(restarted["sequence"], 0, "a new session counts from 0");
+    let now = children_named(supervisor.id(), "airglyph-capture");
+    assert_eq!(now.len(), 1);
+    assert_ne!(now[0], captures[0]);
+    // The dead publisher's data segment is gone while the pipeline runs on.
+    let after = p.shm_files();
+    let gone: Vec<_> = before_kill.iter().filter(|f| !after.contains(f)).collect();
+    assert!(
+        !gone.is_empty(),
+        "the dead capture's shared memory is still there: {before_kill:?}"
+    );
+
+    assert!(
+        stop(supervisor).success(),
+        "the supervisor stops cleanly on SIGTERM"
+    );
+    stop(probe);
+    assert!(
+        p.shm_files().is_empty(),
+        "left behind after shutdown: {:?}",
+        p.shm_files()
+    );
+}
+
+#[test]
+fn a_recording_recorded_from_a_recording_is_bit_exact() {
+    let p = Isolated::new();
+    let tmp = tempfile::tempdir().unwrap();
+    let (src, copy) = (tmp.path().join("src"), tmp.path().join("copy"));
+    write_ramp_recording(&src, 20, 40, 30);
+    let status = p
+        .command("airglyph")
+        .args([
+            "record",
+            "--fast",
+            "--source",
+            &format!("recording:{}", src.display()),
+            "--out",
+            copy.to_str().unwrap(),
+        ])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let (a, b) = (
+        Recording::open(&src).unwrap(),
+        Recording::open(&copy).unwrap(),
+    );
+    assert_eq!(a.len(), b.len());
+    assert_eq!(a.intrinsics(), b.intrinsics());
+    for i in 0..a.len() {
+        assert_eq!(a.read_frame(i).unwrap(), b.read_frame(i).unwrap());
+        assert_eq!(a.capture_ns(i), b.capture_ns(i));
+    }
+    assert_eq!(b.read_frame(7).unwrap(), ramp(40, 30, 7));
+}
+
+#[test]
+fn a_corrupt_frame_is_skipped_and_counted_and_the_stream_goes_on() {
+    let p = Isolated::new();
+    let tmp = tempfile::tempdir().unwrap();
+    let src = tmp.path().join("src");
+    write_ramp_recording(&src, 10, 16, 12);
+    let png = airglyph_core::recording::frame_path(&src, 4);
+    let bytes = std::fs::read(&png).unwrap();
+    std::fs::write(&png, &bytes[..bytes.len() / 3]).unwrap();
+
+    let (probe, rx) = start_probe(&p, &["--frames", "9"]);
+    let out = p
+        .command("airglyph-capture")
+        .args(["--source", &format!("recording:{}", src.display())])
+        .stderr(Stdio::piped())
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let log = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        log.contains("000004.png") && log.contains("frame 4"),
+        "the log names the bad frame: {log}"
+    );
+    let got: Vec<_> = rx.iter().take(9).collect();
+    assert_eq!(got.len(), 9, "the 9 good frames arrive");
+    stop(probe);
+}
+
+#[test]
+fn bad_sources_fail_with_a_clear_message() {
+    let p = Isolated::new();
+    let tmp = tempfile::tempdir().unwrap();
+    let out = p
+        .command("airglyph-capture")
+        .args(["--source", &format!("recording:{}", tmp.path().display())])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("recording.toml") && err.contains("missing"),
+        "{err}"
+    );
+    let out = p
+        .command("airglyph-capture")
+        .args(["--source", "kinect"])
+        .output()
+        .unwrap();
+    assert!(String::from_utf8_lossy(&out.stderr).contains("unknown source \"kinect\""));
+}
