@@ -22,6 +22,8 @@ enum Command {
     Record(cmd::record::Args),
     /// Show each stage's frame rate, drops and latency, live.
     Top(cmd::top::Args),
+    /// Render a synthetic person into a recording with exact ground-truth joints.
+    Synth(cmd::synth::Args),
 }
 
 fn main() -> std::process::ExitCode {
@@ -36,6 +38,7 @@ fn main() -> std::process::ExitCode {
         Command::Run(a) => cmd::run::run(a),
         Command::Record(a) => cmd::record::run(a),
         Command::Top(a) => cmd::top::run(a),
+        Command::Synth(a) => cmd::synth::run(a),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

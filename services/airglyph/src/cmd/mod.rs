@@ -2,6 +2,7 @@
 
 pub mod record;
 pub mod run;
+pub mod synth;
 pub mod top;
 
 use airglyph_ipc::GestureEventMsg;

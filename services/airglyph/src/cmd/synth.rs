@@ -1,0 +1,199 @@
+//! `airglyph synth`: render a synthetic person into a recording with exact ground truth
+//! (depth PNGs, frames.csv, joints.csv, and gestures.csv for air-drawing).
+
+use airglyph_core::camera::Preset;
+use airglyph_core::Intrinsics;
+use airglyph_synth::{
+    Background, BodySpec, DrawSpec, MotionSpec, Placement, ProceduralBody, SceneConfig,
+    ScriptedPose,
+};
+use anyhow::{bail, Context};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::PathBuf;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The body: `procedural` (built in) or `makehuman` (needs `scripts/fetch-assets`).
+    #[arg(long, default_value = "procedural")]
+    pub body: String,
+    /// What the person does: `poses` (the scripted poses in turn), `pose:NAME` (one of
+    /// neutral, t-pose, point-at-camera, arm-across-torso, hands-near-face, sideways,
+    /// wave, hands-in-front), `draw:SYMBOLS` (air-draw e.g. `draw:0123ABC`), or a BVH file.
+    #[arg(long, default_value = "poses")]
+    pub motion: String,
+    /// Frames to write (at most the clip's length); default: the whole clip or symbol
+    /// list, 300 for endless motion.
+    #[arg(long)]
+    pub frames: Option<usize>,
+    /// The recording directory to create.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Apply the Kinect-like sensor model (quantization, noise, lost edge pixels).
+    #[arg(long)]
+    pub noise: bool,
+    /// `none` (the person alone) or `floor-wall`.
+    #[arg(long, default_value = "none")]
+    pub background: String,
+    /// 640x480 or 320x240 (Kinect v1 optics), or any WxH scaled from the camera preset.
+    #[arg(long, default_value = "640x480")]
+    pub resolution: String,
+    /// Camera preset: kinect-v1-640x480, kinect-v1-320x240, realsense-d435.
+    #[arg(long, default_value = "kinect-v1-640x480")]
+    pub camera: String,
+    /// Frames a second.
+    #[arg(long, default_value_t = 30.0)]
+    pub fps: f32,
+    /// Random seed: everything is deterministic given it.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Procedural body height, metres.
+    #[arg(long, default_value_t = 1.75)]
+    pub height: f32,
+    /// Procedural body build: 0.8 slim, 1.0 average, 1.3 heavy.
+    #[arg(long, default_value_t = 1.0)]
+    pub build: f32,
+    /// Distance from the camera to the person, metres.
+    #[arg(long, default_value_t = 2.7)]
+    pub distance: f32,
+    /// The person's turn to their left, degrees.
+    #[arg(long, default_value_t = 0.0)]
+    pub yaw: f32,
+    /// Folder holding the MakeHuman assets (mpfb2/); default .cache/assets.
+    #[arg(long)]
+    pub assets: Option<PathBuf>,
+    /// With draw:SYMBOLS, take the shapes from this trajectory JSONL (.jsonl or .jsonl.gz).
+    #[arg(long)]
+    pub samples: Option<PathBuf>,
+    /// Print the summary as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+fn intrinsics(camera: &str, resolution: &str) -> anyhow::Result<Intrinsics> {
+    let preset = Preset::from_name(camera).with_context(|| {
+        let names: Vec<_> = Preset::ALL.iter().map(|p| p.name()).collect();
+        format!(
+            "--camera {camera:?}: known cameras are {}",
+            names.join(", ")
+        )
+    })?;
+    let (w, h) = resolution
+        .split_once('x')
+        .and_then(|(w, h)| Some((w.parse::<u32>().ok()?, h.parse::<u32>().ok()?)))
+        .with_context(|| format!("--resolution {resolution:?}: expected WxH, e.g. 640x480"))?;
+    let k = match (preset, w, h) {
+        (Preset::KinectV1Vga | Preset::KinectV1Qvga, 640, 480) => Preset::KinectV1Vga.intrinsics(),
+        (Preset::KinectV1Vga | Preset::KinectV1Qvga, 320, 240) => Preset::KinectV1Qvga.intrinsics(),
+        _ => preset.intrinsics().scaled_to(w, h),
+    };
+    k.validate()
+        .with_context(|| format!("--resolution {resolution}"))?;
+    Ok(k)
+}
+
+fn motion(spec: &str, samples: Option<PathBuf>) -> anyhow::Result<MotionSpec> {
+    if spec == "poses" {
+        return Ok(MotionSpec::Poses);
+    }
+    if let Some(name) = spec.strip_prefix("pose:") {
+        let pose = ScriptedPose::from_name(name).with_context(|| {
+            let names: Vec<_> = ScriptedPose::ALL.iter().map(|p| p.name()).collect();
+            format!("--motion {spec:?}: known poses are {}", names.join(", "))
+        })?;
+        return Ok(MotionSpec::Pose(pose));
+    }
+    if let Some(symbols) = spec.strip_prefix("draw:") {
+        if symbols.is_empty() {
+            bail!("--motion draw: needs symbols, e.g. draw:0123ABC");
+        }
+        return Ok(MotionSpec::Draw(DrawSpec {
+            symbols: symbols.to_string(),
+            samples,
+            repeat: false,
+        }));
+    }
+    let path = PathBuf::from(spec);
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("bvh"))
+        || path.is_file()
+    {
+        return Ok(MotionSpec::Bvh(path));
+    }
+    bail!("--motion {spec:?}: expected poses, pose:NAME, draw:SYMBOLS or a .bvh file")
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let body = match args.body.as_str() {
+        "procedural" => BodySpec::Procedural(ProceduralBody {
+            height_m: args.height,
+            build: args.build,
+        }),
+        "makehuman" => BodySpec::MakeHuman {
+            assets: args.assets.clone(),
+        },
+        other => bail!("--body {other:?}: expected procedural or makehuman"),
+    };
+    let background = match args.background.as_str() {
+        "none" => Background::None,
+        "floor-wall" | "floor-and-wall" => Background::FloorAndWall,
+        other => bail!("--background {other:?}: expected none or floor-wall"),
+    };
+    let cfg = SceneConfig {
+        body,
+        motion: motion(&args.motion, args.samples.clone())?,
+        intrinsics: intrinsics(&args.camera, &args.resolution)?,
+        fps: args.fps,
+        sensor_noise: args.noise,
+        background,
+        placement: Placement {
+            distance_m: args.distance,
+            yaw_deg: args.yaw,
+            ..Placement::default()
+        },
+        seed: args.seed,
+    };
+    // Learn the motion's length first, for the progress bar and the default count.
+    let len = airglyph_synth::Synthesizer::new(cfg.clone())?.len();
+    let frames = match (args.frames, len) {
+        (Some(n), Some(len)) => n.min(len),
+        (Some(n), None) => n,
+        (None, Some(len)) => len,
+        (None, None) => 300,
+    };
+    let bar = if args.json {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(frames as u64)
+    };
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} frames  {per_sec}  eta {eta}")
+            .expect("valid template"),
+    );
+    let summary =
+        airglyph_synth::write_recording(cfg, frames, &args.out, |n| bar.set_position(n as u64))
+            .with_context(|| format!("writing {}", args.out.display()))?;
+    bar.finish_and_clear();
+    if args.json {
+        let line = serde_json::json!({
+            "out": args.out,
+            "frames": summary.frames,
+            "gestures": summary.gestures.iter().map(|g| serde_json::json!({
+                "label": g.label, "start_frame": g.start_frame, "end_frame": g.end_frame
+            })).collect::<Vec<_>>(),
+        });
+        println!("{line}");
+    } else {
+        println!(
+            "wrote {} frames to {} (depth/, frames.csv, joints.csv{})",
+            summary.frames,
+            args.out.display(),
+            if summary.gestures.is_empty() {
+                String::new()
+            } else {
+                format!(", gestures.csv: {} symbols", summary.gestures.len())
+            }
+        );
+    }
+    Ok(())
+}
