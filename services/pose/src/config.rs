@@ -45,9 +45,9 @@ pub struct PoseConfig {
     pub torso_bottom: f32,
     pub torso_top: f32,
     /// Key points in the torso frame: x = person's left, y = up, z = forward (out of the
-    /// chest), origin the torso joint. Order: neck, pelvis, left shoulder, right
-    /// shoulder, left hip, right hip.
-    pub torso_keypoints: [[f32; 3]; 6],
+    /// chest), origin the model's centre. Order: neck, pelvis, left shoulder, right
+    /// shoulder, left hip, right hip, torso.
+    pub torso_keypoints: [[f32; 3]; 7],
 
     // --- geodesic graph ---
     /// 8-neighbours are joined when closer than `max(edge_min, edge_px * footprint)`
@@ -63,6 +63,10 @@ pub struct PoseConfig {
     /// A geodesic maximum must be at least this far (geodesically) from every source
     /// found before it.
     pub min_extremity: f32,
+    /// How many geodesic maxima to look for: the seed's five, plus spares, since the
+    /// middle of a long leg can lie geodesically farther from every source than the top
+    /// of the head; the assignment leaves the spares out.
+    pub max_maxima: usize,
 
     // --- limbs ---
     /// Target points: within `d_e` of the geodesic path (seed Eq. 16.10).
@@ -71,6 +75,8 @@ pub struct PoseConfig {
     pub d_e_head: f32,
     /// Weight of successor-segment points in a parent rotation (seed: 0.05).
     pub omega_succ: f32,
+    /// Weight of target points beyond the chain's end (fingers, toes).
+    pub beyond_end_weight: f32,
     pub chain_iterations: usize,
     /// Bone lengths: upper arm, forearm (elbow to palm centre), thigh, shin, neck to head.
     pub upper_arm: f32,
@@ -98,8 +104,8 @@ impl Default for PoseConfig {
             far: 6.0,
             remove_floor: true,
             floor_margin: 0.03,
-            blob_jump_min: 0.05,
-            blob_jump_px: 8.0,
+            blob_jump_min: 0.15,
+            blob_jump_px: 20.0,
             min_person_area: 0.05,
             max_person_area: 2.0,
             min_person_height: 0.4,
@@ -113,13 +119,15 @@ impl Default for PoseConfig {
             torso_half_depth: 0.11,
             torso_bottom: -0.30,
             torso_top: 0.20,
+            // Measured on the synthetic average adult (airglyph-synth), symmetrised.
             torso_keypoints: [
-                [0.0, 0.24, 0.0],    // neck
-                [0.0, -0.22, 0.0],   // pelvis
-                [0.18, 0.19, 0.0],   // left shoulder
-                [-0.18, 0.19, 0.0],  // right shoulder
-                [0.09, -0.30, 0.0],  // left hip
-                [-0.09, -0.30, 0.0], // right hip
+                [0.0, 0.252, 0.0],      // neck
+                [0.0, -0.264, 0.018],   // pelvis
+                [0.184, 0.226, 0.018],  // left shoulder
+                [-0.184, 0.226, 0.018], // right shoulder
+                [0.091, -0.265, 0.018], // left hip
+                [-0.091, -0.265, 0.018], // right hip
+                [0.0, 0.112, 0.005],    // torso
             ],
 
             edge_min: 0.012,
@@ -128,17 +136,19 @@ impl Default for PoseConfig {
             bridge_occluder: 0.05,
             min_component: 8,
             min_extremity: 0.12,
+            max_maxima: 8,
 
             d_e_arm: 0.05,
             d_e_leg: 0.10,
             d_e_head: 0.10,
             omega_succ: 0.05,
+            beyond_end_weight: 0.1,
             chain_iterations: 12,
-            upper_arm: 0.28,
-            forearm: 0.30,
-            thigh: 0.43,
-            shin: 0.43,
-            neck_to_head: 0.20,
+            upper_arm: 0.30,
+            forearm: 0.34,
+            thigh: 0.41,
+            shin: 0.425,
+            neck_to_head: 0.21,
             surface_offset_arm: 0.03,
             surface_offset_leg: 0.05,
             surface_offset_head: 0.07,
@@ -195,6 +205,16 @@ impl PoseConfig {
             Limb::Head => (self.neck_to_head, 0.0),
             Limb::LeftArm | Limb::RightArm => (self.upper_arm, self.forearm),
             Limb::LeftLeg | Limb::RightLeg => (self.thigh, self.shin),
+        }
+    }
+
+    /// Geodesic length beyond the end joint: fingers past the palm centre, the foot
+    /// past the ankle, the skull's top past its centre.
+    pub fn extremity_extra(&self, limb: Limb) -> f32 {
+        match limb {
+            Limb::Head => 0.10,
+            Limb::LeftArm | Limb::RightArm => 0.10,
+            Limb::LeftLeg | Limb::RightLeg => 0.12,
         }
     }
 

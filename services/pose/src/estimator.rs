@@ -47,6 +47,12 @@ pub struct Debug {
     pub torso_residual: f32,
     pub torso_reinit: bool,
     pub floor: Option<Plane>,
+    /// Assignment cost of each maximum (rows) for each limb (columns).
+    pub cost: Vec<[f32; 5]>,
+    /// Geodesic distance of each maximum from the torso centre, metres.
+    pub maxima_dist: Vec<f32>,
+    /// The registered torso frame (torso frame → camera frame).
+    pub torso_pose: Option<TorsoPose>,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -220,6 +226,7 @@ impl PoseEstimator {
             0.2
         };
         self.prev_torso = Some(torso);
+        self.debug.torso_pose = Some(torso);
         let kp = keypoints(&torso, cfg);
         let t2 = Instant::now();
         self.times.torso = (t2 - t1).as_secs_f64();
@@ -229,7 +236,7 @@ impl PoseEstimator {
         self.debug.nodes = self.graph.node_count();
         self.debug.bridges = self.graph.bridges.len();
         self.debug.joins = self.graph.joins.len();
-        let centre = Point3::from(torso.t);
+        let centre = kp[6];
         let root = self
             .graph
             .nearest_node(&k, &centre, 12)
@@ -251,7 +258,7 @@ impl PoseEstimator {
         self.pred0.extend_from_slice(&self.dij.pred);
         let min_ext = (cfg.min_extremity * 1000.0) as u32;
         let mut maxima: Vec<u32> = Vec::with_capacity(5);
-        for _ in 0..5 {
+        for _ in 0..cfg.max_maxima {
             let mut best = (0u32, NONE);
             for (a, &d) in self.dij.dist.iter().enumerate() {
                 if d != INF && d > best.0 {
@@ -300,12 +307,10 @@ impl PoseEstimator {
                         best = (g, pi);
                     }
                 }
+                // The geodesic length of a limb hardly depends on how it is bent.
                 let (l1, l2) = cfg.bones(l);
-                let reach = l1 + l2 + 0.15;
-                let mut c = best.0;
-                if c > 1.3 * reach {
-                    c += 2.0 * (c - 1.3 * reach);
-                }
+                let reach = l1 + l2 + cfg.extremity_extra(l);
+                let mut c = (best.0 - reach).abs();
                 if let Some(prev) = self.limbs[l.index()].and_then(|s| s.extremity) {
                     let pm = self.graph.pos[m as usize];
                     c += cfg.temporal_weight * (inv.apply(&pm) - prev).norm();
@@ -325,6 +330,11 @@ impl PoseEstimator {
             paths.push(self.path.clone());
         }
         let assignment = assign(&cost, cfg.unassigned_cost);
+        self.debug.cost = cost.clone();
+        self.debug.maxima_dist = maxima
+            .iter()
+            .map(|&m| self.dist0[m as usize] as f32 * 1e-3)
+            .collect();
         self.debug.assignment = assignment;
 
         // 6. Target points and chain fitting per limb.
@@ -396,7 +406,13 @@ impl PoseEstimator {
                     }
                     let mut best: Option<(Chain, f32)> = None;
                     for c in cands {
-                        let (fitc, e) = fit_chain(c, &targets, cfg.omega_succ, cfg.chain_iterations);
+                        let (fitc, e) = fit_chain(
+                            c,
+                            &targets,
+                            cfg.omega_succ,
+                            cfg.beyond_end_weight,
+                            cfg.chain_iterations,
+                        );
                         if best.is_none_or(|(_, be)| e < be) {
                             best = Some((fitc, e));
                         }

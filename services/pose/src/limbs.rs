@@ -69,18 +69,43 @@ impl Chain {
         }
     }
 
-    /// Mean squared distance of the targets to the nearer bone.
-    pub fn error(&self, targets: &[Point3<f32>]) -> f32 {
+    /// Mean squared distance of the targets to the nearer bone (targets past the end
+    /// weighted by `beyond`).
+    pub fn error(&self, targets: &[Point3<f32>], beyond: f32) -> f32 {
         if targets.is_empty() {
             return 0.0;
         }
-        let mut s = 0.0;
+        let (mut s, mut sw) = (0.0, 0.0);
         for t in targets {
-            let a = (closest_on_segment(t, &self.root, &self.mid) - t).norm_squared();
-            let b = (closest_on_segment(t, &self.mid, &self.end) - t).norm_squared();
-            s += a.min(b);
+            let (_, c, w) = self.nearest(t, beyond);
+            s += w * (c - t).norm_squared();
+            sw += w;
         }
-        s / targets.len() as f32
+        s / sw.max(1e-9)
+    }
+
+    /// Which bone is nearer `t` (0 upper, 1 lower), the nearest point on it, and the
+    /// target's weight (`beyond` past the end joint, else 1).
+    #[inline]
+    fn nearest(&self, t: &Point3<f32>, beyond: f32) -> (usize, Point3<f32>, f32) {
+        let c1 = closest_on_segment(t, &self.root, &self.mid);
+        let single = (self.end - self.mid).norm_squared() < 1e-12;
+        let (last_a, last_b) = if single {
+            (self.root, self.mid)
+        } else {
+            (self.mid, self.end)
+        };
+        let past = (t - last_b).dot(&(last_b - last_a)) > 0.0;
+        let w = if past { beyond } else { 1.0 };
+        if single {
+            return (0, c1, w);
+        }
+        let c2 = closest_on_segment(t, &self.mid, &self.end);
+        if (c1 - t).norm_squared() <= (c2 - t).norm_squared() {
+            (0, c1, w)
+        } else {
+            (1, c2, w)
+        }
     }
 
     pub fn is_finite(&self) -> bool {
@@ -98,9 +123,10 @@ pub fn fit_chain(
     mut chain: Chain,
     targets: &[Point3<f32>],
     omega_succ: f32,
+    beyond: f32,
     iterations: usize,
 ) -> (Chain, f32) {
-    let mut err = chain.error(targets);
+    let mut err = chain.error(targets, beyond);
     if targets.is_empty() {
         return (chain, err);
     }
@@ -110,13 +136,8 @@ pub fn fit_chain(
         // Upper bone about the root.
         let mut acc = RotationAccumulator::default();
         for t in targets {
-            let c1 = closest_on_segment(t, &chain.root, &chain.mid);
-            let c2 = closest_on_segment(t, &chain.mid, &chain.end);
-            let (c, w) = if single || (c1 - t).norm_squared() <= (c2 - t).norm_squared() {
-                (c1, 1.0)
-            } else {
-                (c2, omega_succ)
-            };
+            let (bone, c, w) = chain.nearest(t, beyond);
+            let w = if bone == 0 { w } else { w * omega_succ };
             acc.add(&(c - chain.root), &(t - chain.root), w);
         }
         let r1 = acc.rotation();
@@ -126,10 +147,9 @@ pub fn fit_chain(
             // Lower bone about the middle joint.
             let mut acc = RotationAccumulator::default();
             for t in targets {
-                let c1 = closest_on_segment(t, &chain.root, &chain.mid);
-                let c2 = closest_on_segment(t, &chain.mid, &chain.end);
-                if (c2 - t).norm_squared() < (c1 - t).norm_squared() {
-                    acc.add(&(c2 - chain.mid), &(t - chain.mid), 1.0);
+                let (bone, c, w) = chain.nearest(t, beyond);
+                if bone == 1 {
+                    acc.add(&(c - chain.mid), &(t - chain.mid), w);
                 }
             }
             if acc.weight() > 0.0 {
@@ -137,7 +157,7 @@ pub fn fit_chain(
                 chain.end = chain.mid + r2 * (chain.end - chain.mid);
             }
         }
-        let e = chain.error(targets);
+        let e = chain.error(targets, beyond);
         if !chain.is_finite() || e > err {
             chain = prev;
             break;
@@ -180,7 +200,7 @@ mod tests {
             targets.push(mid + (end - mid) * s);
         }
         let init = Chain::towards(root, Vector3::new(0.3, -0.2, 0.0), end, 0.28, 0.3);
-        let (fit, err) = fit_chain(init, &targets, 0.05, 60);
+        let (fit, err) = fit_chain(init, &targets, 0.05, 1.0, 60);
         assert!(err < 1e-4, "{err}");
         assert!((fit.mid - mid).norm() < 0.02, "{:?}", fit.mid - mid);
         assert!((fit.end - end).norm() < 0.02, "{:?}", fit.end - end);
@@ -192,7 +212,7 @@ mod tests {
     #[test]
     fn empty_targets_leave_the_chain_alone() {
         let c = Chain::towards(Point3::new(0.0, 0.0, 2.0), -Vector3::y(), Point3::new(0.0, 1.0, 2.0), 0.3, 0.3);
-        let (f, e) = fit_chain(c, &[], 0.05, 10);
+        let (f, e) = fit_chain(c, &[], 0.05, 1.0, 10);
         assert_eq!(f, c);
         assert_eq!(e, 0.0);
     }

@@ -116,7 +116,7 @@ impl Segmenter {
         };
         if let Some(pl) = floor {
             for p in points.iter_mut() {
-                if p.z > 0.0 && pl.height(p) < cfg.floor_margin {
+                if p.z > 0.0 && pl.height(p).abs() < cfg.floor_margin {
                     *p = Point3::origin();
                 }
             }
@@ -247,7 +247,7 @@ impl Segmenter {
         seg
     }
 
-    /// RANSAC for a floor-like plane (normal within 50° of the image's up) among the
+    /// RANSAC for a floor-like plane (normal within 37° of the image's up) among the
     /// points of the lower two thirds of the image.
     fn find_floor(
         &mut self,
@@ -289,7 +289,7 @@ impl Segmenter {
             if nrm.y > 0.0 {
                 nrm = -nrm;
             }
-            if -nrm.y < 0.64 {
+            if -nrm.y < 0.8 {
                 continue;
             }
             let pl = Plane {
@@ -305,17 +305,26 @@ impl Segmenter {
         if c < (s.len() / 20).max(40) {
             return None;
         }
-        // Least-squares refinement on the inliers.
+        // Least-squares refinement on the inliers; a floor recedes from the camera and
+        // spreads sideways, a slice through a body does not.
         let mut m = Moments::default();
+        let (mut zmin, mut zmax, mut xmin, mut xmax) = (f32::MAX, f32::MIN, f32::MAX, f32::MIN);
         for p in s.iter().filter(|p| pl.height(p).abs() < tol) {
             m.add(p);
+            zmin = zmin.min(p.z);
+            zmax = zmax.max(p.z);
+            xmin = xmin.min(p.x);
+            xmax = xmax.max(p.x);
+        }
+        if zmax - zmin < 0.6 || xmax - xmin < 0.6 {
+            return None;
         }
         let pca = m.pca()?;
         let mut nrm: Vector3<f32> = pca.axes.column(2).into_owned();
         if nrm.y > 0.0 {
             nrm = -nrm;
         }
-        if -nrm.y < 0.64 || !nrm.iter().all(|c| c.is_finite()) {
+        if -nrm.y < 0.8 || !nrm.iter().all(|c| c.is_finite()) {
             return Some(pl);
         }
         // Most of the floor must be below the person: the plane's points lie low in

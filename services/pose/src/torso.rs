@@ -312,8 +312,8 @@ impl TorsoEstimator {
 }
 
 /// The torso key points in the camera frame: neck, pelvis, left/right shoulder,
-/// left/right hip.
-pub fn keypoints(pose: &TorsoPose, cfg: &PoseConfig) -> [Point3<f32>; 6] {
+/// left/right hip, torso.
+pub fn keypoints(pose: &TorsoPose, cfg: &PoseConfig) -> [Point3<f32>; 7] {
     cfg.torso_keypoints
         .map(|[x, y, z]| pose.apply(&Point3::new(x, y, z)))
 }

@@ -1,0 +1,125 @@
+//! Development loop: renders a synthetic scene, estimates every frame, prints the
+//! figures and writes overlays (green = truth, red = estimate).
+//!
+//! `cargo run --release -p airglyph-pose --example devloop -- [pose|bvh:FILE] [frames]
+//!  [noise] [floor] [qvga] [overlays:DIR] [every:N]`
+
+use airglyph_core::{Intrinsics, Joint};
+use airglyph_pose::metrics::PoseEval;
+use airglyph_pose::{overlay, PoseConfig, PoseEstimator};
+use airglyph_synth::{Background, MotionSpec, SceneConfig, ScriptedPose, Synthesizer};
+use std::time::Instant;
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let mut cfg = SceneConfig::default();
+    let mut frames = 60usize;
+    let mut out: Option<String> = None;
+    let mut every = 10usize;
+    for a in &args {
+        if let Some(f) = a.strip_prefix("bvh:") {
+            cfg.motion = MotionSpec::Bvh(f.into());
+        } else if let Some(p) = a.strip_prefix("pose:") {
+            let p = ScriptedPose::ALL
+                .into_iter()
+                .find(|x| format!("{x:?}").eq_ignore_ascii_case(p))
+                .expect("pose name");
+            cfg.motion = MotionSpec::Pose(p);
+        } else if a == "noise" {
+            cfg.sensor_noise = true;
+        } else if a == "floor" {
+            cfg.background = Background::FloorAndWall;
+        } else if a == "qvga" {
+            cfg.intrinsics = Intrinsics::default().scaled_to(320, 240);
+        } else if let Some(d) = a.strip_prefix("overlays:") {
+            out = Some(d.to_string());
+        } else if let Some(n) = a.strip_prefix("every:") {
+            every = n.parse().unwrap();
+        } else if let Ok(n) = a.parse() {
+            frames = n;
+        }
+    }
+    let mut synth = Synthesizer::new(cfg).expect("scene");
+    let k = synth.intrinsics();
+    let n = synth.len().map_or(frames, |l| l.min(frames));
+    let mut est = PoseEstimator::new(k, PoseConfig::default());
+    let mut ev = PoseEval::default();
+    if let Some(d) = &out {
+        std::fs::create_dir_all(d).unwrap();
+    }
+    let mut local = [nalgebra::Vector3::<f32>::zeros(); Joint::COUNT];
+    let mut nlocal = [0f32; Joint::COUNT];
+    let mut bias = [nalgebra::Vector3::<f32>::zeros(); Joint::COUNT];
+    for i in 0..n {
+        let (img, truth) = synth.render(i);
+        if std::env::var("PROBE").is_ok() { probe(&img, 320); probe(&img, 300); }
+        let t = Instant::now();
+        let r = est.estimate(img.view());
+        ev.seconds += t.elapsed().as_secs_f64();
+        let fe = ev.add(&r, &truth.skeleton);
+        if let (true, Some(tp)) = (r.person_found, est.debug().torso_pose) {
+            let inv = tp.inverse();
+            for j in 0..Joint::COUNT {
+                local[j] += inv.apply(&truth.skeleton.joints[j]).coords;
+                nlocal[j] += 1.0;
+            }
+            for j in 0..Joint::COUNT {
+                bias[j] += (r.skeleton.joints[j] - truth.skeleton.joints[j]) / n as f32;
+            }
+        }
+        if let Some(d) = &out {
+            if i % every == 0 {
+                let mut im = overlay::depth_image(&img.view(), Some(est.mask()));
+                overlay::skeleton(&mut im, &k, &truth.skeleton, overlay::GREEN);
+                if r.person_found {
+                    overlay::skeleton(&mut im, &k, &r.skeleton, overlay::RED);
+                }
+                for l in 0..5 {
+                    for p in est.debug().targets[l].iter().step_by(7) {
+                        if let Some(q) = k.project(p) {
+                            overlay::dot(&mut im, q, 0, overlay::YELLOW);
+                        }
+                    }
+                }
+                for &m in &est.debug().maxima {
+                    let (u, v) = ((m % k.width) as f32, (m / k.width) as f32);
+                    overlay::dot(&mut im, (u, v), 4, overlay::BLUE);
+                }
+                im.save(format!("{d}/{i:04}.png")).unwrap();
+                eprintln!(
+                    "frame {i}: e_m {:.1} cm e_h {:.1} cm maxima {} assign {:?} torso res {:.3} reinit {} joins {} bridges {}",
+                    fe.mean() * 100.0,
+                    fe.max() * 100.0,
+                    est.debug().maxima.len(),
+                    est.debug().assignment,
+                    est.debug().torso_residual,
+                    est.debug().torso_reinit,
+                    est.debug().joins,
+                    est.debug().bridges,
+                );
+                eprintln!("  maxima dist {:?}", est.debug().maxima_dist);
+                for row in &est.debug().cost {
+                    eprintln!("  cost {row:?}");
+                }
+            }
+        }
+    }
+    let s = ev.summary();
+    println!("{}", serde_json::to_string(&s).unwrap());
+    for j in Joint::ALL {
+        let b = bias[j.index()] * 100.0;
+        let lo = local[j.index()] / nlocal[j.index()].max(1.0);
+        println!("{:15} e_j {:6.2} cm  bias ({:6.2} {:6.2} {:6.2}) cm  truth in torso frame [{:.3}, {:.3}, {:.3}]", j.name(), s.per_joint_cm[j.name()], b.x, b.y, b.z, lo.x, lo.y, lo.z);
+    }
+    let t = est.step_times();
+    eprintln!("last frame steps: {t:?}");
+}
+
+#[allow(dead_code)]
+pub fn probe(img: &airglyph_core::DepthImage, u: u32) {
+    let mut s = String::new();
+    for v in (0..img.height()).step_by(4) {
+        s += &format!("{} ", img.get(u, v));
+    }
+    eprintln!("col {u}: {s}");
+}
