@@ -24,6 +24,10 @@ enum Command {
     Top(cmd::top::Args),
     /// Render a synthetic person into a recording with exact ground-truth joints.
     Synth(cmd::synth::Args),
+    /// Estimate the skeleton of every frame of a recording.
+    Pose(cmd::pose::Args),
+    /// Pose error against a recording's ground truth (e_m, e_j, within 10 cm, mAP, fps).
+    EvalPose(cmd::eval_pose::Args),
 }
 
 fn main() -> std::process::ExitCode {
@@ -39,6 +43,8 @@ fn main() -> std::process::ExitCode {
         Command::Record(a) => cmd::record::run(a),
         Command::Top(a) => cmd::top::run(a),
         Command::Synth(a) => cmd::synth::run(a),
+        Command::Pose(a) => cmd::pose::run(a),
+        Command::EvalPose(a) => cmd::eval_pose::run(a),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

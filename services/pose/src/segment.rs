@@ -258,7 +258,7 @@ impl Segmenter {
         prev: Option<Plane>,
     ) -> Option<Plane> {
         self.samples.clear();
-        let step = (((w * h) as f32 / 6000.0).sqrt().floor() as usize).max(1);
+        let step = (((w * h) as f32 / 4000.0).sqrt().floor() as usize).max(1);
         for v in (h / 3..h).step_by(step) {
             for u in (0..w).step_by(step) {
                 let p = points[v * w + u];
@@ -275,10 +275,14 @@ impl Segmenter {
         let count = |pl: &Plane| s.iter().filter(|p| pl.height(p).abs() < tol).count();
         let mut best: Option<(usize, Plane)> = prev.map(|pl| (count(&pl), pl));
         let mut rng = XorShift::new(0x9e37_79b9_7f4a_7c15);
-        for _ in 0..60 {
-            let a = s[rng.below(s.len())];
-            let b = s[rng.below(s.len())];
-            let c = s[rng.below(s.len())];
+        // Samples are in row order: the floor is most likely among the last rows, so
+        // most hypotheses are drawn from there.
+        let low = s.len() * 2 / 3;
+        for it in 0..150 {
+            let (lo, span) = if it % 3 == 2 { (0, s.len()) } else { (low, s.len() - low) };
+            let a = s[lo + rng.below(span)];
+            let b = s[lo + rng.below(span)];
+            let c = s[lo + rng.below(span)];
             let nrm = (b - a).cross(&(c - a));
             let len = nrm.norm();
             if len < 1e-6 {

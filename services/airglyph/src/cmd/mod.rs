@@ -1,5 +1,7 @@
 //! One module a subcommand: its clap `Args` and a `run(args) -> anyhow::Result<()>`.
 
+pub mod eval_pose;
+pub mod pose;
 pub mod record;
 pub mod run;
 pub mod synth;

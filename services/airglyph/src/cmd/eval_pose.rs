@@ -1,0 +1,201 @@
+//! `airglyph eval-pose DIR [--json] [--plots OUTDIR]`: the pose estimator against a
+//! recording's ground truth (joints.csv): e_m, e_h, e_j (seed Eq. 16.20–16.22), share
+//! within 10 cm, mAP at 10 cm, frames/s; plots like the seed's Fig. 16.10 and 16.11.
+
+use airglyph_core::recording::Recording;
+use airglyph_core::Joint;
+use airglyph_pose::metrics::{PoseEval, Summary};
+use airglyph_pose::{overlay, PoseConfig, PoseEstimator};
+use anyhow::{bail, Context};
+use indicatif::{ProgressBar, ProgressStyle};
+use plotters::prelude::*;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Recording directory with ground truth (joints.csv).
+    pub dir: PathBuf,
+    /// Print one JSON object: {"frames":N,"mean_error_cm":…,"max_error_cm":…,
+    /// "per_joint_cm":{…},"within_10cm":…,"map_10cm":…,"fps":…}.
+    #[arg(long)]
+    pub json: bool,
+    /// Write per-frame error (Fig. 16.10) and per-joint error (Fig. 16.11) plots here.
+    #[arg(long, value_name = "OUTDIR")]
+    pub plots: Option<PathBuf>,
+    /// Also write overlays (ground truth green, estimate red) of every Nth frame into
+    /// the plots directory.
+    #[arg(long, value_name = "N")]
+    pub overlay_every: Option<usize>,
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let rec = Recording::open(&args.dir)?;
+    if !rec.has_joints() {
+        bail!(
+            "{}: has no joints.csv, so there is no ground truth to evaluate against",
+            args.dir.display()
+        );
+    }
+    let k = rec.intrinsics();
+    let mut est = PoseEstimator::new(k, PoseConfig::default());
+    let mut ev = PoseEval::default();
+    let mut px = vec![0u16; (k.width * k.height) as usize];
+    if let Some(d) = &args.plots {
+        std::fs::create_dir_all(d).with_context(|| format!("creating {}", d.display()))?;
+    }
+    let bar = ProgressBar::new(rec.len() as u64).with_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} frames {per_sec} eta {eta}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    for i in 0..rec.len() {
+        rec.read_frame_into(i, &mut px)?;
+        let view = airglyph_core::DepthView::new(k.width, k.height, &px)?;
+        let t = Instant::now();
+        let r = est.estimate(view);
+        ev.seconds += t.elapsed().as_secs_f64();
+        let truth = rec.joints(i).expect("checked above");
+        ev.add(&r, truth);
+        if let (Some(d), Some(n)) = (&args.plots, args.overlay_every) {
+            if n > 0 && i % n == 0 {
+                let mut im = overlay::depth_image(&view, Some(est.mask()));
+                overlay::skeleton(&mut im, &k, truth, overlay::GREEN);
+                if r.person_found {
+                    overlay::skeleton(&mut im, &k, &r.skeleton, overlay::RED);
+                }
+                let p = d.join(format!("overlay_{i:06}.png"));
+                im.save(&p).with_context(|| format!("writing {}", p.display()))?;
+            }
+        }
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let s = ev.summary();
+    if let Some(d) = &args.plots {
+        plot_frames(&ev, &d.join("error_per_frame.png"))?;
+        plot_joints(&s, &d.join("error_per_joint.png"))?;
+    }
+    if args.json {
+        println!("{}", serde_json::to_string(&s)?);
+    } else {
+        print_human(&s);
+    }
+    Ok(())
+}
+
+fn print_human(s: &Summary) {
+    println!(
+        "{} frames: mean error e_m {:.2} cm, max error e_h {:.2} cm, {:.1} % of joints within 10 cm, mAP@10cm {:.3}, {:.0} frames/s",
+        s.frames,
+        s.mean_error_cm,
+        s.max_error_cm,
+        s.within_10cm * 100.0,
+        s.map_10cm,
+        s.fps
+    );
+    for j in Joint::ALL {
+        println!("  {:15} {:6.2} cm", j.name(), s.per_joint_cm[j.name()]);
+    }
+}
+
+fn plot_err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
+    anyhow::anyhow!("plotting: {e:?}")
+}
+
+/// Fig. 16.10: mean and largest joint error of each frame.
+fn plot_frames(ev: &PoseEval, path: &Path) -> anyhow::Result<()> {
+    let mean: Vec<(f64, f64)> = ev
+        .frames
+        .iter()
+        .enumerate()
+        .filter(|(_, f)| f.person_found)
+        .map(|(i, f)| (i as f64, f.mean() as f64 * 100.0))
+        .collect();
+    let max: Vec<(f64, f64)> = ev
+        .frames
+        .iter()
+        .enumerate()
+        .filter(|(_, f)| f.person_found)
+        .map(|(i, f)| (i as f64, f.max() as f64 * 100.0))
+        .collect();
+    let top = max.iter().map(|p| p.1).fold(10.0, f64::max).min(200.0) * 1.05;
+    let root = BitMapBackend::new(path, (1000, 500)).into_drawing_area();
+    root.fill(&WHITE).map_err(plot_err)?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption("Joint error per frame", ("sans-serif", 22))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(50)
+        .build_cartesian_2d(0f64..(ev.frames.len().max(1) as f64), 0f64..top)
+        .map_err(plot_err)?;
+    chart
+        .configure_mesh()
+        .x_desc("frame")
+        .y_desc("error (cm)")
+        .draw()
+        .map_err(plot_err)?;
+    chart
+        .draw_series(LineSeries::new(mean, &BLUE))
+        .map_err(plot_err)?
+        .label("mean e_m")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLUE));
+    chart
+        .draw_series(LineSeries::new(max, &RED))
+        .map_err(plot_err)?
+        .label("max e_h")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED));
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()
+        .map_err(plot_err)?;
+    root.present()
+        .with_context(|| format!("writing {}", path.display()))?;
+    Ok(())
+}
+
+/// Fig. 16.11: mean error of each joint.
+fn plot_joints(s: &Summary, path: &Path) -> anyhow::Result<()> {
+    let vals: Vec<f64> = Joint::ALL
+        .iter()
+        .map(|j| s.per_joint_cm[j.name()].max(0.0))
+        .collect();
+    let top = vals.iter().copied().fold(5.0, f64::max) * 1.1;
+    let root = BitMapBackend::new(path, (1000, 500)).into_drawing_area();
+    root.fill(&WHITE).map_err(plot_err)?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption("Mean error per joint", ("sans-serif", 22))
+        .margin(12)
+        .x_label_area_size(90)
+        .y_label_area_size(50)
+        .build_cartesian_2d((0..Joint::COUNT).into_segmented(), 0f64..top)
+        .map_err(plot_err)?;
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .y_desc("error (cm)")
+        .x_labels(Joint::COUNT)
+        .x_label_formatter(&|v| match v {
+            SegmentValue::CenterOf(i) if *i < Joint::COUNT => Joint::ALL[*i].name().to_string(),
+            _ => String::new(),
+        })
+        .x_label_style(
+            ("sans-serif", 12)
+                .into_font()
+                .transform(FontTransform::Rotate90),
+        )
+        .draw()
+        .map_err(plot_err)?;
+    chart
+        .draw_series(
+            Histogram::vertical(&chart)
+                .style(BLUE.mix(0.7).filled())
+                .margin(6)
+                .data(vals.iter().enumerate().map(|(i, v)| (i, *v))),
+        )
+        .map_err(plot_err)?;
+    root.present()
+        .with_context(|| format!("writing {}", path.display()))?;
+    Ok(())
+}

@@ -1,0 +1,75 @@
+//! `airglyph pose DIR [--json]`: the pose estimator over a recording, one line a frame.
+
+use airglyph_core::recording::Recording;
+use airglyph_core::{Joint, Skeleton};
+use airglyph_pose::{PoseConfig, PoseEstimator};
+use anyhow::Context;
+use std::io::Write;
+use std::path::PathBuf;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Recording directory (recording.toml, depth/*.png).
+    pub dir: PathBuf,
+    /// One JSON object a frame: {"frame":i,"person_found":…,"joints":{…},"confidence":{…}}.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// The JSON line of one frame (joints in metres, camera frame; keys in joint order).
+pub fn frame_json(frame: usize, person_found: bool, s: &Skeleton) -> String {
+    let num = |x: f32| {
+        if x.is_finite() {
+            format!("{}", (x as f64 * 1e5).round() / 1e5)
+        } else {
+            "0".into()
+        }
+    };
+    let mut out = format!("{{\"frame\":{frame},\"person_found\":{person_found},\"joints\":{{");
+    for (i, j) in Joint::ALL.iter().enumerate() {
+        let p = s.get(*j);
+        if i > 0 {
+            out.push(',');
+        }
+        out += &format!("\"{}\":[{},{},{}]", j.name(), num(p.x), num(p.y), num(p.z));
+    }
+    out += "},\"confidence\":{";
+    for (i, j) in Joint::ALL.iter().enumerate() {
+        if i > 0 {
+            out.push(',');
+        }
+        out += &format!("\"{}\":{}", j.name(), num(s.confidence[j.index()]));
+    }
+    out += "}}";
+    out
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let rec = Recording::open(&args.dir)?;
+    let k = rec.intrinsics();
+    let mut est = PoseEstimator::new(k, PoseConfig::default());
+    let mut px = vec![0u16; (k.width * k.height) as usize];
+    let stdout = std::io::stdout();
+    let mut out = std::io::BufWriter::new(stdout.lock());
+    for i in 0..rec.len() {
+        rec.read_frame_into(i, &mut px)?;
+        let view = airglyph_core::DepthView::new(k.width, k.height, &px)?;
+        let r = est.estimate(view);
+        if args.json {
+            writeln!(out, "{}", frame_json(i, r.person_found, &r.skeleton))?;
+        } else if r.person_found {
+            let h = r.skeleton[Joint::Head];
+            let rh = r.skeleton[Joint::RightHand];
+            let lh = r.skeleton[Joint::LeftHand];
+            writeln!(
+                out,
+                "frame {i}: head ({:.2}, {:.2}, {:.2})  right hand ({:.2}, {:.2}, {:.2})  left hand ({:.2}, {:.2}, {:.2})",
+                h.x, h.y, h.z, rh.x, rh.y, rh.z, lh.x, lh.y, lh.z
+            )?;
+        } else {
+            writeln!(out, "frame {i}: no person")?;
+        }
+    }
+    out.flush().context("writing to stdout")?;
+    Ok(())
+}
