@@ -370,10 +370,10 @@ pub fn own_bones(j: Joint) -> &'static [Bone] {
         Joint::RightShoulder => &[RightCollar, RightUpperArm, Chest],
         Joint::RightElbow => &[RightUpperArm, RightForearm],
         Joint::RightHand => &[RightHand, RightForearm],
-        Joint::LeftHip => &[Hips, LeftThigh],
+        Joint::LeftHip => &[Hips, Spine, LeftThigh],
         Joint::LeftKnee => &[LeftThigh, LeftShin],
         Joint::LeftFoot => &[LeftShin, LeftFoot],
-        Joint::RightHip => &[Hips, RightThigh],
+        Joint::RightHip => &[Hips, Spine, RightThigh],
         Joint::RightKnee => &[RightThigh, RightShin],
         Joint::RightFoot => &[RightShin, RightFoot],
     }

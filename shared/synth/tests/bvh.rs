@@ -1,4 +1,5 @@
 //! BVH reading and retargeting, with tiny clips written here for each naming convention.
+#![allow(clippy::needless_range_loop)]
 
 use airglyph_synth::bvh::{BvhClip, Convention};
 use airglyph_synth::{Body, Bone, ProceduralBody};
@@ -85,7 +86,10 @@ fn names(c: Convention) -> Vec<(Bone, &'static str)> {
 fn skeleton(c: Convention, a_pose: bool) -> Vec<J> {
     let n: HashMap<Bone, &'static str> = names(c).into_iter().collect();
     let (ax, ay) = if a_pose {
-        (0.7071, -0.7071)
+        (
+            std::f32::consts::FRAC_1_SQRT_2,
+            -std::f32::consts::FRAC_1_SQRT_2,
+        )
     } else {
         (1.0, 0.0)
     };
