@@ -3,5 +3,6 @@
 
 pub mod recording;
 pub mod source;
+pub mod synthetic;
 
 pub use source::{open, DepthSource, Frame, Pacing, SourceError, SourceOptions, SourceSpec};

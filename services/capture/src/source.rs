@@ -118,9 +118,10 @@ pub fn open(spec: &SourceSpec, opts: &SourceOptions) -> Result<Box<dyn DepthSour
         SourceSpec::Recording(dir) => Ok(Box::new(crate::recording::RecordingSource::open(
             dir, opts,
         )?)),
-        SourceSpec::Synthetic(_) => Err(SourceError::Fatal(
-            "the synthetic source is not built into this airglyph-capture yet".into(),
-        )),
+        SourceSpec::Synthetic(script) => Ok(Box::new(crate::synthetic::SyntheticSource::open(
+            script.as_deref(),
+            opts,
+        )?)),
         SourceSpec::V4l2(_) => Err(SourceError::Fatal(
             "V4L2 support is not compiled in: rebuild airglyph-capture with --features v4l2".into(),
         )),

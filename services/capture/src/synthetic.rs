@@ -1,0 +1,142 @@
+//! The built-in synthetic person (airglyph-synth), rendered live at the camera's rate.
+
+use crate::source::{DepthSource, Frame, Pacing, SourceError, SourceOptions};
+use airglyph_core::camera::Preset;
+use airglyph_core::{Intrinsics, Skeleton};
+use airglyph_ipc::clock::monotonic_ns;
+use airglyph_ipc::wire::SourceKind;
+use airglyph_synth::{DrawSpec, MotionSpec, SceneConfig, ScriptedPose, Synthesizer};
+use std::path::PathBuf;
+use std::time::Duration;
+
+/// What the demo person draws when no script is given: every built-in symbol, forever.
+pub const DEMO_SYMBOLS: &str = "0123456789ABCDEFGHIJKLMNOPQRSTUVWXYZ";
+
+/// Parses the script of `synthetic:SCRIPT`: `draw:SYMBOLS`, `poses`, `pose:NAME` or a
+/// BVH file. No script: the person draws every symbol, forever.
+pub fn motion(script: Option<&str>, repeat: bool) -> Result<MotionSpec, SourceError> {
+    let bad = |m: String| SourceError::Fatal(m);
+    let Some(script) = script else {
+        return Ok(MotionSpec::Draw(DrawSpec {
+            symbols: DEMO_SYMBOLS.into(),
+            samples: None,
+            repeat: true,
+        }));
+    };
+    if script == "poses" {
+        return Ok(MotionSpec::Poses);
+    }
+    if let Some(name) = script.strip_prefix("pose:") {
+        return ScriptedPose::from_name(name)
+            .map(MotionSpec::Pose)
+            .ok_or_else(|| {
+                let names: Vec<_> = ScriptedPose::ALL.iter().map(|p| p.name()).collect();
+                bad(format!(
+                    "synthetic:{script}: known poses are {}",
+                    names.join(", ")
+                ))
+            });
+    }
+    if let Some(symbols) = script.strip_prefix("draw:") {
+        if symbols.is_empty() {
+            return Err(bad(
+                "synthetic:draw: needs symbols, e.g. synthetic:draw:0123ABC".into(),
+            ));
+        }
+        return Ok(MotionSpec::Draw(DrawSpec {
+            symbols: symbols.into(),
+            samples: None,
+            repeat,
+        }));
+    }
+    if script.to_ascii_lowercase().ends_with(".bvh") {
+        return Ok(MotionSpec::Bvh(PathBuf::from(script)));
+    }
+    Err(bad(format!(
+        "synthetic:{script}: expected draw:SYMBOLS, poses, pose:NAME or a .bvh file"
+    )))
+}
+
+pub struct SyntheticSource {
+    synth: Synthesizer,
+    script: String,
+    opts: SourceOptions,
+    next: usize,
+    start_ns: Option<u64>,
+    last: Option<Skeleton>,
+}
+
+impl SyntheticSource {
+    pub fn open(script: Option<&str>, opts: &SourceOptions) -> Result<Self, SourceError> {
+        let cfg = SceneConfig {
+            motion: motion(script, opts.looping)?,
+            intrinsics: Preset::KinectV1Vga.intrinsics(),
+            fps: 30.0,
+            ..SceneConfig::default()
+        };
+        let synth = Synthesizer::new(cfg).map_err(|e| SourceError::Fatal(e.to_string()))?;
+        Ok(Self {
+            synth,
+            script: script.unwrap_or("").to_owned(),
+            opts: opts.clone(),
+            next: 0,
+            start_ns: None,
+            last: None,
+        })
+    }
+}
+
+impl DepthSource for SyntheticSource {
+    fn intrinsics(&self) -> Intrinsics {
+        self.synth.intrinsics()
+    }
+
+    fn fps(&self) -> f32 {
+        self.synth.fps()
+    }
+
+    fn kind(&self) -> SourceKind {
+        SourceKind::Synthetic
+    }
+
+    fn describe(&self) -> String {
+        if self.script.is_empty() {
+            "synthetic".into()
+        } else {
+            format!("synthetic:{}", self.script)
+        }
+    }
+
+    fn next_frame(&mut self, out: &mut [u16]) -> Result<Option<Frame>, SourceError> {
+        if self.synth.len().is_some_and(|n| self.next >= n) {
+            if !self.opts.looping {
+                return Ok(None);
+            }
+            self.next = 0;
+            self.start_ns = None;
+        }
+        let index = self.next;
+        self.next += 1;
+        if self.opts.pacing == Pacing::Realtime {
+            let start = *self.start_ns.get_or_insert_with(monotonic_ns);
+            let due = start + (index as f64 * 1e9 / self.synth.fps() as f64) as u64;
+            let now = monotonic_ns();
+            if due > now {
+                std::thread::sleep(Duration::from_nanos(due - now));
+            }
+        }
+        let truth = self
+            .synth
+            .render_into(index, out)
+            .map_err(|e| SourceError::Fatal(e.to_string()))?;
+        self.last = Some(truth.skeleton);
+        Ok(Some(Frame {
+            capture_ns: monotonic_ns(),
+            source_ns: truth.capture_ns,
+        }))
+    }
+
+    fn last_truth(&self) -> Option<Skeleton> {
+        self.last
+    }
+}
