@@ -67,7 +67,6 @@ fn run(args: Args) -> anyhow::Result<()> {
 
     let mut skipped = 0u64;
     while !shutdown::requested() && args.frames.is_none_or(|n| publisher.sequence() < n) {
-        let started = monotonic_ns();
         let result = publisher.publish(pixels, |header, out| {
             let frame = source.next_frame(out)?;
             if let Some(f) = frame {
@@ -83,10 +82,11 @@ fn run(args: Args) -> anyhow::Result<()> {
             Ok::<_, SourceError>(frame.is_some())
         });
         match result {
-            Ok(Some(_)) => {
-                let now = monotonic_ns();
+            Ok(Some(sent)) => {
+                // Capture's own work (decode, render, readout) is its whole latency.
+                let took = sent.publish_ns - sent.capture_ns;
                 telemetry.input(0, 0);
-                telemetry.output(now - started, now - started);
+                telemetry.output(took, took);
             }
             Ok(None) => {
                 tracing::info!(frames = publisher.sequence(), skipped, "end of source");

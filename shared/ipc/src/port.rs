@@ -404,12 +404,13 @@ impl DepthPublisher {
 
     /// Loans a `pixels`-long sample, lets `fill` write the frame into it and set the
     /// header's capture time and intrinsics, then sends it and wakes the subscribers.
-    /// `fill` returns `Ok(false)` when it has no frame; nothing is sent then.
+    /// `fill` returns `Ok(false)` when it has no frame; nothing is sent then. Returns the
+    /// header as sent.
     pub fn publish<E>(
         &mut self,
         pixels: usize,
         fill: impl FnOnce(&mut DepthHeader, &mut [u16]) -> Result<bool, E>,
-    ) -> Result<Option<u64>, PublishError<E>> {
+    ) -> Result<Option<DepthHeader>, PublishError<E>> {
         // `loan_slice` initializes the memory (a memset): handing uninitialized shared
         // memory out as `&mut [u16]` would be undefined behaviour.
         let mut sample = self
@@ -436,7 +437,7 @@ impl DepthPublisher {
         // A missing listener is not an error: nobody may be subscribed yet.
         let _ = self.notifier.notify();
         self.sequence += 1;
-        Ok(Some(header.sequence))
+        Ok(Some(header))
     }
 
     /// Sends a frame whose header is taken as given (no sequence or time is filled in).

@@ -3,8 +3,10 @@
 //! arrived, in what order, with which timestamps, bit for bit.
 
 use airglyph_core::recording::{RecordingInfo, RecordingWriter};
+use airglyph_core::Joint;
 use airglyph_ipc::clock::monotonic_ns;
-use airglyph_ipc::{shutdown, Pipeline};
+use airglyph_ipc::port::Message;
+use airglyph_ipc::{shutdown, GestureEventMsg, Pipeline, Receiver, SkeletonMsg};
 use clap::Parser;
 use std::io::Write;
 use std::path::PathBuf;
@@ -12,6 +14,9 @@ use std::time::{Duration, Instant};
 
 #[derive(Parser)]
 struct Args {
+    /// What to receive: depth, skeleton or gesture.
+    #[arg(long, default_value = "depth")]
+    stream: String,
     /// Write received frames here as a recording (frames.csv carries the source times).
     #[arg(long)]
     out: Option<PathBuf>,
@@ -27,10 +32,67 @@ fn main() -> anyhow::Result<()> {
     let args = Args::parse();
     shutdown::install();
     let pipeline = Pipeline::join("probe")?;
-    let mut rx = pipeline.depth_receiver()?;
-    // Tells the test we are subscribed.
+    match args.stream.as_str() {
+        "depth" => depth(&pipeline, &args),
+        "skeleton" => messages(pipeline.skeleton_receiver()?, &args, |m: &SkeletonMsg| {
+            serde_json::json!({
+                "sequence": m.sequence, "session": m.session, "person_found": m.person_found == 1,
+                "capture_ns": m.chain.capture_ns, "capture_publish_ns": m.chain.capture_publish_ns,
+                "pose_receive_ns": m.chain.pose_receive_ns, "pose_publish_ns": m.chain.pose_publish_ns,
+                "right_hand": m.joints[Joint::RightHand.index()], "head": m.joints[Joint::Head.index()],
+            })
+        }),
+        "gesture" => messages(
+            pipeline.gesture_receiver()?,
+            &args,
+            |m: &GestureEventMsg| {
+                serde_json::json!({
+                    "label": m.label().unwrap_or("?"), "score": m.score, "start_sequence": m.start_sequence,
+                    "end_sequence": m.end_sequence, "capture_ns": m.chain.capture_ns,
+                    "gesture_publish_ns": m.chain.gesture_publish_ns,
+                })
+            },
+        ),
+        other => anyhow::bail!("unknown stream {other:?}: expected depth, skeleton or gesture"),
+    }
+}
+
+fn ready() -> anyhow::Result<()> {
     println!("{}", serde_json::json!({"ready": true}));
     std::io::stdout().flush()?;
+    Ok(())
+}
+
+fn messages<T: Message>(
+    mut rx: Receiver<T>,
+    args: &Args,
+    line: impl Fn(&T) -> serde_json::Value,
+) -> anyhow::Result<()> {
+    ready()?;
+    let mut received = 0u64;
+    let mut last = Instant::now();
+    while !shutdown::requested() && args.frames.is_none_or(|n| received < n) {
+        let Some(r) = rx.recv(Duration::from_millis(100))? else {
+            if last.elapsed().as_secs_f64() > args.idle {
+                break;
+            }
+            continue;
+        };
+        last = Instant::now();
+        received += 1;
+        let mut v = line(&r.msg);
+        v["dropped"] = r.dropped.into();
+        v["receive_ns"] = r.receive_ns.into();
+        println!("{v}");
+        std::io::stdout().flush()?;
+    }
+    Ok(())
+}
+
+fn depth(pipeline: &Pipeline, args: &Args) -> anyhow::Result<()> {
+    let mut rx = pipeline.depth_receiver()?;
+    // Tells the test we are subscribed.
+    ready()?;
     let mut writer: Option<RecordingWriter> = None;
     let mut received = 0u64;
     let mut last = Instant::now();
