@@ -24,6 +24,12 @@ enum Command {
     Top(cmd::top::Args),
     /// Render a synthetic person into a recording with exact ground-truth joints.
     Synth(cmd::synth::Args),
+    /// Train a gesture model from trajectory JSONL files.
+    Train(cmd::train::Args),
+    /// Accuracy, per-class recall and confusion matrices of a gesture model.
+    EvalGestures(cmd::eval_gestures::Args),
+    /// Spotting reliability on continuous streams of gestures and random movement.
+    EvalSpotting(cmd::eval_spotting::Args),
     /// Estimate the skeleton of every frame of a recording.
     Pose(cmd::pose::Args),
     /// Pose error against a recording's ground truth (e_m, e_j, within 10 cm, mAP, fps).
@@ -43,6 +49,9 @@ fn main() -> std::process::ExitCode {
         Command::Record(a) => cmd::record::run(a),
         Command::Top(a) => cmd::top::run(a),
         Command::Synth(a) => cmd::synth::run(a),
+        Command::Train(a) => cmd::train::run(a),
+        Command::EvalGestures(a) => cmd::eval_gestures::run(a),
+        Command::EvalSpotting(a) => cmd::eval_spotting::run(a),
         Command::Pose(a) => cmd::pose::run(a),
         Command::EvalPose(a) => cmd::eval_pose::run(a),
     };

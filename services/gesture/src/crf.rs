@@ -31,7 +31,7 @@ impl Default for CrfTrainConfig {
     fn default() -> Self {
         Self {
             l2: 1.0,
-            iterations: 150,
+            iterations: 80,
             time_bins: 3,
         }
     }

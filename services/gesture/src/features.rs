@@ -99,7 +99,7 @@ impl Default for FeatureConfig {
         Self {
             points: 32,
             grid: 6,
-            pen_up: true,
+            pen_up: false,
         }
     }
 }

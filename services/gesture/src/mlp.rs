@@ -39,7 +39,7 @@ pub struct MlpTrainConfig {
 impl Default for MlpTrainConfig {
     fn default() -> Self {
         Self {
-            hidden: 256,
+            hidden: 192,
             epochs: 30,
             batch: 64,
             learning_rate: 0.05,

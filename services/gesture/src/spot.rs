@@ -13,6 +13,10 @@
 //! points between its start and end (boundaries refined by a few steps) and published.
 
 use crate::data::{Sample, Trajectory};
+use crate::features::{feature_vector, resample, FeatureConfig};
+use crate::mlp::{Mlp, MlpTrainConfig};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 use crate::hmm::{DiscreteHmm, HmmTrainConfig};
 use crate::model::{LabelledHmm, Model};
 use crate::tracker::{Hand, HandPoint, HandTracker, TrackerConfig};
@@ -30,12 +34,158 @@ pub struct SpottingModel {
     /// Chord step as a fraction of the gesture's larger side.
     pub step: f64,
     pub models: Vec<LabelledHmm>,
+    /// Gesture / non-gesture verifier of candidate segments (features, then the log of
+    /// the segment's size in gesture sizes); output 1 = gesture.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub verifier: Option<Verifier>,
+}
+
+/// A small network telling a whole gesture from movement around, before, after or
+/// inside one.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Verifier {
+    pub features: FeatureConfig,
+    pub net: Mlp,
+}
+
+impl Verifier {
+    /// log P(gesture) of a segment given in gesture-size units.
+    pub fn log_p_gesture(&self, points: &[[f32; 2]]) -> f64 {
+        let mut f = Vec::with_capacity(self.features.dim() + 1);
+        verifier_features(points, &self.features, &mut f);
+        self.net.log_probs(&f).get(1).copied().unwrap_or(f32::NEG_INFINITY) as f64
+    }
+
+    /// Trains on the samples (positives) and movement around them (negatives).
+    pub fn train(samples: &[Sample], seed: u64) -> Verifier {
+        let features = FeatureConfig {
+            pen_up: false,
+            ..FeatureConfig::default()
+        };
+        let shapes: Vec<Vec<[f32; 2]>> = samples
+            .par_iter()
+            .map(|s| resample(&s.trajectory(), 80).points)
+            .collect();
+        let n = shapes.len() * 2;
+        let labels: Vec<usize> = (0..n).map(|i| usize::from(i % 2 == 0)).collect();
+        let cfg = MlpTrainConfig {
+            hidden: 128,
+            epochs: 20,
+            seed,
+            ..MlpTrainConfig::default()
+        };
+        let feats = |epoch: usize, i: usize| {
+            let mut rng = ChaCha8Rng::seed_from_u64(
+                seed ^ ((epoch as u64).wrapping_mul(0x1000_0001)) ^ (i as u64).wrapping_mul(0x9E37_79B9),
+            );
+            let pts = verifier_example(&shapes, i / 2, i % 2 == 0, &mut rng);
+            let mut f = Vec::new();
+            verifier_features(&pts, &features, &mut f);
+            f
+        };
+        let net = Mlp::train(n, features.dim() + 1, &labels, 2, &cfg, feats, |_| {});
+        Verifier { features, net }
+    }
+}
+
+fn verifier_features(points: &[[f32; 2]], cfg: &FeatureConfig, out: &mut Vec<f32>) {
+    let t = Trajectory::from_points(points.to_vec());
+    feature_vector(&t, cfg, out);
+    let (mut x0, mut y0, mut x1, mut y1) = (f32::MAX, f32::MAX, f32::MIN, f32::MIN);
+    for p in points {
+        x0 = x0.min(p[0]);
+        y0 = y0.min(p[1]);
+        x1 = x1.max(p[0]);
+        y1 = y1.max(p[1]);
+    }
+    let size = (x1 - x0).max(y1 - y0).max(1e-3);
+    out.push(size.ln());
+}
+
+/// One training example for the verifier, in gesture-size units: a whole gesture
+/// (`positive`), or random movement, a gesture with a long lead-in or tail, or part of
+/// a gesture.
+fn verifier_example(
+    shapes: &[Vec<[f32; 2]>],
+    k: usize,
+    positive: bool,
+    rng: &mut ChaCha8Rng,
+) -> Vec<[f32; 2]> {
+    let shape = &shapes[k % shapes.len()];
+    let scale = rng.gen_range(0.75..1.3f32);
+    let rot = rng.gen_range(-0.15..0.15f32);
+    let (c, s) = (rot.cos(), rot.sin());
+    let g: Vec<[f32; 2]> = shape
+        .iter()
+        .map(|p| [scale * (c * p[0] - s * p[1]), scale * (s * p[0] + c * p[1])])
+        .collect();
+    let lead = |rng: &mut ChaCha8Rng, at: [f32; 2], len: f32| {
+        let a = rng.gen_range(0.0..std::f32::consts::TAU);
+        let from = [at[0] + len * a.cos(), at[1] + len * a.sin()];
+        crate::stream::random_path(rng, from, at, 1)
+    };
+    let first = g[0];
+    let last = g[g.len() - 1];
+    let kind = if positive { 0 } else { rng.gen_range(1..5) };
+    match kind {
+        0 => {
+            let mut v = Vec::new();
+            if rng.gen_bool(0.5) {
+                let l = rng.gen_range(0.0..0.12);
+                v.extend(lead(rng, first, l));
+            }
+            v.extend(&g);
+            if rng.gen_bool(0.5) {
+                let l = rng.gen_range(0.0..0.12);
+                let mut t = lead(rng, last, l);
+                t.reverse();
+                v.extend(t);
+            }
+            v
+        }
+        1 => {
+            let from = [rng.gen_range(-1.5..1.5), rng.gen_range(-1.5..1.5)];
+            let to = [rng.gen_range(-1.5..1.5), rng.gen_range(-1.5..1.5)];
+            let k = rng.gen_range(1..4);
+            crate::stream::random_path(rng, from, to, k)
+        }
+        2 => {
+            let l = rng.gen_range(0.2..1.2);
+            let mut v = lead(rng, first, l);
+            v.extend(&g);
+            v
+        }
+        3 => {
+            let l = rng.gen_range(0.2..1.2);
+            let mut t = lead(rng, last, l);
+            t.reverse();
+            let mut v = g.clone();
+            v.extend(t);
+            v
+        }
+        _ => {
+            let n = g.len();
+            let keep = ((n as f32) * rng.gen_range(0.3..0.85)) as usize;
+            let keep = keep.clamp(2, n);
+            if rng.gen_bool(0.5) {
+                g[..keep].to_vec()
+            } else {
+                g[n - keep..].to_vec()
+            }
+        }
+    }
 }
 
 impl SpottingModel {
     pub fn validate(&self) -> Result<(), String> {
         if !(self.step > 0.0 && self.step < 1.0) {
             return Err(format!("spotting step {} is not in (0, 1)", self.step));
+        }
+        if let Some(v) = &self.verifier {
+            v.net.validate().map_err(|e| format!("spotting verifier: {e}"))?;
+            if v.net.inputs() != v.features.dim() + 1 || v.net.outputs() != 2 {
+                return Err("spotting verifier has the wrong dimensions".into());
+            }
         }
         for m in &self.models {
             m.hmm
@@ -79,7 +229,12 @@ impl SpottingModel {
                 }
             })
             .collect();
-        Self { step, models }
+        let verifier = Some(Verifier::train(samples, 7));
+        Self {
+            step,
+            models,
+            verifier,
+        }
     }
 }
 
@@ -147,6 +302,9 @@ pub struct SpotterConfig {
     pub enter_log_prob: f64,
     /// A gesture model must beat the threshold model by this log-likelihood margin.
     pub margin: f64,
+    /// Cost of every code spent inside a gesture model (log space): tightens the
+    /// boundaries, since movement before and after a gesture no longer comes free.
+    pub code_penalty: f64,
     /// Codes to wait after the last candidate before deciding.
     pub hangover: usize,
     /// Shortest and longest gesture in codes.
@@ -154,6 +312,8 @@ pub struct SpotterConfig {
     pub max_codes: usize,
     /// Smallest classifier confidence to publish a gesture.
     pub min_score: f64,
+    /// Smallest verifier probability that the segment is a whole gesture.
+    pub min_gesture_prob: f64,
     /// Boundary refinement: try start/end moved by up to this many codes.
     pub refine: usize,
     pub tracker: TrackerConfig,
@@ -165,12 +325,14 @@ impl Default for SpotterConfig {
             gesture_size: 1.0,
             rest_seconds: 0.3,
             enter_log_prob: -2.0,
-            margin: 2.0,
-            hangover: 6,
+            margin: 1.0,
+            code_penalty: 0.1,
+            hangover: 8,
             min_codes: 6,
             max_codes: 120,
             min_score: 0.5,
-            refine: 2,
+            min_gesture_prob: 0.5,
+            refine: 4,
             tracker: TrackerConfig::default(),
         }
     }
@@ -437,7 +599,7 @@ impl Spotter {
                 } else {
                     (from, fstart)
                 };
-                net.score[s] = v + net.log_b[s * m + o];
+                net.score[s] = v + net.log_b[s * m + o] - self.cfg.code_penalty;
                 net.start[s] = st;
             }
             // Prune tokens that are too long.
@@ -477,15 +639,18 @@ impl Spotter {
             return None;
         }
         self.best = None;
-        self.barrier = b.end + 1;
+        let (g, used_end) = self.publish(b);
+        // A published gesture blocks its codes; a rejected candidate only its start.
+        let block = if g.is_some() { used_end } else { b.start };
+        self.barrier = self.barrier.max(block + 1);
         for net in self.nets.iter_mut() {
             for s in 0..net.score.len() {
-                if net.start[s] <= b.end {
+                if net.start[s] <= block {
                     net.score[s] = NEG;
                 }
             }
         }
-        self.publish(b)
+        g
     }
 
     /// The hand points of codes start..=end (stream indices), or None if trimmed.
@@ -505,41 +670,92 @@ impl Spotter {
         (i1 < self.pts.len() && i0 < i1).then_some((i0, i1))
     }
 
-    fn publish(&self, c: Candidate) -> Option<SpottedGesture> {
+    /// Scores the segment of codes s..=e: (verifier log P(gesture) + log classifier
+    /// score, P(gesture), class, classifier score, first point, last point).
+    fn judge(&self, s: usize, e: usize) -> Option<(f64, f64, usize, f64, usize, usize)> {
+        if e <= s || e >= self.obs_base + self.obs.len() || e + 1 - s < self.cfg.min_codes {
+            return None;
+        }
+        let (i0, i1) = self.segment(s, e)?;
+        let inv = 1.0 / self.cfg.gesture_size.max(1e-3);
+        let pts: Vec<[f32; 2]> = self.pts[i0..=i1]
+            .iter()
+            .map(|p| [p.0[0] * inv, p.0[1] * inv])
+            .collect();
+        let verifier = self.model.spotting.as_ref().and_then(|m| m.verifier.as_ref());
+        let lpg = verifier.map_or(0.0, |v| v.log_p_gesture(&pts));
+        let cl = self.model.classify(&Trajectory::from_points(pts));
+        Some((lpg + cl.score.max(1e-12).ln(), lpg.exp(), cl.class, cl.score, i0, i1))
+    }
+
+    /// Classifies a candidate with its boundaries refined: a coarse search over starts
+    /// around the candidate's and ends up to its end, then a fine one around the best.
+    /// Returns the gesture (if accepted) and the last code it used.
+    fn publish(&self, c: Candidate) -> (Option<SpottedGesture>, usize) {
         let r = self.cfg.refine as isize;
-        let mut best: Option<(f64, usize, usize, usize)> = None;
-        for ds in -r..=r {
-            for de in -r..=r {
-                let s = c.start as isize + ds;
-                let e = c.end as isize + de;
-                if s < 0 || e <= s || (e as usize) >= self.obs_base + self.obs.len() {
+        let better = |b: &Option<(f64, f64, usize, f64, usize, usize, usize)>, v: f64| {
+            b.is_none_or(|b| v > b.0)
+        };
+        let mut best: Option<(f64, f64, usize, f64, usize, usize, usize)> = None;
+        let (s0, s1) = (c.start as isize - r, c.start as isize + 3 * r);
+        let (e0, e1) = (
+            c.start as isize + self.cfg.min_codes as isize,
+            (self.obs_base + self.obs.len()) as isize - 1,
+        );
+        let mut s = s0;
+        while s <= s1 {
+            let mut e = e0.max(s + 1);
+            while e <= e1 {
+                if s >= 0 {
+                    if let Some(j) = self.judge(s as usize, e as usize) {
+                        if better(&best, j.0) {
+                            best = Some((j.0, j.1, j.2, j.3, j.4, j.5, e as usize));
+                        }
+                    }
+                }
+                e += 2;
+            }
+            s += 2;
+        }
+        let Some(coarse) = best else {
+            return (None, c.end);
+        };
+        // Fine search around the coarse optimum (its start is recovered from the point).
+        let cs = (c.start as isize - r..=c.start as isize + 3 * r)
+            .find(|&s| s >= 0 && self.segment(s as usize, coarse.6).map(|x| x.0) == Some(coarse.4))
+            .unwrap_or(c.start as isize);
+        for ds in -1..=1isize {
+            for de in -1..=1isize {
+                let (s, e) = (cs + ds, coarse.6 as isize + de);
+                if s < 0 || e < 0 {
                     continue;
                 }
-                let Some((i0, i1)) = self.segment(s as usize, e as usize) else {
-                    continue;
-                };
-                let pts: Vec<[f32; 2]> = self.pts[i0..=i1].iter().map(|p| p.0).collect();
-                let cl = self.model.classify(&Trajectory::from_points(pts));
-                if best.is_none_or(|b| cl.score > b.0) {
-                    best = Some((cl.score, cl.class, i0, i1));
+                if let Some(j) = self.judge(s as usize, e as usize) {
+                    if better(&best, j.0) {
+                        best = Some((j.0, j.1, j.2, j.3, j.4, j.5, e as usize));
+                    }
                 }
             }
         }
-        let (score, class, i0, i1) = best?;
-        if score < self.cfg.min_score {
-            return None;
+        let Some((_, p_gesture, class, score, i0, i1, used_end)) = best else {
+            return (None, c.end);
+        };
+        if score < self.cfg.min_score || p_gesture < self.cfg.min_gesture_prob {
+            return (None, c.end);
         }
         let _ = c.model;
-        Some(SpottedGesture {
-            label: self.model.labels[class].clone(),
-            class,
-            score,
-            start_seq: self.pts[i0].1,
-            end_seq: self.pts[i1].1,
-            start_ns: self.pts[i0].2,
-            end_ns: self.pts[i1].2,
-            hand: self.hand,
-        })
+        (
+            Some(SpottedGesture {
+                label: self.model.labels[class].clone(),
+                class,
+                score: score * p_gesture,
+                start_seq: self.pts[i0].1,
+                end_seq: self.pts[i1].1,
+                start_ns: self.pts[i0].2,
+                end_ns: self.pts[i1].2,
+                hand: self.hand,
+            }),
+            used_end,
+        )
     }
 }
-

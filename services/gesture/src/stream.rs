@@ -78,8 +78,9 @@ fn walk(points: &mut Vec<[f32; 2]>, path: &[[f32; 2]], step: f32) {
     }
 }
 
-/// A smooth random movement from `from` to `to` through random curves.
-fn random_path<R: Rng>(rng: &mut R, from: [f32; 2], to: [f32; 2], segments: usize) -> Vec<[f32; 2]> {
+/// A smooth random movement from `from` to `to` through random curves (quadratic Bezier
+/// pieces through `segments − 1` random waypoints).
+pub fn random_path<R: Rng>(rng: &mut R, from: [f32; 2], to: [f32; 2], segments: usize) -> Vec<[f32; 2]> {
     let mut way = vec![from];
     for _ in 1..segments {
         way.push([rng.gen_range(-1.2..1.6), rng.gen_range(-0.8..1.6)]);

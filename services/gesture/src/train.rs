@@ -80,7 +80,7 @@ impl Default for TrainConfig {
             crf: CrfTrainConfig::default(),
             mlp: MlpTrainConfig::default(),
             features: FeatureConfig::default(),
-            ensemble: 1,
+            ensemble: 3,
             augment: 1.0,
             spotting: true,
             spotting_step: 0.1,

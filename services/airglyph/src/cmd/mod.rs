@@ -1,11 +1,14 @@
 //! One module a subcommand: its clap `Args` and a `run(args) -> anyhow::Result<()>`.
 
+pub mod eval_gestures;
 pub mod eval_pose;
 pub mod pose;
+pub mod eval_spotting;
 pub mod record;
 pub mod run;
 pub mod synth;
 pub mod top;
+pub mod train;
 
 use airglyph_ipc::GestureEventMsg;
 

@@ -1,0 +1,332 @@
+//! `airglyph eval-gestures`: accuracy, per-class recall, confusion matrices and decision
+//! time of a gesture model; with `--folds K`, writer-independent cross-validation
+//! (retraining the model's classifier with its recorded parameters on the other folds);
+//! with `--baselines`, the template baseline (DTW 1-NN), the seed's pipeline and the CRF
+//! trained on the same data in the same run.
+
+use airglyph_gesture::data::{folds_by_subject, labels_of, load_many, Sample};
+use airglyph_gesture::dtw::DtwClassifier;
+use airglyph_gesture::eval::Confusion;
+use airglyph_gesture::{train, ClassifierKind, Model, TrainConfig};
+use anyhow::{bail, Context};
+use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
+use serde_json::json;
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// The model (its classifier and training parameters).
+    #[arg(long)]
+    pub model: PathBuf,
+    /// Trajectory JSONL test data (with --folds: the data to cross-validate on).
+    #[arg(long, num_args = 1.., required = true)]
+    pub data: Vec<PathBuf>,
+    /// One JSON object a line.
+    #[arg(long)]
+    pub json: bool,
+    /// Write confusion-matrix PNGs here.
+    #[arg(long)]
+    pub plots: Option<PathBuf>,
+    /// Also evaluate the template baseline (DTW 1-NN), the seed's pipeline and the CRF.
+    #[arg(long)]
+    pub baselines: bool,
+    /// Cross-validation by subject with K folds, retraining on the other folds.
+    #[arg(long)]
+    pub folds: Option<usize>,
+    /// Bezier points of the seed's pipeline among the baselines.
+    #[arg(long, value_delimiter = ',', default_value = "15")]
+    pub seed_points: Vec<usize>,
+    /// Evaluate DTW on every S-th test sample only (it is slow).
+    #[arg(long, default_value_t = 1)]
+    pub dtw_stride: usize,
+    /// Skip the CRF among the baselines.
+    #[arg(long)]
+    pub no_crf: bool,
+    /// Fold assignment seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
+#[derive(Clone)]
+enum Method {
+    Model(Box<TrainConfig>),
+    Dtw,
+    Seed(usize),
+    Crf(usize),
+}
+
+impl Method {
+    fn name(&self) -> String {
+        match self {
+            Method::Model(c) => c.classifier.name().to_string(),
+            Method::Dtw => "dtw".into(),
+            Method::Seed(_) => "seed-hmm".into(),
+            Method::Crf(_) => "crf".into(),
+        }
+    }
+
+    fn file_name(&self) -> String {
+        match self {
+            Method::Seed(n) => format!("seed-hmm-n{n}"),
+            Method::Crf(n) => format!("crf-n{n}"),
+            m => m.name(),
+        }
+    }
+
+    fn bezier_points(&self, model_n: usize) -> usize {
+        match self {
+            Method::Seed(n) | Method::Crf(n) => *n,
+            _ => model_n,
+        }
+    }
+}
+
+/// A trained predictor of class indices into `labels`.
+enum Predictor {
+    Model(Model, Vec<usize>),
+    Dtw(DtwClassifier),
+}
+
+impl Predictor {
+    fn predict(&self, s: &Sample) -> usize {
+        match self {
+            Predictor::Model(m, map) => map[m.classify(&s.trajectory()).class],
+            Predictor::Dtw(d) => d.classify(&s.trajectory()).unwrap_or(0),
+        }
+    }
+}
+
+fn fit(method: &Method, train_set: &[Sample], labels: &[String]) -> anyhow::Result<Predictor> {
+    let base = |kind, n| TrainConfig {
+        classifier: kind,
+        bezier_points: n,
+        spotting: false,
+        ..TrainConfig::default()
+    };
+    let cfg = match method {
+        Method::Dtw => {
+            let mut d = DtwClassifier::new(32, 4);
+            for s in train_set {
+                let c = labels.iter().position(|l| *l == s.label).unwrap_or(0);
+                d.add(&s.trajectory(), c);
+            }
+            return Ok(Predictor::Dtw(d));
+        }
+        Method::Model(c) => TrainConfig {
+            spotting: false,
+            ..(**c).clone()
+        },
+        Method::Seed(n) => base(ClassifierKind::Hmm, *n),
+        Method::Crf(n) => base(ClassifierKind::Crf, *n),
+    };
+    let model = train(train_set, &cfg, &|_, _| {})?;
+    let map = model
+        .labels
+        .iter()
+        .map(|l| labels.iter().position(|x| x == l).unwrap_or(0))
+        .collect();
+    Ok(Predictor::Model(model, map))
+}
+
+struct Outcome {
+    conf: Confusion,
+    decisions: u64,
+    seconds: f64,
+}
+
+fn test(p: &Predictor, test_set: &[Sample], labels: &[String], stride: usize, out: &mut Outcome) {
+    let picked: Vec<&Sample> = test_set.iter().step_by(stride.max(1)).collect();
+    let preds: Vec<usize> = picked.par_iter().map(|s| p.predict(s)).collect();
+    for (s, pr) in picked.iter().zip(preds) {
+        let t = labels.iter().position(|l| *l == s.label).unwrap_or(0);
+        out.conf.add(t, pr);
+    }
+    // Decision time measured on one thread.
+    let timed = picked.len().min(300);
+    let t0 = Instant::now();
+    for s in &picked[..timed] {
+        std::hint::black_box(p.predict(s));
+    }
+    out.seconds += t0.elapsed().as_secs_f64();
+    out.decisions += timed as u64;
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let model = Model::load(&args.model)?;
+    let samples = load_many(&args.data)?;
+    let labels = labels_of(&samples);
+    // Cross-validation retrains on the data's labels; otherwise the model must know them.
+    let unknown = labels.iter().find(|l| model.label_index(l).is_none());
+    if let (None, Some(l)) = (args.folds, unknown) {
+        bail!(
+            "{}: the data hold label {l:?}, which the model {} does not know",
+            args.data[0].display(),
+            args.model.display()
+        );
+    }
+    let model_n = model.training.bezier_points;
+    let mut methods = Vec::new();
+    if args.folds.is_some() {
+        let cfg: TrainConfig = serde_json::from_value(model.training.parameters.clone())
+            .with_context(|| {
+                format!(
+                    "{}: the model's training parameters cannot be read back for retraining",
+                    args.model.display()
+                )
+            })?;
+        methods.push(Method::Model(Box::new(cfg)));
+    }
+    if args.baselines {
+        if args.folds.is_none() {
+            bail!("--baselines trains the baselines by cross-validation: add --folds K");
+        }
+        methods.push(Method::Dtw);
+        for &n in &args.seed_points {
+            if !(2..=200).contains(&n) {
+                bail!("--seed-points {n} is not in 2..=200");
+            }
+            methods.push(Method::Seed(n));
+        }
+        if !args.no_crf {
+            methods.push(Method::Crf(15));
+        }
+    }
+    let mut results: Vec<(String, String, usize, Outcome)> = Vec::new();
+    if let Some(k) = args.folds {
+        if k < 2 {
+            bail!("--folds {k}: need at least 2");
+        }
+        let fold = folds_by_subject(&samples, k, args.seed);
+        let bar = ProgressBar::new((k * methods.len()) as u64);
+        bar.set_style(
+            ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} {elapsed}")
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        for m in &methods {
+            let mut out = Outcome {
+                conf: Confusion::new(labels.clone()),
+                decisions: 0,
+                seconds: 0.0,
+            };
+            for f in 0..k {
+                bar.set_message(format!("{} fold {}", m.file_name(), f + 1));
+                let (tr, te): (Vec<_>, Vec<_>) = samples
+                    .iter()
+                    .cloned()
+                    .zip(&fold)
+                    .partition(|(_, &g)| g != f);
+                let tr: Vec<Sample> = tr.into_iter().map(|x| x.0).collect();
+                let te: Vec<Sample> = te.into_iter().map(|x| x.0).collect();
+                if tr.is_empty() || te.is_empty() {
+                    bar.inc(1);
+                    continue;
+                }
+                let p = fit(m, &tr, &labels)?;
+                let stride = if matches!(m, Method::Dtw) {
+                    args.dtw_stride
+                } else {
+                    1
+                };
+                test(&p, &te, &labels, stride, &mut out);
+                bar.inc(1);
+            }
+            results.push((m.name(), m.file_name(), m.bezier_points(model_n), out));
+        }
+        bar.finish_and_clear();
+    } else {
+        let map: Vec<usize> = model
+            .labels
+            .iter()
+            .map(|l| labels.iter().position(|x| x == l).unwrap_or(usize::MAX))
+            .collect();
+        let mut conf = Confusion::new(labels.clone());
+        let preds: Vec<usize> = samples
+            .par_iter()
+            .map(|s| model.classify(&s.trajectory()).class)
+            .collect();
+        for (s, p) in samples.iter().zip(preds) {
+            let t = labels.iter().position(|l| *l == s.label).unwrap_or(0);
+            // A prediction outside the data's labels counts as wrong.
+            let pr = map[p];
+            if pr == usize::MAX {
+                conf.add(t, (t + 1) % labels.len().max(1));
+            } else {
+                conf.add(t, pr);
+            }
+        }
+        let timed = samples.len().min(500);
+        let t0 = Instant::now();
+        for s in &samples[..timed] {
+            std::hint::black_box(model.classify(&s.trajectory()));
+        }
+        let name = model.classifier.name().to_string();
+        results.push((
+            name.clone(),
+            name,
+            model_n,
+            Outcome {
+                conf,
+                decisions: timed as u64,
+                seconds: t0.elapsed().as_secs_f64(),
+            },
+        ));
+    }
+    if let Some(dir) = &args.plots {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("{}: cannot create plot directory", dir.display()))?;
+    }
+    for (name, file, n, out) in &results {
+        let ms = 1e3 * out.seconds / out.decisions.max(1) as f64;
+        let recall: serde_json::Map<String, serde_json::Value> = out
+            .conf
+            .recall()
+            .into_iter()
+            .map(|(l, r)| (l, r.map_or(serde_json::Value::Null, |v| json!(v))))
+            .collect();
+        if args.json {
+            println!(
+                "{}",
+                json!({
+                    "classifier": name,
+                    "bezier_points": n,
+                    "samples": out.conf.total(),
+                    "accuracy": out.conf.accuracy(),
+                    "ms_per_decision": ms,
+                    "per_class_recall": recall,
+                })
+            );
+        } else {
+            println!(
+                "{file}: accuracy {:.2} % on {} samples, {ms:.3} ms per decision",
+                100.0 * out.conf.accuracy(),
+                out.conf.total()
+            );
+            let worst: Vec<String> = out
+                .conf
+                .recall()
+                .into_iter()
+                .map(|(l, r)| format!("{l}:{:.0}", 100.0 * r.unwrap_or(0.0)))
+                .collect();
+            println!("  recall %: {}", worst.join(" "));
+            let top: Vec<String> = out
+                .conf
+                .top_confusions(8)
+                .into_iter()
+                .map(|(t, p, c)| format!("{t}->{p} {c}"))
+                .collect();
+            println!("  top confusions: {}", top.join(", "));
+        }
+        if let Some(dir) = &args.plots {
+            let path = dir.join(format!("confusion-{file}.png"));
+            out.conf
+                .plot(
+                    &path,
+                    &format!("{file}: {:.2} %", 100.0 * out.conf.accuracy()),
+                )
+                .map_err(anyhow::Error::msg)?;
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,102 @@
+//! `airglyph train`: trains a gesture model from trajectory JSONL files.
+
+use airglyph_gesture::{load_many, train, ClassifierKind, TrainConfig};
+use anyhow::Context;
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::PathBuf;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Trajectory JSONL files (.jsonl or .jsonl.gz).
+    #[arg(long, num_args = 1.., required = true)]
+    pub data: Vec<PathBuf>,
+    /// Where to write the model JSON.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Classifier: mlp (default: network ensemble), hmm (the seed's pipeline) or crf.
+    #[arg(long, default_value = "mlp")]
+    pub classifier: String,
+    /// Bezier points of the seed's descriptor (hmm, crf).
+    #[arg(long, default_value_t = 15)]
+    pub bezier_points: usize,
+    /// HMM states (hmm).
+    #[arg(long, default_value_t = 14)]
+    pub states: usize,
+    /// Networks in the ensemble (mlp).
+    #[arg(long, default_value_t = 3)]
+    pub ensemble: usize,
+    /// Training epochs (mlp).
+    #[arg(long, default_value_t = 30)]
+    pub epochs: usize,
+    /// Hidden units (mlp).
+    #[arg(long, default_value_t = 192)]
+    pub hidden: usize,
+    /// Use the pen-up flag of the data (off: treat every sample as one air-drawn path).
+    #[arg(long)]
+    pub pen_up: bool,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
+/// The training configuration the arguments describe.
+pub fn config(args: &Args) -> anyhow::Result<TrainConfig> {
+    let kind = ClassifierKind::parse(&args.classifier)
+        .with_context(|| format!("unknown classifier {:?} (mlp, hmm or crf)", args.classifier))?;
+    if !(2..=200).contains(&args.bezier_points) {
+        anyhow::bail!("--bezier-points {} is not in 2..=200", args.bezier_points);
+    }
+    let mut cfg = TrainConfig {
+        classifier: kind,
+        bezier_points: args.bezier_points,
+        ensemble: args.ensemble.max(1),
+        seed: args.seed,
+        data: args
+            .data
+            .iter()
+            .map(|p| {
+                p.file_name().map_or(p.display().to_string(), |f| {
+                    f.to_string_lossy().into_owned()
+                })
+            })
+            .collect(),
+        ..TrainConfig::default()
+    };
+    cfg.hmm.states = args.states.max(1);
+    cfg.mlp.epochs = args.epochs.max(1);
+    cfg.mlp.hidden = args.hidden.max(2);
+    cfg.features.pen_up = args.pen_up;
+    Ok(cfg)
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let cfg = config(&args)?;
+    let samples = load_many(&args.data)?;
+    eprintln!(
+        "training {} on {} samples from {} file(s)",
+        cfg.classifier.name(),
+        samples.len(),
+        args.data.len()
+    );
+    let bar = ProgressBar::new(1);
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} {msg} [{bar:40}] {pos}/{len} {elapsed}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bar.set_message(cfg.classifier.name());
+    let progress = |done: u64, total: u64| {
+        bar.set_length(total);
+        bar.set_position(done);
+    };
+    let model = train(&samples, &cfg, &progress)?;
+    bar.finish_and_clear();
+    model
+        .save(&args.out)
+        .with_context(|| format!("{}: cannot write model", args.out.display()))?;
+    eprintln!(
+        "wrote {} ({} labels, {} bytes)",
+        args.out.display(),
+        model.labels.len(),
+        std::fs::metadata(&args.out).map(|m| m.len()).unwrap_or(0)
+    );
+    Ok(())
+}

@@ -1,0 +1,180 @@
+//! Training and spotting on small synthetic gestures the test makes itself (no data
+//! files needed), and the model loader's errors.
+
+use airglyph_gesture::data::Sample;
+use airglyph_gesture::stream::{build_stream, random_movement, score, StreamConfig};
+use airglyph_gesture::{train, ClassifierKind, Model, Spotter, SpotterConfig, TrainConfig};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::path::Path;
+
+/// Noisy circles, zigzags and squares, in tablet-like units with random size/offset.
+fn shape(kind: usize, rng: &mut ChaCha8Rng) -> Vec<[f32; 2]> {
+    let n = rng.gen_range(30..60);
+    let size = rng.gen_range(50.0..400.0f32);
+    let (ox, oy) = (rng.gen_range(-100.0..100.0), rng.gen_range(-100.0..100.0));
+    let noise = 0.02 * size;
+    let mut pts = Vec::with_capacity(n);
+    for i in 0..n {
+        let t = i as f32 / (n - 1) as f32;
+        let (x, y) = match kind {
+            // Circle, counter-clockwise on screen, from the top.
+            0 => {
+                let a = -std::f32::consts::FRAC_PI_2 - t * std::f32::consts::TAU * 0.95;
+                (0.5 * a.cos(), 0.5 * a.sin())
+            }
+            // Zigzag: four strokes down-right, up-right, down-right, up-right.
+            1 => {
+                let k = (t * 4.0).min(3.999);
+                let seg = k.floor();
+                let f = k - seg;
+                let y = if seg as i32 % 2 == 0 { f } else { 1.0 - f };
+                (t, y)
+            }
+            // Square, clockwise from the top-left corner.
+            _ => {
+                let k = (t * 4.0).min(3.999);
+                let f = k - k.floor();
+                match k as i32 {
+                    0 => (f, 0.0),
+                    1 => (1.0, f),
+                    2 => (1.0 - f, 1.0),
+                    _ => (0.0, 1.0 - f),
+                }
+            }
+        };
+        pts.push([
+            ox + size * x + rng.gen_range(-noise..noise),
+            oy + size * y + rng.gen_range(-noise..noise),
+        ]);
+    }
+    pts
+}
+
+const NAMES: [&str; 3] = ["circle", "zigzag", "square"];
+
+fn samples(per_class: usize, seed: u64) -> Vec<Sample> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut v = Vec::new();
+    for i in 0..per_class {
+        for (k, name) in NAMES.iter().enumerate() {
+            v.push(Sample {
+                label: name.to_string(),
+                subject: format!("w{}", i % 5),
+                strokes: vec![shape(k, &mut rng)],
+            });
+        }
+    }
+    v
+}
+
+fn small_config(kind: ClassifierKind) -> TrainConfig {
+    let mut cfg = TrainConfig {
+        classifier: kind,
+        ..TrainConfig::default()
+    };
+    cfg.mlp.hidden = 24;
+    cfg.mlp.epochs = 15;
+    cfg.hmm.iterations = 8;
+    cfg.crf.iterations = 40;
+    cfg.spotting_states = 8;
+    cfg
+}
+
+fn accuracy(model: &Model, test: &[Sample]) -> f64 {
+    let ok = test
+        .iter()
+        .filter(|s| model.labels[model.classify(&s.trajectory()).class] == s.label)
+        .count();
+    ok as f64 / test.len() as f64
+}
+
+#[test]
+fn every_classifier_learns_synthetic_shapes() {
+    let tr = samples(30, 1);
+    let te = samples(20, 2);
+    for kind in [ClassifierKind::Mlp, ClassifierKind::Hmm, ClassifierKind::Crf] {
+        let mut cfg = small_config(kind);
+        cfg.spotting = false;
+        let model = train(&tr, &cfg, &|_, _| {}).unwrap();
+        let acc = accuracy(&model, &te);
+        assert!(acc >= 0.95, "{kind:?}: accuracy {acc}");
+        // The model survives a round trip through JSON and the loader.
+        let back = Model::from_json_str(&model.to_json(), Path::new("m.json")).unwrap();
+        assert_eq!(accuracy(&back, &te), acc);
+    }
+}
+
+fn tiny_model_json() -> serde_json::Value {
+    let mut cfg = small_config(ClassifierKind::Hmm);
+    cfg.spotting = false;
+    cfg.hmm.states = 3;
+    let model = train(&samples(5, 3), &cfg, &|_, _| {}).unwrap();
+    serde_json::from_str(&model.to_json()).unwrap()
+}
+
+fn load_err(v: &serde_json::Value) -> String {
+    Model::from_json_str(&v.to_string(), Path::new("bad-model.json"))
+        .unwrap_err()
+        .to_string()
+}
+
+#[test]
+fn loader_refuses_other_versions() {
+    let mut v = tiny_model_json();
+    v["version"] = serde_json::json!(99);
+    let e = load_err(&v);
+    assert!(e.contains("bad-model.json") && e.contains("version 99"), "{e}");
+    v["format"] = serde_json::json!("something-else");
+    assert!(load_err(&v).contains("not an airglyph gesture model"));
+}
+
+#[test]
+fn loader_refuses_unknown_labels() {
+    let mut v = tiny_model_json();
+    v["classifier"]["models"][0]["label"] = serde_json::json!("Ω");
+    let e = load_err(&v);
+    assert!(e.contains("bad-model.json") && e.contains("unknown label \"Ω\""), "{e}");
+}
+
+#[test]
+fn loader_refuses_broken_probabilities() {
+    let mut v = tiny_model_json();
+    v["classifier"]["models"][0]["hmm"]["b"][0][0] = serde_json::json!(5.0);
+    let e = load_err(&v);
+    assert!(e.contains("emission row 0"), "{e}");
+    let e = Model::from_json_str("{not json", Path::new("x.json"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("x.json") && e.contains("not a model JSON"), "{e}");
+}
+
+#[test]
+fn spotter_finds_gestures_in_a_stream_and_none_in_random_movement() {
+    let cfg = small_config(ClassifierKind::Mlp);
+    let model = train(&samples(40, 4), &cfg, &|_, _| {}).unwrap();
+    let test = samples(6, 5);
+    let refs: Vec<&Sample> = test.iter().collect();
+    let scfg = StreamConfig::default();
+    let mut rng = ChaCha8Rng::seed_from_u64(6);
+    let stream = build_stream(&refs, &scfg, &mut rng);
+    let mut spotter = Spotter::new(model.clone(), SpotterConfig::default()).unwrap();
+    let mut found = Vec::new();
+    for i in 0..stream.points.len() {
+        let sk = stream.skeleton(i, scfg.distance);
+        if let Some(g) = spotter.push(&sk, i as u64, i as u64 * 33_333_333) {
+            found.push(g);
+        }
+    }
+    let sc = score(&stream.truth, &found);
+    assert!(sc.reliability >= 0.8, "{sc:?}");
+
+    let noise = random_movement(60.0, &scfg, &mut rng);
+    let mut spotter = Spotter::new(model, SpotterConfig::default()).unwrap();
+    let mut n = 0;
+    for i in 0..noise.points.len() {
+        let sk = noise.skeleton(i, scfg.distance);
+        n += usize::from(spotter.push(&sk, i as u64, i as u64 * 33_333_333).is_some());
+    }
+    assert_eq!(n, 0, "gestures spotted in random movement");
+}
