@@ -1,0 +1,118 @@
+//! `airglyph-gesture`: the gesture stage process. Follows the drawing hand through the
+//! skeleton stream, spots and classifies gestures, publishes each as an event.
+
+use airglyph_gesture::{Hand, Model, Spotter, SpotterConfig};
+use airglyph_ipc::clock::monotonic_ns;
+use airglyph_ipc::stats::Telemetry;
+use airglyph_ipc::wire::Hand as WireHand;
+use airglyph_ipc::{shutdown, GestureEventMsg, Pipeline, Stage};
+use anyhow::Context;
+use clap::Parser;
+use std::path::PathBuf;
+use std::time::Duration;
+
+/// The gesture stage: skeletons in (`airglyph/skeleton`), gesture events out
+/// (`airglyph/gesture`).
+///
+/// The pipeline it joins is set by AIRGLYPH_IPC_ROOT / AIRGLYPH_IPC_PREFIX (or the
+/// config file named by AIRGLYPH_CONFIG). Normally started by `airglyph run`.
+#[derive(Parser)]
+#[command(name = "airglyph-gesture", version)]
+struct Args {
+    /// The gesture model (from `airglyph train`); default: the shipped 36-symbol model.
+    #[arg(long)]
+    model: Option<PathBuf>,
+}
+
+/// The shipped model: looked for under the working directory, then in the source tree
+/// this binary was built from.
+pub const DEFAULT_MODEL: &str = "models/unipen-36.json";
+
+fn default_model() -> PathBuf {
+    let here = PathBuf::from(DEFAULT_MODEL);
+    if here.exists() {
+        return here;
+    }
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .join(DEFAULT_MODEL)
+}
+
+fn main() -> std::process::ExitCode {
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()),
+        )
+        .with_writer(std::io::stderr)
+        .init();
+    shutdown::install();
+    match run(Args::parse()) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("airglyph-gesture: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(args: Args) -> anyhow::Result<()> {
+    let path = args.model.unwrap_or_else(default_model);
+    let model = Model::load(&path).with_context(|| {
+        format!(
+            "cannot load the gesture model {} (train one with `airglyph train`, or pass --model)",
+            path.display()
+        )
+    })?;
+    let mut spotter = Spotter::new(model, SpotterConfig::default())?;
+    let pipeline = Pipeline::join("gesture")?;
+    let mut skeletons = pipeline.skeleton_receiver()?;
+    let events = pipeline.gesture_publisher()?;
+    let mut telemetry = Telemetry::new(&pipeline, Stage::Gesture)?;
+    tracing::info!(model = %path.display(), "waiting for skeletons");
+    let mut session = None;
+    while !shutdown::requested() {
+        telemetry.tick();
+        // Every skeleton, not only the newest: the trajectory needs them all.
+        let Some(r) = skeletons.recv(Duration::from_millis(100))? else {
+            continue;
+        };
+        let msg = r.msg;
+        telemetry.input(r.receive_ns - msg.chain.pose_publish_ns, r.dropped);
+        telemetry.set_rejected(skeletons.rejected());
+        if session.replace(msg.session) != Some(msg.session) {
+            // A restarted capture stage: the last trajectory is over.
+            spotter.reset();
+        }
+        let spotted = msg
+            .skeleton()
+            .and_then(|s| spotter.push(&s, msg.sequence, msg.chain.capture_ns));
+        let now = monotonic_ns();
+        if let Some(g) = spotted {
+            let mut event = GestureEventMsg {
+                score: g.score as f32,
+                start_sequence: g.start_seq,
+                end_sequence: g.end_seq,
+                start_ns: g.start_ns,
+                end_ns: g.end_ns,
+                session: msg.session,
+                hand: match g.hand {
+                    Hand::Left => WireHand::Left as u8,
+                    Hand::Right => WireHand::Right as u8,
+                },
+                ..GestureEventMsg::default()
+            };
+            if let Err(e) = event.set_label(&g.label) {
+                tracing::warn!(label = %g.label, "label does not fit the wire ({e}); sent cut");
+                let cut: String = g.label.chars().take(8).collect();
+                event.set_label(&cut)?;
+            }
+            event.chain = msg.chain;
+            event.chain.gesture_receive_ns = r.receive_ns;
+            event.chain.gesture_publish_ns = monotonic_ns();
+            events.send(event)?;
+            tracing::info!(label = %g.label, score = g.score, "gesture");
+        }
+        telemetry.output(now - r.receive_ns, now - msg.chain.capture_ns);
+    }
+    Ok(())
+}
