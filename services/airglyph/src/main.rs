@@ -22,6 +22,8 @@ enum Command {
     Record(cmd::record::Args),
     /// Show each stage's frame rate, drops and latency, live.
     Top(cmd::top::Args),
+    /// Measure each stage's latency frame by frame; write CSV, JSON and histograms.
+    Profile(cmd::profile::Args),
     /// Render a synthetic person into a recording with exact ground-truth joints.
     Synth(cmd::synth::Args),
     /// Train a gesture model from trajectory JSONL files.
@@ -48,6 +50,7 @@ fn main() -> std::process::ExitCode {
         Command::Run(a) => cmd::run::run(a),
         Command::Record(a) => cmd::record::run(a),
         Command::Top(a) => cmd::top::run(a),
+        Command::Profile(a) => cmd::profile::run(a),
         Command::Synth(a) => cmd::synth::run(a),
         Command::Train(a) => cmd::train::run(a),
         Command::EvalGestures(a) => cmd::eval_gestures::run(a),

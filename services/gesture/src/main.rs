@@ -5,7 +5,7 @@ use airglyph_gesture::{Hand, Model, Spotter, SpotterConfig};
 use airglyph_ipc::clock::monotonic_ns;
 use airglyph_ipc::stats::Telemetry;
 use airglyph_ipc::wire::Hand as WireHand;
-use airglyph_ipc::{shutdown, GestureEventMsg, Pipeline, Stage};
+use airglyph_ipc::{shutdown, DecisionMsg, GestureEventMsg, Pipeline, Stage};
 use anyhow::Context;
 use clap::Parser;
 use std::path::PathBuf;
@@ -67,6 +67,7 @@ fn run(args: Args) -> anyhow::Result<()> {
     let pipeline = Pipeline::join("gesture")?;
     let mut skeletons = pipeline.skeleton_receiver()?;
     let events = pipeline.gesture_publisher()?;
+    let decisions = pipeline.decision_publisher()?;
     let mut telemetry = Telemetry::new(&pipeline, Stage::Gesture)?;
     tracing::info!(model = %path.display(), "waiting for skeletons");
     let mut session = None;
@@ -86,7 +87,16 @@ fn run(args: Args) -> anyhow::Result<()> {
         let spotted = msg
             .skeleton()
             .and_then(|s| spotter.push(&s, msg.sequence, msg.chain.capture_ns));
-        let now = monotonic_ns();
+        let decided_ns = monotonic_ns();
+        let mut decision = DecisionMsg {
+            sequence: msg.sequence,
+            session: msg.session,
+            chain: msg.chain,
+            gesture: spotted.is_some() as u8,
+            ..DecisionMsg::default()
+        };
+        decision.chain.gesture_receive_ns = r.receive_ns;
+        decision.chain.gesture_publish_ns = decided_ns;
         if let Some(g) = spotted {
             let mut event = GestureEventMsg {
                 score: g.score as f32,
@@ -112,7 +122,8 @@ fn run(args: Args) -> anyhow::Result<()> {
             events.send(event)?;
             tracing::info!(label = %g.label, score = g.score, "gesture");
         }
-        telemetry.output(now - r.receive_ns, now - msg.chain.capture_ns);
+        decisions.send(decision)?;
+        telemetry.output(decided_ns - r.receive_ns, decided_ns - msg.chain.capture_ns);
     }
     Ok(())
 }

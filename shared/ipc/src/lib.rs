@@ -4,6 +4,7 @@
 //!
 //! ```text
 //!  capture ──airglyph/depth──▶ pose ──airglyph/skeleton──▶ gesture ──airglyph/gesture──▶
+//!                                                           └─airglyph/decision─▶ (each frame)
 //!     └──────────── airglyph/stats/<stage>, once a second ──────────────▶ airglyph top
 //! ```
 //!
@@ -22,4 +23,4 @@ pub mod wire;
 pub use config::IpcConfig;
 pub use error::IpcError;
 pub use port::{DepthPublisher, Pipeline, Publisher, Received, Receiver, Stage};
-pub use wire::{DepthHeader, GestureEventMsg, LatencyChain, SkeletonMsg, StageStatsMsg};
+pub use wire::{DecisionMsg, DepthHeader, GestureEventMsg, LatencyChain, SkeletonMsg, StageStatsMsg};

@@ -3,7 +3,7 @@
 use crate::clock::monotonic_ns;
 use crate::stats::SequenceTracker;
 use crate::wire::{
-    DepthHeader, GestureEventMsg, HeaderError, MessageError, SkeletonMsg, StageStatsMsg,
+    DecisionMsg, DepthHeader, GestureEventMsg, HeaderError, MessageError, SkeletonMsg, StageStatsMsg,
 };
 use crate::{IpcConfig, IpcError};
 use iceoryx2::port::listener::Listener;
@@ -87,6 +87,7 @@ const GESTURE: Settings = Settings {
     max_publishers: 2,
     max_subscribers: 8,
 };
+const DECISION: Settings = Settings { name: "airglyph/decision", buffer: 8, max_publishers: 2, max_subscribers: 8 };
 const STATS: Settings = Settings {
     name: "airglyph/stats",
     buffer: 4,
@@ -328,6 +329,14 @@ impl Pipeline {
         self.receiver(&GESTURE, GESTURE.name)
     }
 
+    pub fn decision_publisher(&self) -> Result<Publisher<DecisionMsg>, IpcError> {
+        self.publisher(&DECISION, DECISION.name)
+    }
+
+    pub fn decision_receiver(&self) -> Result<Receiver<DecisionMsg>, IpcError> {
+        self.receiver(&DECISION, DECISION.name)
+    }
+
     pub fn stats_publisher(&self, stage: Stage) -> Result<Publisher<StageStatsMsg>, IpcError> {
         self.publisher(&STATS, &format!("{}/{}", STATS.name, stage.name()))
     }
@@ -358,6 +367,15 @@ impl Message for SkeletonMsg {
 impl Message for GestureEventMsg {
     fn frame(&self) -> Option<(u64, u64)> {
         None
+    }
+    fn check(&self) -> Result<(), MessageError> {
+        self.validate()
+    }
+}
+
+impl Message for DecisionMsg {
+    fn frame(&self) -> Option<(u64, u64)> {
+        Some((self.session, self.sequence))
     }
     fn check(&self) -> Result<(), MessageError> {
         self.validate()

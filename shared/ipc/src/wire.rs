@@ -297,6 +297,30 @@ impl GestureEventMsg {
     }
 }
 
+/// The gesture stage's decision on one skeleton: sent for every frame it processes, so
+/// capture→decision latency can be profiled frame by frame, gesture or not.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend)]
+#[type_name("airglyph.DecisionMsg.v1")]
+#[repr(C)]
+pub struct DecisionMsg {
+    pub sequence: u64,
+    pub session: u64,
+    pub chain: LatencyChain,
+    /// 1 when this frame closed a gesture (an event was published for it).
+    pub gesture: u8,
+    pub _reserved: [u8; 7],
+}
+
+impl DecisionMsg {
+    pub fn validate(&self) -> Result<(), MessageError> {
+        if self.chain.is_ordered() {
+            Ok(())
+        } else {
+            Err(MessageError::Chain)
+        }
+    }
+}
+
 /// Percentiles of one latency distribution over the last reporting window, in ns.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend)]
 #[type_name("airglyph.Percentiles.v1")]

@@ -4,6 +4,7 @@ pub mod eval_gestures;
 pub mod eval_pose;
 pub mod pose;
 pub mod eval_spotting;
+pub mod profile;
 pub mod record;
 pub mod run;
 pub mod synth;
