@@ -122,9 +122,9 @@ fn run(args: Args) -> anyhow::Result<()> {
     tracing::info!("waiting for depth frames");
     while !shutdown::requested() {
         telemetry.tick();
-        let Some(frame) = frames.latest(Duration::from_millis(100))? else {
-            continue;
-        };
+        let frame = frames.latest(Duration::from_millis(100))?;
+        telemetry.set_rejected(frames.rejected());
+        let Some(frame) = frame else { continue };
         let h = *frame.header();
         telemetry.input(frame.receive_ns - h.publish_ns, frame.dropped);
         let r = stage.estimate(h.intrinsics(), frame.view());
@@ -137,7 +137,6 @@ fn run(args: Args) -> anyhow::Result<()> {
             msg.chain.pose_publish_ns - msg.chain.pose_receive_ns,
             msg.chain.pose_publish_ns - h.capture_ns,
         );
-        telemetry.set_rejected(frames.rejected());
     }
     Ok(())
 }

@@ -224,7 +224,8 @@ impl Segmenter {
                     continue;
                 }
             }
-            let mut score = b.area;
+            // Largest in the image: of two people, the nearer one.
+            let mut score = b.pixels as f32;
             if let Some(c) = prev_centroid {
                 if (b.moments.mean() - c).norm() < 0.5 {
                     score *= 1.5;
@@ -321,6 +322,12 @@ impl Segmenter {
             xmax = xmax.max(p.x);
         }
         if zmax - zmin < 0.6 || xmax - xmin < 0.6 {
+            return None;
+        }
+        // A floor fills the bottom of the image, except where someone stands on it.
+        let bottom = &s[s.len() * 17 / 20..];
+        let on = bottom.iter().filter(|p| pl.height(p).abs() < tol).count();
+        if bottom.is_empty() || on * 2 < bottom.len() {
             return None;
         }
         let pca = m.pca()?;

@@ -1,0 +1,162 @@
+//! Hard inputs: never a panic, never NaN, `person_found` right.
+
+use airglyph_core::{DepthImage, Intrinsics, Joint};
+use airglyph_pose::{PoseConfig, PoseEstimator, PoseResult};
+use airglyph_synth::{Background, MotionSpec, Placement, SceneConfig, ScriptedPose, Synthesizer};
+
+fn qvga() -> Intrinsics {
+    Intrinsics::default().scaled_to(320, 240)
+}
+
+fn render(cfg: SceneConfig, frame: usize) -> (DepthImage, airglyph_synth::FrameTruth) {
+    let mut s = Synthesizer::new(cfg).expect("scene");
+    s.render(frame)
+}
+
+fn scene(pose: ScriptedPose) -> SceneConfig {
+    SceneConfig {
+        intrinsics: qvga(),
+        motion: MotionSpec::Pose(pose),
+        ..SceneConfig::default()
+    }
+}
+
+fn check(r: &PoseResult) {
+    assert!(r.skeleton.is_finite(), "{r:?}");
+    assert!(r.skeleton.confidence.iter().all(|c| (0.0..=1.0).contains(c)));
+}
+
+fn estimate_n(img: &DepthImage, k: Intrinsics, n: usize) -> PoseResult {
+    let mut est = PoseEstimator::new(k, PoseConfig::default());
+    let mut r = est.estimate(img.view());
+    check(&r);
+    for _ in 1..n {
+        r = est.estimate(img.view());
+        check(&r);
+    }
+    r
+}
+
+#[test]
+fn empty_frame_has_no_person() {
+    let k = qvga();
+    let img = DepthImage::empty(k.width, k.height);
+    assert!(!estimate_n(&img, k, 2).person_found);
+}
+
+#[test]
+fn floor_and_wall_alone_have_no_person() {
+    // The room of the synthetic scenes without anybody in it: floor 1 m below the
+    // camera, a wall 4.2 m ahead.
+    let k = qvga();
+    let mut img = DepthImage::empty(k.width, k.height);
+    for v in 0..k.height {
+        for u in 0..k.width {
+            let ray = k.back_project(u as f32, v as f32, 1.0);
+            let mut z: f32 = 4.2;
+            if ray.y > 0.0 {
+                z = z.min(1.0 / ray.y);
+            }
+            img.set(u, v, (z * 1000.0) as u16);
+        }
+    }
+    assert!(!estimate_n(&img, k, 3).person_found);
+}
+
+#[test]
+fn noise_garbage_and_wrong_sizes_do_not_panic() {
+    let k = qvga();
+    let mut img = DepthImage::empty(k.width, k.height);
+    let mut x: u32 = 12345;
+    for p in img.pixels_mut() {
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        *p = if x % 3 == 0 { 0 } else { (x % 9000) as u16 };
+    }
+    estimate_n(&img, k, 2);
+    // A frame of another size than the intrinsics, and a tiny one.
+    let mut est = PoseEstimator::new(Intrinsics::default(), PoseConfig::default());
+    check(&est.estimate(img.view()));
+    let tiny = DepthImage::new(3, 2, vec![1000; 6]).unwrap();
+    check(&est.estimate(tiny.view()));
+}
+
+#[test]
+fn a_standing_person_is_found_and_roughly_right() {
+    let (img, truth) = render(scene(ScriptedPose::Neutral), 0);
+    let r = estimate_n(&img, qvga(), 2);
+    assert!(r.person_found);
+    for j in Joint::ALL {
+        let e = (r.skeleton[j] - truth.skeleton[j]).norm();
+        assert!(e < 0.15, "{j:?} off by {e} m");
+    }
+}
+
+#[test]
+fn a_person_before_floor_and_wall_with_noise_is_found() {
+    let cfg = SceneConfig {
+        background: Background::FloorAndWall,
+        sensor_noise: true,
+        ..scene(ScriptedPose::TPose)
+    };
+    let (img, truth) = render(cfg, 0);
+    let r = estimate_n(&img, qvga(), 2);
+    assert!(r.person_found);
+    let e = (r.skeleton[Joint::Torso] - truth.skeleton[Joint::Torso]).norm();
+    assert!(e < 0.15, "torso off by {e} m");
+}
+
+#[test]
+fn arm_pointing_at_the_camera() {
+    let (img, _) = render(scene(ScriptedPose::PointAtCamera), 0);
+    assert!(estimate_n(&img, qvga(), 3).person_found);
+}
+
+#[test]
+fn person_half_out_of_the_image() {
+    let cfg = SceneConfig {
+        placement: Placement {
+            lateral_m: 1.3,
+            ..Placement::default()
+        },
+        ..scene(ScriptedPose::Wave)
+    };
+    let (img, _) = render(cfg, 0);
+    let k = qvga();
+    // Some of the person is cut off at the right border.
+    let edge = (0..k.height).filter(|&v| img.get(k.width - 1, v) > 0).count();
+    assert!(edge > 10, "the scene should cut the person");
+    assert!(estimate_n(&img, k, 3).person_found);
+}
+
+#[test]
+fn two_people_one_is_found() {
+    let a = SceneConfig {
+        placement: Placement {
+            lateral_m: -0.6,
+            ..Placement::default()
+        },
+        ..scene(ScriptedPose::Neutral)
+    };
+    let b = SceneConfig {
+        placement: Placement {
+            lateral_m: 0.7,
+            distance_m: 3.3,
+            ..Placement::default()
+        },
+        ..scene(ScriptedPose::TPose)
+    };
+    let (mut img, ta) = render(a, 0);
+    let (ib, _) = render(b, 0);
+    for (p, &q) in img.pixels_mut().iter_mut().zip(ib.pixels()) {
+        if q > 0 && (*p == 0 || q < *p) {
+            *p = q;
+        }
+    }
+    let r = estimate_n(&img, qvga(), 2);
+    assert!(r.person_found);
+    // The nearer, larger person is the one tracked.
+    let e = (r.skeleton[Joint::Torso] - ta.skeleton[Joint::Torso]).norm();
+    assert!(e < 0.2, "torso off by {e} m");
+}
