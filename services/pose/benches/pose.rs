@@ -1,1 +1,102 @@
-fn main() {}
+//! Time of each step and of the whole estimator at 320×240 and 640×480, on a synthetic
+//! person (airglyph-synth, procedural body, T-pose before floor and wall with sensor noise).
+
+use airglyph_core::{DepthImage, Intrinsics};
+use airglyph_pose::dijkstra::{Dijkstra, Graph};
+use airglyph_pose::dt::DistanceTransform;
+use airglyph_pose::graph::GeoGraph;
+use airglyph_pose::segment::Segmenter;
+use airglyph_pose::torso::TorsoEstimator;
+use airglyph_pose::{PoseConfig, PoseEstimator};
+use airglyph_synth::{Background, MotionSpec, SceneConfig, ScriptedPose, Synthesizer};
+use criterion::{criterion_group, criterion_main, Criterion};
+use nalgebra::{Point3, Vector3};
+use std::hint::black_box;
+use std::time::Duration;
+
+fn frame(k: Intrinsics) -> DepthImage {
+    let cfg = SceneConfig {
+        intrinsics: k,
+        motion: MotionSpec::Pose(ScriptedPose::Wave),
+        background: Background::FloorAndWall,
+        sensor_noise: true,
+        ..SceneConfig::default()
+    };
+    Synthesizer::new(cfg).expect("scene").render(0).0
+}
+
+fn bench(c: &mut Criterion) {
+    for (w, h) in [(320u32, 240u32), (640, 480)] {
+        let k = Intrinsics::default().scaled_to(w, h);
+        let img = frame(k);
+        let cfg = PoseConfig::default();
+        let mut g = c.benchmark_group(format!("{w}x{h}"));
+        g.measurement_time(Duration::from_secs(3))
+            .warm_up_time(Duration::from_millis(500))
+            .sample_size(30);
+
+        let mut seg = Segmenter::default();
+        let mut points: Vec<Point3<f32>> = Vec::new();
+        let mut mask: Vec<bool> = Vec::new();
+        g.bench_function("1 segment", |b| {
+            b.iter(|| {
+                black_box(seg.run(&img.view(), &k, &cfg, None, None, &mut points, &mut mask));
+            })
+        });
+        let s = seg.run(&img.view(), &k, &cfg, None, None, &mut points, &mut mask);
+        assert!(s.found);
+        let (wu, hu) = (w as usize, h as usize);
+        let mut dt = DistanceTransform::default();
+        let mut dist = Vec::new();
+        g.bench_function("2a distance transform", |b| {
+            b.iter(|| dt.compute(black_box(&mask), wu, hu, &mut dist))
+        });
+        let mut torso = TorsoEstimator::new(&cfg);
+        let up = -Vector3::y();
+        g.bench_function("2 torso (DT + PCA + registration from PCA)", |b| {
+            b.iter(|| black_box(torso.fit(&points, &mask, wu, hu, &cfg, None, up)))
+        });
+        let fit = torso
+            .fit(&points, &mask, wu, hu, &cfg, None, up)
+            .expect("torso");
+        g.bench_function("2b torso registration from last frame", |b| {
+            b.iter(|| black_box(torso.fit(&points, &mask, wu, hu, &cfg, Some(fit.pose), up)))
+        });
+        let mut graph = GeoGraph::default();
+        g.bench_function("3 geodesic graph", |b| {
+            b.iter(|| graph.build(&points, &mask, wu, hu, &k, &cfg))
+        });
+        graph.build(&points, &mask, wu, hu, &k, &cfg);
+        let root = graph
+            .nearest_node(&k, &Point3::from(fit.pose.t), 12)
+            .expect("root");
+        let mut dij = Dijkstra::default();
+        g.bench_function("4 Dijkstra + 8 incremental maxima", |b| {
+            b.iter(|| {
+                dij.reset(graph.node_count());
+                dij.add_source(root);
+                dij.run(&graph);
+                for _ in 0..8 {
+                    let (m, _) = dij
+                        .dist
+                        .iter()
+                        .enumerate()
+                        .filter(|(_, &d)| d != u32::MAX)
+                        .max_by_key(|(_, &d)| d)
+                        .unwrap();
+                    dij.add_source(m as u32);
+                    dij.run(&graph);
+                }
+            })
+        });
+        let mut est = PoseEstimator::new(k, cfg.clone());
+        est.estimate(img.view());
+        g.bench_function("whole estimator", |b| {
+            b.iter(|| black_box(est.estimate(img.view())))
+        });
+        g.finish();
+    }
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

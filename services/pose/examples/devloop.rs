@@ -3,6 +3,7 @@
 //!
 //! `cargo run --release -p airglyph-pose --example devloop -- [pose|bvh:FILE] [frames]
 //!  [noise] [floor] [qvga] [overlays:DIR] [every:N]`
+#![allow(clippy::needless_range_loop)]
 
 use airglyph_core::{Intrinsics, Joint};
 use airglyph_pose::metrics::PoseEval;
@@ -52,7 +53,10 @@ fn main() {
     let mut bias = [nalgebra::Vector3::<f32>::zeros(); Joint::COUNT];
     for i in 0..n {
         let (img, truth) = synth.render(i);
-        if std::env::var("PROBE").is_ok() { probe(&img, 320); probe(&img, 300); }
+        if std::env::var("PROBE").is_ok() {
+            probe(&img, 320);
+            probe(&img, 300);
+        }
         let t = Instant::now();
         let r = est.estimate(img.view());
         ev.seconds += t.elapsed().as_secs_f64();
@@ -82,7 +86,9 @@ fn main() {
                     }
                 }
                 for &m in &est.debug().maxima {
-                    let (u, v) = ((m % k.width) as f32, (m / k.width) as f32);
+                    let ww = est.debug().work_size.0.max(1);
+                    let f = (k.width / ww) as f32;
+                    let (u, v) = ((m % ww) as f32 * f, (m / ww) as f32 * f);
                     overlay::dot(&mut im, (u, v), 4, overlay::BLUE);
                 }
                 im.save(format!("{d}/{i:04}.png")).unwrap();

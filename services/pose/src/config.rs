@@ -9,6 +9,10 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct PoseConfig {
+    /// Frames wider than this are reduced by an integer factor (each block's nearest
+    /// depth) before estimation, so 640×480 costs about what 320×240 does; 0 = never.
+    pub work_width: u32,
+
     // --- person segmentation ---
     /// Depth band in which a person is looked for.
     pub near: f32,
@@ -100,6 +104,7 @@ pub struct PoseConfig {
 impl Default for PoseConfig {
     fn default() -> Self {
         Self {
+            work_width: 320,
             near: 0.3,
             far: 6.0,
             remove_floor: true,
@@ -121,13 +126,13 @@ impl Default for PoseConfig {
             torso_top: 0.20,
             // Measured on the synthetic average adult (airglyph-synth), symmetrised.
             torso_keypoints: [
-                [0.0, 0.252, 0.0],      // neck
-                [0.0, -0.264, 0.018],   // pelvis
-                [0.184, 0.226, 0.018],  // left shoulder
-                [-0.184, 0.226, 0.018], // right shoulder
-                [0.091, -0.265, 0.018], // left hip
+                [0.0, 0.252, 0.0],       // neck
+                [0.0, -0.264, 0.018],    // pelvis
+                [0.184, 0.226, 0.018],   // left shoulder
+                [-0.184, 0.226, 0.018],  // right shoulder
+                [0.091, -0.265, 0.018],  // left hip
                 [-0.091, -0.265, 0.018], // right hip
-                [0.0, 0.112, 0.005],    // torso
+                [0.0, 0.112, 0.005],     // torso
             ],
 
             edge_min: 0.012,

@@ -53,6 +53,8 @@ pub struct Debug {
     pub maxima_dist: Vec<f32>,
     /// The registered torso frame (torso frame → camera frame).
     pub torso_pose: Option<TorsoPose>,
+    /// Size of the image the steps worked on (after reduction), and its intrinsics.
+    pub work_size: (u32, u32),
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -81,6 +83,7 @@ pub struct PoseEstimator {
     stamp: Vec<u32>,
     stamp_now: u32,
     path: Vec<u32>,
+    small: Vec<u16>,
     prev_torso: Option<TorsoPose>,
     prev_floor: Option<Plane>,
     prev_centroid: Option<Point3<f32>>,
@@ -107,6 +110,7 @@ impl PoseEstimator {
             stamp: Vec::new(),
             stamp_now: 0,
             path: Vec::new(),
+            small: Vec::new(),
             prev_torso: None,
             prev_floor: None,
             prev_centroid: None,
@@ -169,21 +173,68 @@ impl PoseEstimator {
     }
 
     fn estimate_inner(&mut self, depth: DepthView) -> Option<Skeleton> {
-        let (w, h) = (depth.width() as usize, depth.height() as usize);
-        if w < 8 || h < 8 {
+        if depth.width() < 8 || depth.height() < 8 {
             return None;
         }
-        let k = if depth.width() != self.k.width || depth.height() != self.k.height {
+        let k_full = if depth.width() != self.k.width || depth.height() != self.k.height {
             self.k.scaled_to(depth.width(), depth.height())
         } else {
             self.k
         };
+        // Reduce wide frames: each output pixel is the nearest depth of its block.
+        let factor = if self.cfg.work_width > 0 && depth.width() > self.cfg.work_width {
+            depth.width().div_ceil(self.cfg.work_width)
+        } else {
+            1
+        };
+        let mut small = std::mem::take(&mut self.small);
+        let (depth, k) = if factor > 1 {
+            let (sw, sh) = (depth.width() / factor, depth.height() / factor);
+            small.clear();
+            small.resize((sw * sh) as usize, 0);
+            let src = depth.pixels();
+            let fw = depth.width() as usize;
+            for v in 0..sh as usize {
+                for u in 0..sw as usize {
+                    let mut best = u16::MAX;
+                    for dv in 0..factor as usize {
+                        let row = (v * factor as usize + dv) * fw + u * factor as usize;
+                        for &d in &src[row..row + factor as usize] {
+                            if d > 0 && d < best {
+                                best = d;
+                            }
+                        }
+                    }
+                    small[v * sw as usize + u] = if best == u16::MAX { 0 } else { best };
+                }
+            }
+            let view = DepthView::new(sw, sh, &small).ok();
+            match view {
+                Some(v) => (v, k_full.scaled_to(sw, sh)),
+                None => {
+                    self.small = small;
+                    return None;
+                }
+            }
+        } else {
+            (depth, k_full)
+        };
+        let r = self.estimate_at(depth, k);
+        self.small = small;
+        r
+    }
+
+    fn estimate_at(&mut self, depth: DepthView, k: Intrinsics) -> Option<Skeleton> {
+        let (w, h) = (depth.width() as usize, depth.height() as usize);
         if k.validate().is_err() {
             return None;
         }
         let cfg_owned = self.cfg.clone();
         let cfg = &cfg_owned;
-        self.debug = Debug::default();
+        self.debug = Debug {
+            work_size: (depth.width(), depth.height()),
+            ..Debug::default()
+        };
         let t0 = Instant::now();
 
         // 1. The person's pixels.
@@ -237,13 +288,10 @@ impl PoseEstimator {
         self.debug.bridges = self.graph.bridges.len();
         self.debug.joins = self.graph.joins.len();
         let centre = kp[6];
-        let root = self
-            .graph
-            .nearest_node(&k, &centre, 12)
-            .or_else(|| {
-                let a = self.graph.node_of_pixel[fit.core_pixel];
-                (a != NONE && self.graph.comp[a as usize] != NONE).then_some(a)
-            })?;
+        let root = self.graph.nearest_node(&k, &centre, 12).or_else(|| {
+            let a = self.graph.node_of_pixel[fit.core_pixel];
+            (a != NONE && self.graph.comp[a as usize] != NONE).then_some(a)
+        })?;
         let t3 = Instant::now();
         self.times.graph = (t3 - t2).as_secs_f64();
 
@@ -389,8 +437,14 @@ impl PoseEstimator {
                     let c0 = if l2 > 0.0 {
                         Chain::towards(root_p, mid_guess - root_p, ext_b, l1, l2_eff)
                     } else {
-                        let d = (ext_b - root_p).try_normalize(1e-6).unwrap_or(torso.r * Vector3::y());
-                        Chain { root: root_p, mid: root_p + d * l1, end: root_p + d * l1 }
+                        let d = (ext_b - root_p)
+                            .try_normalize(1e-6)
+                            .unwrap_or(torso.r * Vector3::y());
+                        Chain {
+                            root: root_p,
+                            mid: root_p + d * l1,
+                            end: root_p + d * l1,
+                        }
                     };
                     cands.push(c0);
                     if let Some(s) = prev {
@@ -399,8 +453,14 @@ impl PoseEstimator {
                         let c = if l2 > 0.0 {
                             Chain::towards(root_p, mid - root_p, end, l1, l2)
                         } else {
-                            let d = (end - root_p).try_normalize(1e-6).unwrap_or(torso.r * Vector3::y());
-                            Chain { root: root_p, mid: root_p + d * l1, end: root_p + d * l1 }
+                            let d = (end - root_p)
+                                .try_normalize(1e-6)
+                                .unwrap_or(torso.r * Vector3::y());
+                            Chain {
+                                root: root_p,
+                                mid: root_p + d * l1,
+                                end: root_p + d * l1,
+                            }
                         };
                         cands.push(c);
                     }
@@ -420,7 +480,7 @@ impl PoseEstimator {
                     let (fitc, e) = best.unwrap_or((c0, 0.0));
                     let rms = e.sqrt();
                     let conf = ((1.0 - rms / 0.06).clamp(0.1, 1.0))
-                        * (targets.len() as f32 / 30.0).min(1.0).max(0.2);
+                        * (targets.len() as f32 / 30.0).clamp(0.2, 1.0);
                     self.debug.targets[li] = targets;
                     self.limbs[li] = Some(LimbState {
                         mid: inv.apply(&fitc.mid),
@@ -449,7 +509,14 @@ impl PoseEstimator {
                     });
                     let mid = torso.apply(&s.mid);
                     let end = torso.apply(&s.end);
-                    (Chain { root: root_p, mid, end }, conf)
+                    (
+                        Chain {
+                            root: root_p,
+                            mid,
+                            end,
+                        },
+                        conf,
+                    )
                 }
             };
             let (c, conf) = chain;
@@ -484,7 +551,8 @@ impl PoseEstimator {
             self.stamp.resize(g.node_count(), 0);
             self.stamp_now = 1;
         }
-        let floor_d = self.dist0[path[path.len() - 1] as usize].saturating_sub((d_e * 1000.0) as u32);
+        let floor_d =
+            self.dist0[path[path.len() - 1] as usize].saturating_sub((d_e * 1000.0) as u32);
         let spacing = (d_e * 500.0) as u32;
         let mut last_d = u32::MAX;
         let (w, h) = (g.width as i32, g.height as i32);

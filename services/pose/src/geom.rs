@@ -285,7 +285,11 @@ mod tests {
         let mut m = Moments::default();
         for i in 0..100 {
             let f = i as f32 / 100.0;
-            m.add(&Point3::new(0.1 * (f * 31.0).sin(), 2.0 * f, 0.01 * (f * 17.0).cos()));
+            m.add(&Point3::new(
+                0.1 * (f * 31.0).sin(),
+                2.0 * f,
+                0.01 * (f * 17.0).cos(),
+            ));
         }
         let p = m.pca().unwrap();
         assert!(p.axes.column(0).y.abs() > 0.99);

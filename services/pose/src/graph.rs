@@ -245,7 +245,10 @@ impl GeoGraph {
             self.scratch[r as usize] += 1;
         }
         let mut comps: Vec<(u32, u32)> = (0..n as u32)
-            .filter(|&a| self.uf[a as usize] == a && self.scratch[a as usize] as usize >= cfg.min_component.max(1))
+            .filter(|&a| {
+                self.uf[a as usize] == a
+                    && self.scratch[a as usize] as usize >= cfg.min_component.max(1)
+            })
             .map(|a| (self.scratch[a as usize], a))
             .collect();
         comps.sort_by(|a, b| b.cmp(a));
@@ -340,7 +343,12 @@ impl GeoGraph {
             for vv in (v - r)..=(v + r) {
                 for uu in (u - r)..=(u + r) {
                     let on_ring = (vv - v).abs() == r || (uu - u).abs() == r;
-                    if !on_ring || uu < 0 || vv < 0 || uu >= self.width as i32 || vv >= self.height as i32 {
+                    if !on_ring
+                        || uu < 0
+                        || vv < 0
+                        || uu >= self.width as i32
+                        || vv >= self.height as i32
+                    {
                         continue;
                     }
                     let a = self.node_of_pixel[vv as usize * self.width + uu as usize];

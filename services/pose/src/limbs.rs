@@ -28,7 +28,15 @@ pub fn assign(cost: &[[f32; 5]], unassigned: f32) -> [Option<usize>; 5] {
         for (m, row) in cost.iter().enumerate() {
             if used & (1 << m) == 0 && row[l].is_finite() {
                 cur[l] = Some(m);
-                go(l + 1, used | (1 << m), cost, unassigned, cur, acc + row[l], best);
+                go(
+                    l + 1,
+                    used | (1 << m),
+                    cost,
+                    unassigned,
+                    cur,
+                    acc + row[l],
+                    best,
+                );
             }
         }
         cur[l] = None;
@@ -211,7 +219,13 @@ mod tests {
 
     #[test]
     fn empty_targets_leave_the_chain_alone() {
-        let c = Chain::towards(Point3::new(0.0, 0.0, 2.0), -Vector3::y(), Point3::new(0.0, 1.0, 2.0), 0.3, 0.3);
+        let c = Chain::towards(
+            Point3::new(0.0, 0.0, 2.0),
+            -Vector3::y(),
+            Point3::new(0.0, 1.0, 2.0),
+            0.3,
+            0.3,
+        );
         let (f, e) = fit_chain(c, &[], 0.05, 1.0, 10);
         assert_eq!(f, c);
         assert_eq!(e, 0.0);

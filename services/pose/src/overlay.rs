@@ -21,6 +21,14 @@ pub fn depth_image(depth: &DepthView, mask: Option<&[bool]>) -> RgbImage {
         }
     }
     let span = (hi.saturating_sub(lo)).max(1) as f32;
+    // A mask of another resolution (the estimator's reduced one) is scaled.
+    let (mw, mh, mask) = match mask {
+        Some(m) if !m.is_empty() => {
+            let f = ((px.len() as f32 / m.len() as f32).sqrt().round() as u32).max(1);
+            (w / f, h / f, Some((m, f)))
+        }
+        _ => (0, 0, None),
+    };
     RgbImage::from_fn(w, h, |u, v| {
         let i = (v * w + u) as usize;
         let d = px[i];
@@ -28,7 +36,11 @@ pub fn depth_image(depth: &DepthView, mask: Option<&[bool]>) -> RgbImage {
             return Rgb([0, 0, 40]);
         }
         let g = (235.0 - 200.0 * (d - lo) as f32 / span) as u8;
-        if mask.is_some_and(|m| m.get(i).copied().unwrap_or(false)) {
+        let inside = mask.is_some_and(|(m, f)| {
+            let (mu, mv) = (u / f, v / f);
+            mu < mw && mv < mh && m.get((mv * mw + mu) as usize).copied().unwrap_or(false)
+        });
+        if inside {
             Rgb([g / 2 + 60, g / 2 + 40, g])
         } else {
             Rgb([g, g, g])

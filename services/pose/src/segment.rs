@@ -54,7 +54,7 @@ impl XorShift {
     }
     #[inline]
     pub fn below(&mut self, n: usize) -> usize {
-        (self.next_u32() as u64 * n as u64 >> 32) as usize
+        ((self.next_u32() as u64 * n as u64) >> 32) as usize
     }
 }
 
@@ -237,8 +237,8 @@ impl Segmenter {
         }
         if let Some((_, bi)) = best {
             let b = &blobs[bi];
-            for i in 0..n {
-                mask[i] = self.labels[i] == b.label;
+            for (m, &l) in mask.iter_mut().zip(&self.labels) {
+                *m = l == b.label;
             }
             seg.found = true;
             seg.pixels = b.pixels;
@@ -280,7 +280,11 @@ impl Segmenter {
         // most hypotheses are drawn from there.
         let low = s.len() * 2 / 3;
         for it in 0..150 {
-            let (lo, span) = if it % 3 == 2 { (0, s.len()) } else { (low, s.len() - low) };
+            let (lo, span) = if it % 3 == 2 {
+                (0, s.len())
+            } else {
+                (low, s.len() - low)
+            };
             let a = s[lo + rng.below(span)];
             let b = s[lo + rng.below(span)];
             let c = s[lo + rng.below(span)];

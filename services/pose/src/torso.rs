@@ -43,7 +43,8 @@ impl TorsoModel {
         let mut points = Vec::new();
         let mut normals = Vec::new();
         for i in 0..rings {
-            let y = cfg.torso_bottom + (cfg.torso_top - cfg.torso_bottom) * i as f32 / (rings - 1) as f32;
+            let y = cfg.torso_bottom
+                + (cfg.torso_top - cfg.torso_bottom) * i as f32 / (rings - 1) as f32;
             // Shoulders: the lateral half-axis shrinks over the top 6 cm.
             let top_gap = cfg.torso_top - y;
             let shrink = if top_gap < 0.06 {
@@ -79,6 +80,8 @@ pub struct TorsoEstimator {
     dst: Vec<Point3<f32>>,
     stack: Vec<u32>,
     region: Vec<bool>,
+    sub_mask: Vec<bool>,
+    sub_dist: Vec<f32>,
 }
 
 impl TorsoEstimator {
@@ -96,6 +99,8 @@ impl TorsoEstimator {
             dst: Vec::new(),
             stack: Vec::new(),
             region: Vec::new(),
+            sub_mask: Vec::new(),
+            sub_dist: Vec::new(),
         }
     }
 
@@ -115,7 +120,34 @@ impl TorsoEstimator {
         cfg: &PoseConfig,
         up_hint: Vector3<f32>,
     ) -> Option<(TorsoPose, usize)> {
-        self.dt.compute(mask, width, height, &mut self.dist);
+        // The transform over the person's bounding box (plus a background margin) only.
+        let (mut u0, mut v0, mut u1, mut v1) = (usize::MAX, usize::MAX, 0, 0);
+        for v in 0..height {
+            let row = &mask[v * width..(v + 1) * width];
+            if let Some(a) = row.iter().position(|&m| m) {
+                let b = row.iter().rposition(|&m| m).unwrap_or(a);
+                u0 = u0.min(a);
+                u1 = u1.max(b);
+                v0 = v0.min(v);
+                v1 = v1.max(v);
+            }
+        }
+        if u0 == usize::MAX {
+            return None;
+        }
+        let (sw, sh) = (u1 - u0 + 1, v1 - v0 + 1);
+        self.sub_mask.clear();
+        for v in v0..=v1 {
+            self.sub_mask
+                .extend_from_slice(&mask[v * width + u0..v * width + u1 + 1]);
+        }
+        self.dt.compute(&self.sub_mask, sw, sh, &mut self.sub_dist);
+        self.dist.clear();
+        self.dist.resize(width * height, 0.0);
+        for (r, v) in (v0..=v1).enumerate() {
+            self.dist[v * width + u0..v * width + u1 + 1]
+                .copy_from_slice(&self.sub_dist[r * sw..(r + 1) * sw]);
+        }
         let (core, &dmax) = self
             .dist
             .iter()
@@ -193,7 +225,7 @@ impl TorsoEstimator {
         let reach = (cfg.torso_top - cfg.torso_bottom).max(cfg.torso_half_width * 2.0) * 0.75
             + cfg.icp_max_dist;
         let count = mask.iter().filter(|&&m| m).count();
-        let stride = ((count as f32 / 1500.0).sqrt().ceil() as usize).max(1);
+        let stride = ((count as f32 / 800.0).sqrt().ceil() as usize).max(1);
         self.data.clear();
         for v in (0..height).step_by(stride) {
             for u in (0..width).step_by(stride) {
@@ -214,7 +246,13 @@ impl TorsoEstimator {
             // Model points facing the camera (at the origin).
             self.world.clear();
             self.visible.clear();
-            for (k, (p, n)) in self.model.points.iter().zip(&self.model.normals).enumerate() {
+            for (k, (p, n)) in self
+                .model
+                .points
+                .iter()
+                .zip(&self.model.normals)
+                .enumerate()
+            {
                 let wp = pose.apply(p);
                 let wn = pose.apply_vec(n);
                 if wn.dot(&wp.coords) < 0.0 {
@@ -229,7 +267,8 @@ impl TorsoEstimator {
             self.nn_model.clear();
             self.nn_model.resize(self.data.len(), 0);
             self.nn_data.clear();
-            self.nn_data.resize(self.world.len(), (u32::MAX, f32::INFINITY));
+            self.nn_data
+                .resize(self.world.len(), (u32::MAX, f32::INFINITY));
             for (di, d) in self.data.iter().enumerate() {
                 let mut best = (0u32, f32::INFINITY);
                 for (mi, m) in self.world.iter().enumerate() {

@@ -23,7 +23,11 @@ fn scene(pose: ScriptedPose) -> SceneConfig {
 
 fn check(r: &PoseResult) {
     assert!(r.skeleton.is_finite(), "{r:?}");
-    assert!(r.skeleton.confidence.iter().all(|c| (0.0..=1.0).contains(c)));
+    assert!(r
+        .skeleton
+        .confidence
+        .iter()
+        .all(|c| (0.0..=1.0).contains(c)));
 }
 
 fn estimate_n(img: &DepthImage, k: Intrinsics, n: usize) -> PoseResult {
@@ -125,7 +129,9 @@ fn person_half_out_of_the_image() {
     let (img, _) = render(cfg, 0);
     let k = qvga();
     // Some of the person is cut off at the right border.
-    let edge = (0..k.height).filter(|&v| img.get(k.width - 1, v) > 0).count();
+    let edge = (0..k.height)
+        .filter(|&v| img.get(k.width - 1, v) > 0)
+        .count();
     assert!(edge > 10, "the scene should cut the person");
     assert!(estimate_n(&img, k, 3).person_found);
 }
