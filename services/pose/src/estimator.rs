@@ -347,14 +347,20 @@ impl PoseEstimator {
             let mut cut = [0usize; 5];
             for l in Limb::ALL {
                 let r = roots[l.index()];
-                let mut best = (f32::INFINITY, 0usize);
+                // Cut the path where it passes nearest the limb root: the geodesic cost
+                // from the root is the path's length beyond that point plus the gap.
+                let mut near = (f32::INFINITY, 0usize);
                 for (pi, &p) in self.path.iter().enumerate() {
-                    let g = dm - self.dist0[p as usize] as f32 * 1e-3
-                        + (self.graph.pos[p as usize] - r).norm();
-                    if g < best.0 {
-                        best = (g, pi);
+                    let d = (self.graph.pos[p as usize] - r).norm();
+                    if d < near.0 {
+                        near = (d, pi);
                     }
                 }
+                let p_cut = self.path[near.1];
+                let best = (
+                    dm - self.dist0[p_cut as usize] as f32 * 1e-3 + near.0,
+                    near.1,
+                );
                 // The geodesic length of a limb hardly depends on how it is bent.
                 let (l1, l2) = cfg.bones(l);
                 let reach = l1 + l2 + cfg.extremity_extra(l);
@@ -370,6 +376,13 @@ impl PoseEstimator {
                     Limb::RightArm | Limb::RightLeg => local.x.max(0.0),
                     Limb::Head => (-local.y).max(0.0),
                 };
+                // Feet stay below the hips.
+                if matches!(l, Limb::LeftLeg | Limb::RightLeg) {
+                    c += (local.y - cfg.torso_keypoints[4][1] + 0.2).max(0.0);
+                }
+                // The limb's geodesic path passes by its root.
+                let gap = (self.graph.pos[self.path[best.1] as usize] - r).norm();
+                c += (gap - 0.05).max(0.0);
                 row[l.index()] = c;
                 cut[l.index()] = best.1;
             }
