@@ -34,6 +34,10 @@ fn main() {
             cfg.intrinsics = Intrinsics::default().scaled_to(320, 240);
         } else if let Some(d) = a.strip_prefix("overlays:") {
             out = Some(d.to_string());
+        } else if let Some(y) = a.strip_prefix("yaw:") {
+            cfg.placement.yaw_deg = y.parse().unwrap();
+        } else if let Some(y) = a.strip_prefix("dist:") {
+            cfg.placement.distance_m = y.parse().unwrap();
         } else if let Some(n) = a.strip_prefix("every:") {
             every = n.parse().unwrap();
         } else if let Ok(n) = a.parse() {
@@ -59,6 +63,9 @@ fn main() {
         }
         let t = Instant::now();
         let r = est.estimate(img.view());
+        if !airglyph_pose::metrics::in_view(&truth.skeleton, &k) {
+            continue;
+        }
         ev.seconds += t.elapsed().as_secs_f64();
         let fe = ev.add(&r, &truth.skeleton);
         if let (true, Some(tp)) = (r.person_found, est.debug().torso_pose) {

@@ -158,7 +158,7 @@ impl Default for PoseConfig {
             surface_offset_leg: 0.05,
             surface_offset_head: 0.07,
             unassigned_cost: 0.8,
-            temporal_weight: 1.0,
+            temporal_weight: 0.3,
             occluded_decay: 0.7,
         }
     }

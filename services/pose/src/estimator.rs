@@ -505,14 +505,15 @@ impl PoseEstimator {
                 }
                 None => {
                     // Occluded: keep the last fit (in the torso frame), trusted less.
-                    let s = prev.unwrap_or_else(|| {
+                    // Long unseen, it falls back to the rest pose.
+                    let s = prev.filter(|s| s.confidence >= 0.1).unwrap_or_else(|| {
                         let d = cfg.rest_direction(l);
                         let r_local = inv.apply(&root_p);
                         LimbState {
                             mid: r_local + d * l1,
                             end: r_local + d * (l1 + l2),
                             extremity: None,
-                            confidence: 0.2 / cfg.occluded_decay.max(1e-3),
+                            confidence: 0.1,
                         }
                     });
                     let conf = (s.confidence * cfg.occluded_decay).clamp(0.0, 1.0);

@@ -52,6 +52,16 @@ pub struct Summary {
     pub fps: f64,
 }
 
+/// Whether every ground-truth joint projects into the image: frames where the person
+/// is partly out of view are left out of an evaluation (the seed's setting).
+pub fn in_view(truth: &Skeleton, k: &airglyph_core::Intrinsics) -> bool {
+    truth.joints.iter().all(|p| {
+        k.project(p).is_some_and(|(u, v)| {
+            u >= 0.0 && v >= 0.0 && u <= k.width as f32 - 1.0 && v <= k.height as f32 - 1.0
+        })
+    })
+}
+
 impl PoseEval {
     pub fn add(&mut self, est: &PoseResult, truth: &Skeleton) -> FrameErrors {
         let mut joint = [0.0; Joint::COUNT];
