@@ -68,10 +68,170 @@ pub enum SourceSpec {
     Recording(PathBuf),
     /// `synthetic[:SCRIPT]`
     Synthetic(Option<String>),
-    /// `v4l2:/dev/videoN`
-    V4l2(PathBuf),
-    /// `openni2[:URI]`
-    OpenNi2(Option<String>),
+    /// `v4l2:/dev/videoN[?OPTIONS]`
+    V4l2(PathBuf, CameraOptions),
+    /// `openni2[:URI][?OPTIONS]`: a device URI, `Dummy`, or a `.oni` file.
+    OpenNi2(Option<String>, CameraOptions),
+}
+
+/// Camera settings after `?` in a `v4l2:` or `openni2:` source, `&`-separated:
+/// `mode=640x480@30` (any part may be left out: `mode=@60`, `mode=848x480`),
+/// `format=Z16|Y16|Y10B` (V4L2), `intrinsics=PRESET` or `intrinsics=fx,fy,cx,cy`,
+/// `scale=0.1` (device depth unit in millimetres).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct CameraOptions {
+    pub width: Option<u32>,
+    pub height: Option<u32>,
+    pub fps: Option<u32>,
+    pub format: Option<crate::pixfmt::DepthFormat>,
+    pub intrinsics: Option<IntrinsicsChoice>,
+    pub scale: Option<f32>,
+}
+
+/// Where a camera's intrinsics come from when the user names them.
+#[derive(Debug, Clone, PartialEq)]
+pub enum IntrinsicsChoice {
+    Preset(airglyph_core::camera::Preset),
+    /// fx, fy, cx, cy in pixels at the capture resolution.
+    Explicit([f32; 4]),
+}
+
+impl CameraOptions {
+    pub fn is_empty(&self) -> bool {
+        *self == Self::default()
+    }
+
+    /// Intrinsics for a `width × height` stream when the user chose them (a preset is
+    /// scaled to the stream's resolution).
+    pub fn chosen_intrinsics(&self, width: u32, height: u32) -> Option<Intrinsics> {
+        match self.intrinsics.as_ref()? {
+            IntrinsicsChoice::Preset(p) => {
+                let k = p.intrinsics();
+                Some(if (k.width, k.height) == (width, height) {
+                    k
+                } else {
+                    k.scaled_to(width, height)
+                })
+            }
+            IntrinsicsChoice::Explicit([fx, fy, cx, cy]) => {
+                Some(Intrinsics::new(width, height, *fx, *fy, *cx, *cy))
+            }
+        }
+    }
+
+    fn parse(text: &str) -> Result<Self, String> {
+        let mut o = CameraOptions::default();
+        for item in text.split('&').filter(|i| !i.is_empty()) {
+            let (key, value) = item
+                .split_once('=')
+                .ok_or_else(|| format!("camera option {item:?} needs a value: KEY=VALUE"))?;
+            match key {
+                "mode" => {
+                    let (size, fps) = match value.split_once('@') {
+                        Some((s, f)) => (s, Some(f)),
+                        None => (value, None),
+                    };
+                    let bad = || format!("mode={value}: expected WIDTHxHEIGHT@FPS, e.g. 640x480@30");
+                    if !size.is_empty() {
+                        let (w, h) = size.split_once('x').ok_or_else(bad)?;
+                        o.width = Some(w.parse().ok().filter(|&w| w > 0).ok_or_else(bad)?);
+                        o.height = Some(h.parse().ok().filter(|&h| h > 0).ok_or_else(bad)?);
+                    }
+                    if let Some(f) = fps {
+                        o.fps = Some(f.parse().ok().filter(|&f| f > 0).ok_or_else(bad)?);
+                    }
+                }
+                "format" => {
+                    o.format = Some(crate::pixfmt::DepthFormat::from_name(value).ok_or_else(|| {
+                        format!("format={value}: supported depth formats are Z16, Y16, Y10B")
+                    })?)
+                }
+                "intrinsics" => {
+                    o.intrinsics = Some(
+                        if let Some(p) = airglyph_core::camera::Preset::from_name(value) {
+                            IntrinsicsChoice::Preset(p)
+                        } else {
+                            let v: Vec<f32> = value
+                                .split(',')
+                                .map(|x| x.trim().parse::<f32>())
+                                .collect::<Result<_, _>>()
+                                .ok()
+                                .filter(|v: &Vec<f32>| v.len() == 4 && v.iter().all(|x| x.is_finite()))
+                                .ok_or_else(|| {
+                                    let names: Vec<_> = airglyph_core::camera::Preset::ALL
+                                        .iter()
+                                        .map(|p| p.name())
+                                        .collect();
+                                    format!(
+                                        "intrinsics={value}: expected fx,fy,cx,cy or a preset ({})",
+                                        names.join(", ")
+                                    )
+                                })?;
+                            IntrinsicsChoice::Explicit([v[0], v[1], v[2], v[3]])
+                        },
+                    )
+                }
+                "scale" => {
+                    o.scale = Some(
+                        value
+                            .parse::<f32>()
+                            .ok()
+                            .filter(|s| s.is_finite() && *s > 0.0)
+                            .ok_or_else(|| {
+                                format!("scale={value}: expected a positive number (millimetres per device unit)")
+                            })?,
+                    )
+                }
+                other => {
+                    return Err(format!(
+                        "unknown camera option {other:?}: expected mode, format, intrinsics or scale"
+                    ))
+                }
+            }
+        }
+        Ok(o)
+    }
+}
+
+impl std::fmt::Display for CameraOptions {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let mut items = Vec::new();
+        if self.width.is_some() || self.fps.is_some() {
+            let mut m = String::from("mode=");
+            if let (Some(w), Some(h)) = (self.width, self.height) {
+                m.push_str(&format!("{w}x{h}"));
+            }
+            if let Some(fps) = self.fps {
+                m.push_str(&format!("@{fps}"));
+            }
+            items.push(m);
+        }
+        if let Some(fmt) = self.format {
+            items.push(format!("format={}", fmt.name()));
+        }
+        match &self.intrinsics {
+            Some(IntrinsicsChoice::Preset(p)) => items.push(format!("intrinsics={}", p.name())),
+            Some(IntrinsicsChoice::Explicit([fx, fy, cx, cy])) => {
+                items.push(format!("intrinsics={fx},{fy},{cx},{cy}"))
+            }
+            None => {}
+        }
+        if let Some(s) = self.scale {
+            items.push(format!("scale={s}"));
+        }
+        if !items.is_empty() {
+            write!(f, "?{}", items.join("&"))?;
+        }
+        Ok(())
+    }
+}
+
+/// Splits `ARG?OPTIONS`.
+fn with_options(arg: Option<&str>) -> Result<(Option<&str>, CameraOptions), String> {
+    match arg.and_then(|a| a.split_once('?')) {
+        Some((a, o)) => Ok((Some(a), CameraOptions::parse(o)?)),
+        None => Ok((arg, CameraOptions::default())),
+    }
 }
 
 impl FromStr for SourceSpec {
@@ -88,10 +248,16 @@ impl FromStr for SourceSpec {
                 .map(|a| SourceSpec::Recording(a.into()))
                 .ok_or_else(|| "recording needs a directory: recording:DIR".to_owned()),
             "synthetic" => Ok(SourceSpec::Synthetic(nonempty(arg))),
-            "v4l2" => nonempty(arg)
-                .map(|a| SourceSpec::V4l2(a.into()))
-                .ok_or_else(|| "v4l2 needs a device: v4l2:/dev/videoN".to_owned()),
-            "openni2" => Ok(SourceSpec::OpenNi2(nonempty(arg))),
+            "v4l2" => {
+                let (arg, opts) = with_options(arg)?;
+                nonempty(arg)
+                    .map(|a| SourceSpec::V4l2(a.into(), opts))
+                    .ok_or_else(|| "v4l2 needs a device: v4l2:/dev/videoN".to_owned())
+            }
+            "openni2" => {
+                let (arg, opts) = with_options(arg)?;
+                Ok(SourceSpec::OpenNi2(nonempty(arg), opts))
+            }
             other => Err(format!(
                 "unknown source {other:?}: expected synthetic, recording:DIR, v4l2:/dev/videoN or openni2[:URI]"
             )),
@@ -105,9 +271,9 @@ impl std::fmt::Display for SourceSpec {
             SourceSpec::Recording(d) => write!(f, "recording:{}", d.display()),
             SourceSpec::Synthetic(None) => write!(f, "synthetic"),
             SourceSpec::Synthetic(Some(s)) => write!(f, "synthetic:{s}"),
-            SourceSpec::V4l2(d) => write!(f, "v4l2:{}", d.display()),
-            SourceSpec::OpenNi2(None) => write!(f, "openni2"),
-            SourceSpec::OpenNi2(Some(u)) => write!(f, "openni2:{u}"),
+            SourceSpec::V4l2(d, o) => write!(f, "v4l2:{}{o}", d.display()),
+            SourceSpec::OpenNi2(None, o) if o.is_empty() => write!(f, "openni2"),
+            SourceSpec::OpenNi2(u, o) => write!(f, "openni2:{}{o}", u.as_deref().unwrap_or("")),
         }
     }
 }
@@ -122,13 +288,49 @@ pub fn open(spec: &SourceSpec, opts: &SourceOptions) -> Result<Box<dyn DepthSour
             script.as_deref(),
             opts,
         )?)),
-        SourceSpec::V4l2(_) => Err(SourceError::Fatal(
+        #[cfg(feature = "v4l2")]
+        SourceSpec::V4l2(dev, cam) => Ok(Box::new(crate::v4l2::V4l2Source::open(dev, cam)?)),
+        #[cfg(not(feature = "v4l2"))]
+        SourceSpec::V4l2(..) => Err(SourceError::Fatal(
             "V4L2 support is not compiled in: rebuild airglyph-capture with --features v4l2".into(),
         )),
-        SourceSpec::OpenNi2(_) => Err(SourceError::Fatal(
+        #[cfg(feature = "openni2")]
+        SourceSpec::OpenNi2(uri, cam) => Ok(Box::new(crate::openni2::OpenNi2Source::open(
+            uri.as_deref(),
+            cam,
+            opts,
+        )?)),
+        #[cfg(not(feature = "openni2"))]
+        SourceSpec::OpenNi2(..) => Err(SourceError::Fatal(
             "OpenNI2 support is not compiled in: rebuild airglyph-capture with --features openni2"
                 .into(),
         )),
+    }
+}
+
+/// Opens an `openni2[:URI]` source that also records its depth stream to `oni` through
+/// OpenNI2's recorder for as long as it lives (`airglyph record --oni FILE`).
+pub fn open_recording_oni(
+    spec: &SourceSpec,
+    opts: &SourceOptions,
+    oni: &std::path::Path,
+) -> Result<Box<dyn DepthSource>, SourceError> {
+    #[cfg(not(feature = "openni2"))]
+    let _ = opts;
+    match spec {
+        #[cfg(feature = "openni2")]
+        SourceSpec::OpenNi2(uri, cam) => Ok(Box::new(
+            crate::openni2::OpenNi2Source::open_recording(uri.as_deref(), cam, opts, oni)?,
+        )),
+        #[cfg(not(feature = "openni2"))]
+        SourceSpec::OpenNi2(..) => Err(SourceError::Fatal(format!(
+            "{}: recording .oni needs OpenNI2, which is not compiled in: rebuild with --features openni2",
+            oni.display()
+        ))),
+        other => Err(SourceError::Fatal(format!(
+            "{}: only openni2 sources can be recorded to .oni (OpenNI2's recorder), not {other}",
+            oni.display()
+        ))),
     }
 }
 
@@ -145,6 +347,9 @@ mod tests {
             "v4l2:/dev/video2",
             "openni2",
             "openni2:Dummy",
+            "openni2:/data/a.oni?mode=320x240@30",
+            "v4l2:/dev/video0?mode=848x480@30&format=Z16&intrinsics=realsense-d435&scale=0.1",
+            "v4l2:/dev/video0?mode=@60&intrinsics=380,381,320,240",
         ] {
             assert_eq!(s.parse::<SourceSpec>().unwrap().to_string(), s);
         }
@@ -161,5 +366,35 @@ mod tests {
             .parse::<SourceSpec>()
             .unwrap_err()
             .contains("recording:DIR"));
+    }
+
+    #[test]
+    fn camera_options_parse_and_bad_ones_say_what_is_expected() {
+        let SourceSpec::V4l2(dev, o) =
+            "v4l2:/dev/video4?mode=640x480@30&intrinsics=kinect-v1-640x480"
+                .parse::<SourceSpec>()
+                .unwrap()
+        else {
+            panic!("v4l2 spec")
+        };
+        assert_eq!(dev, PathBuf::from("/dev/video4"));
+        assert_eq!((o.width, o.height, o.fps), (Some(640), Some(480), Some(30)));
+        let k = o.chosen_intrinsics(320, 240).unwrap();
+        assert!(
+            (k.fx - 287.9).abs() < 0.01,
+            "a preset scales with the mode: {k:?}"
+        );
+        for (spec, want) in [
+            ("v4l2:/dev/video0?mode=640-480", "WIDTHxHEIGHT@FPS"),
+            ("v4l2:/dev/video0?mode=0x480", "WIDTHxHEIGHT@FPS"),
+            ("v4l2:/dev/video0?format=MJPG", "Z16, Y16, Y10B"),
+            ("v4l2:/dev/video0?intrinsics=1,2", "realsense-d435"),
+            ("v4l2:/dev/video0?scale=-1", "positive"),
+            ("openni2:Dummy?fps=30", "unknown camera option \"fps\""),
+            ("openni2:Dummy?mode", "KEY=VALUE"),
+        ] {
+            let err = spec.parse::<SourceSpec>().unwrap_err();
+            assert!(err.contains(want), "{spec}: {err}");
+        }
     }
 }
