@@ -26,6 +26,8 @@ fn main() {
                 .find(|x| format!("{x:?}").eq_ignore_ascii_case(p))
                 .expect("pose name");
             cfg.motion = MotionSpec::Pose(p);
+        } else if a == "mh" {
+            cfg.body = airglyph_synth::BodySpec::MakeHuman { assets: None };
         } else if a == "noise" {
             cfg.sensor_noise = true;
         } else if a == "floor" {

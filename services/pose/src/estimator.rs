@@ -267,7 +267,7 @@ impl PoseEstimator {
             self.prev_torso,
             up_hint,
         )?;
-        let torso = fit.pose;
+        let mut torso = fit.pose;
         self.debug.torso_residual = fit.residual;
         self.debug.torso_reinit = fit.reinitialised;
         // A new registration means the old limb fits are in an unrelated frame.
@@ -278,7 +278,7 @@ impl PoseEstimator {
         };
         self.prev_torso = Some(torso);
         self.debug.torso_pose = Some(torso);
-        let kp = keypoints(&torso, cfg);
+        let mut kp = keypoints(&torso, cfg);
         let t2 = Instant::now();
         self.times.torso = (t2 - t1).as_secs_f64();
 
@@ -287,8 +287,8 @@ impl PoseEstimator {
         self.debug.nodes = self.graph.node_count();
         self.debug.bridges = self.graph.bridges.len();
         self.debug.joins = self.graph.joins.len();
-        let centre = kp[6];
-        let root = self.graph.nearest_node(&k, &centre, 12).or_else(|| {
+        let mut centre = kp[6];
+        let root = self.graph.nearest_node(&k, &Point3::from(torso.t), 12).or_else(|| {
             let a = self.graph.node_of_pixel[fit.core_pixel];
             (a != NONE && self.graph.comp[a as usize] != NONE).then_some(a)
         })?;
@@ -328,8 +328,8 @@ impl PoseEstimator {
         self.times.geodesic = (t4 - t3).as_secs_f64();
 
         // 5. Maxima to limbs by least total cost.
-        let roots = [kp[0], kp[2], kp[3], kp[4], kp[5]];
-        let inv = torso.inverse();
+        let mut roots = [kp[0], kp[2], kp[3], kp[4], kp[5]];
+        let mut inv = torso.inverse();
         let mut cost: Vec<[f32; 5]> = Vec::with_capacity(maxima.len());
         let mut cuts: Vec<[usize; 5]> = Vec::with_capacity(maxima.len());
         let mut paths: Vec<Vec<u32>> = Vec::with_capacity(maxima.len());
@@ -397,6 +397,24 @@ impl PoseEstimator {
             .map(|&m| self.dist0[m as usize] as f32 * 1e-3)
             .collect();
         self.debug.assignment = assignment;
+
+        // The torso model slides along its own axis (a cylinder's surface does not pin
+        // it); the top of the head does: hold it at `head_top_height` above the torso
+        // frame's origin.
+        if let (Some(mi), true) = (assignment[Limb::Head.index()], cfg.head_top_height > 0.0) {
+            let top = inv.apply(&self.graph.pos[maxima[mi] as usize]);
+            let dy = top.y - cfg.head_top_height;
+            // Only a head top straight above the torso, not far off, is trusted; the
+            // registration of the next frame starts from the unanchored pose.
+            if dy.abs() < 0.15 && top.x.abs() < 0.12 && top.z.abs() < 0.2 {
+                torso.t += torso.r * nalgebra::Vector3::new(0.0, dy, 0.0);
+            }
+            self.debug.torso_pose = Some(torso);
+            kp = keypoints(&torso, cfg);
+            centre = kp[6];
+            roots = [kp[0], kp[2], kp[3], kp[4], kp[5]];
+            inv = torso.inverse();
+        }
 
         // 6. Target points and chain fitting per limb.
         let mut skel = Skeleton::new([Point3::origin(); Joint::COUNT]);
