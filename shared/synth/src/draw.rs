@@ -1,30 +1,220 @@
-//! Air-drawing.
+//! Air-drawing: the right hand traces each symbol on a plane in front of the body by
+//! arm IK, at a natural speed (1–1.5 s a symbol, minimum-jerk timing), with idle and
+//! random non-gesture hand movement between symbols. The left arm hangs.
+//!
+//! Timeline of one symbol: idle at rest (0.4–1.0 s), in half the cases a random
+//! non-gesture movement (1–3 reaches to the face, the chest, the side …), a move to the
+//! symbol's first point, the symbol itself (the gesture's frames), a move back to rest.
 
-use crate::canon::{Pose, TposeSkeleton};
+use crate::canon::{Bone, Pose, TposeSkeleton};
 use crate::error::SynthError;
+use crate::glyphs::{self, Glyph};
 use crate::motion::{DrawSpec, GestureTruth};
+use crate::poses::{self, Side};
+use airglyph_core::Joint;
+use nalgebra::{Point2, Point3, Vector3};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 
-pub(crate) struct Drawing {}
+pub(crate) struct Drawing {
+    rest: Pose,
+    sk: TposeSkeleton,
+    /// The right palm's target, one a frame (body frame).
+    targets: Vec<Point3<f32>>,
+    gestures: Vec<GestureTruth>,
+    repeat: bool,
+    pole: Vector3<f32>,
+}
+
+/// Minimum-jerk timing: 0 → 1 with zero speed and acceleration at both ends.
+fn min_jerk(t: f32) -> f32 {
+    let t = t.clamp(0.0, 1.0);
+    t * t * t * (10.0 - 15.0 * t + 6.0 * t * t)
+}
+
+/// Points along a polyline at arc-length fractions.
+fn along(path: &[Point2<f32>], s: f32) -> Point2<f32> {
+    let total: f32 = path.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+    if path.len() < 2 || total <= 0.0 {
+        return path[0];
+    }
+    let mut want = s.clamp(0.0, 1.0) * total;
+    for w in path.windows(2) {
+        let l = (w[1] - w[0]).norm();
+        if want <= l && l > 0.0 {
+            return w[0] + (w[1] - w[0]) * (want / l);
+        }
+        want -= l;
+    }
+    *path.last().unwrap()
+}
 
 impl Drawing {
     pub(crate) fn new(
-        _d: &DrawSpec,
-        _sk: &TposeSkeleton,
-        _fps: f32,
-        _seed: u64,
+        d: &DrawSpec,
+        sk: &TposeSkeleton,
+        fps: f32,
+        seed: u64,
     ) -> Result<Self, SynthError> {
-        Err(SynthError::Config("air-drawing not implemented yet".into()))
+        let samples = match &d.samples {
+            Some(p) => Some((p, glyphs::read_jsonl(p)?)),
+            None => None,
+        };
+        let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0xA1B2_C3D4);
+        let mut glyph_list = Vec::new();
+        for c in d.symbols.chars().filter(|c| !c.is_whitespace()) {
+            let g = match &samples {
+                Some((path, all)) => {
+                    let label = c.to_string();
+                    let pool: Vec<&Glyph> = all
+                        .iter()
+                        .filter(|g| g.label.eq_ignore_ascii_case(&label))
+                        .collect();
+                    if pool.is_empty() {
+                        return Err(SynthError::Config(format!(
+                            "{}: no sample of symbol {label:?}",
+                            path.display()
+                        )));
+                    }
+                    pool[rng.gen_range(0..pool.len())].clone()
+                }
+                None => glyphs::template(c).ok_or_else(|| {
+                    SynthError::Config(format!(
+                        "no built-in template for symbol {c:?} (built in: {}); give a trajectory JSONL",
+                        glyphs::BUILT_IN
+                    ))
+                })?,
+            };
+            glyph_list.push(g);
+        }
+        if glyph_list.is_empty() {
+            return Err(SynthError::Config(
+                "air-drawing needs at least one symbol".into(),
+            ));
+        }
+        let h = poses::height(sk);
+        let rest = poses::neutral(sk);
+        let heads = sk.posed_heads(&rest);
+        let rest_hand = sk.posed_point(&heads, &rest, Bone::RightHand, sk.joint(Joint::RightHand));
+        let shoulder = sk.joint(Joint::RightShoulder);
+        let chest = sk.joint(Joint::Torso);
+        let head = sk.joint(Joint::Head);
+        let frames = |secs: f32| (secs * fps).round().max(1.0) as usize;
+        let mut targets: Vec<Point3<f32>> = Vec::new();
+        let mut gestures = Vec::new();
+        let mut at = rest_hand;
+        let move_to =
+            |targets: &mut Vec<Point3<f32>>, from: Point3<f32>, to: Point3<f32>, n: usize| {
+                for i in 1..=n {
+                    targets.push(from + (to - from) * min_jerk(i as f32 / n as f32));
+                }
+            };
+        for g in &glyph_list {
+            // Idle.
+            let n = frames(rng.gen_range(0.4..1.0));
+            targets.extend(std::iter::repeat_n(at, n));
+            // Random non-gesture movement.
+            if rng.gen_bool(0.5) {
+                for _ in 0..rng.gen_range(1..=3) {
+                    let to = match rng.gen_range(0..4) {
+                        0 => head + Vector3::new(-0.05, -0.02, 0.09) * h, // touch the face
+                        1 => chest + Vector3::new(0.03, 0.0, 0.1) * h,    // hand to chest
+                        2 => shoulder + Vector3::new(-0.2, -0.15, 0.05) * h, // out to the side
+                        _ => {
+                            rest_hand
+                                + Vector3::new(
+                                    rng.gen_range(-0.05..0.05),
+                                    rng.gen_range(0.0..0.1),
+                                    rng.gen_range(0.0..0.1),
+                                ) * h
+                        }
+                    };
+                    let n = frames(rng.gen_range(0.4..0.8));
+                    move_to(&mut targets, at, to, n);
+                    at = to;
+                    let n = frames(rng.gen_range(0.1..0.4));
+                    targets.extend(std::iter::repeat_n(at, n));
+                }
+            }
+            // The drawing plane: in front of the right shoulder, symbol 0.3–0.4 m tall.
+            let size = h * rng.gen_range(0.17..0.23);
+            let centre = Point3::new(
+                shoulder.x * 0.55 + rng.gen_range(-0.03..0.03),
+                shoulder.y - 0.1 * h + rng.gen_range(-0.03..0.03),
+                shoulder.z + 0.26 * h + rng.gen_range(-0.02..0.02),
+            );
+            // Image right is the person's left (+x); image down is −y.
+            let place = |p: Point2<f32>| {
+                centre + Vector3::new((p.x - 0.5) * size, -(p.y - 0.5) * size, 0.0)
+            };
+            let path = g.path();
+            let start = place(path[0]);
+            move_to(&mut targets, at, start, frames(rng.gen_range(0.35..0.5)));
+            let length: f32 = path.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+            let secs = (0.75 + 0.2 * length).clamp(1.0, 1.5) * rng.gen_range(0.92..1.08);
+            let n = frames(secs);
+            let first = targets.len();
+            for i in 0..n {
+                let s = min_jerk(i as f32 / (n - 1).max(1) as f32);
+                targets.push(place(along(&path, s)));
+            }
+            gestures.push(GestureTruth {
+                label: g.label.clone(),
+                start_frame: first,
+                end_frame: targets.len() - 1,
+            });
+            at = *targets.last().unwrap();
+            move_to(&mut targets, at, rest_hand, frames(rng.gen_range(0.4..0.6)));
+            at = rest_hand;
+        }
+        targets.extend(std::iter::repeat_n(at, frames(0.5)));
+        Ok(Self {
+            rest,
+            sk: sk.clone(),
+            targets,
+            gestures,
+            repeat: d.repeat,
+            pole: Vector3::new(-1.0, -1.2, -0.4),
+        })
     }
+
     pub(crate) fn len(&self) -> Option<usize> {
-        None
+        (!self.repeat).then_some(self.targets.len())
     }
-    pub(crate) fn pose(&self, _f: usize) -> Pose {
-        unreachable!()
+
+    fn cycle(&self, frame: usize) -> (usize, usize) {
+        let n = self.targets.len();
+        if self.repeat {
+            (frame / n, frame % n)
+        } else {
+            (0, frame.min(n - 1))
+        }
     }
-    pub(crate) fn gesture(&self, _f: usize) -> Option<GestureTruth> {
-        None
+
+    pub(crate) fn pose(&self, frame: usize) -> Pose {
+        let (_, i) = self.cycle(frame);
+        let mut p = self.rest;
+        poses::arm_ik(&self.sk, &mut p, Side::Right, self.targets[i], &self.pole);
+        p
     }
+
+    pub(crate) fn gesture(&self, frame: usize) -> Option<GestureTruth> {
+        let (c, i) = self.cycle(frame);
+        if !self.repeat && frame >= self.targets.len() {
+            return None;
+        }
+        let off = c * self.targets.len();
+        self.gestures
+            .iter()
+            .find(|g| (g.start_frame..=g.end_frame).contains(&i))
+            .map(|g| GestureTruth {
+                label: g.label.clone(),
+                start_frame: g.start_frame + off,
+                end_frame: g.end_frame + off,
+            })
+    }
+
     pub(crate) fn gestures(&self) -> Vec<GestureTruth> {
-        Vec::new()
+        self.gestures.clone()
     }
 }

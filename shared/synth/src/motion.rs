@@ -49,7 +49,7 @@ pub(crate) enum Motion {
         blend: usize,
     },
     Clip(Vec<Pose>),
-    Draw(crate::draw::Drawing),
+    Draw(Box<crate::draw::Drawing>),
 }
 
 impl Motion {
@@ -70,7 +70,9 @@ impl Motion {
                 let clip = crate::bvh::BvhClip::load(path)?;
                 Motion::Clip(clip.retarget(sk, fps))
             }
-            MotionSpec::Draw(d) => Motion::Draw(crate::draw::Drawing::new(d, sk, fps, seed)?),
+            MotionSpec::Draw(d) => {
+                Motion::Draw(Box::new(crate::draw::Drawing::new(d, sk, fps, seed)?))
+            }
         })
     }
 
