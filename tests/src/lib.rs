@@ -123,8 +123,9 @@ pub fn children_named(parent: u32, name: &str) -> Vec<u32> {
             .split(' ')
             .nth(1)
             .and_then(|p| p.parse::<u32>().ok());
-        // comm is cut to 15 bytes by the kernel.
-        if ppid == Some(parent) && name.starts_with(comm) && !comm.is_empty() {
+        // comm is cut to 15 bytes by the kernel; a child between fork and exec still
+        // carries its parent's name.
+        if ppid == Some(parent) && comm == &name[..name.len().min(15)] {
             out.push(pid);
         }
     }

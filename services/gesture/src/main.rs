@@ -22,6 +22,9 @@ struct Args {
     /// The gesture model (from `airglyph train`); default: the shipped 36-symbol model.
     #[arg(long)]
     model: Option<PathBuf>,
+    /// Fault-injection for tests: sleep this long on every skeleton (a slow stage).
+    #[arg(long, hide = true, default_value_t = 0)]
+    delay_ms: u64,
 }
 
 /// The shipped model: looked for under the working directory, then in the source tree
@@ -56,7 +59,7 @@ fn main() -> std::process::ExitCode {
 }
 
 fn run(args: Args) -> anyhow::Result<()> {
-    let path = args.model.unwrap_or_else(default_model);
+    let path = args.model.clone().unwrap_or_else(default_model);
     let model = Model::load(&path).with_context(|| {
         format!(
             "cannot load the gesture model {} (train one with `airglyph train`, or pass --model)",
@@ -74,12 +77,14 @@ fn run(args: Args) -> anyhow::Result<()> {
     while !shutdown::requested() {
         telemetry.tick();
         // Every skeleton, not only the newest: the trajectory needs them all.
-        let Some(r) = skeletons.recv(Duration::from_millis(100))? else {
-            continue;
-        };
-        let msg = r.msg;
-        telemetry.input(r.receive_ns - msg.chain.pose_publish_ns, r.dropped);
+        let received = skeletons.recv(Duration::from_millis(100))?;
         telemetry.set_rejected(skeletons.rejected());
+        let Some(r) = received else { continue };
+        let msg = r.msg;
+        if args.delay_ms > 0 {
+            std::thread::sleep(Duration::from_millis(args.delay_ms));
+        }
+        telemetry.input(r.receive_ns - msg.chain.pose_publish_ns, r.dropped);
         if session.replace(msg.session) != Some(msg.session) {
             // A restarted capture stage: the last trajectory is over.
             spotter.reset();

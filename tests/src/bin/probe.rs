@@ -3,10 +3,10 @@
 //! arrived, in what order, with which timestamps, bit for bit.
 
 use airglyph_core::recording::{RecordingInfo, RecordingWriter};
-use airglyph_core::Joint;
+use airglyph_core::{Intrinsics, Joint};
 use airglyph_ipc::clock::monotonic_ns;
 use airglyph_ipc::port::Message;
-use airglyph_ipc::{shutdown, GestureEventMsg, Pipeline, Receiver, SkeletonMsg};
+use airglyph_ipc::{shutdown, DepthHeader, GestureEventMsg, Pipeline, Receiver, SkeletonMsg};
 use clap::Parser;
 use std::io::Write;
 use std::path::PathBuf;
@@ -14,6 +14,10 @@ use std::time::{Duration, Instant};
 
 #[derive(Parser)]
 struct Args {
+    /// Instead of receiving: publish this many depth frames whose header does not match
+    /// their payload (a broken or hostile publisher), then exit.
+    #[arg(long)]
+    publish_bad: Option<u64>,
     /// What to receive: depth, skeleton or gesture.
     #[arg(long, default_value = "depth")]
     stream: String,
@@ -32,6 +36,9 @@ fn main() -> anyhow::Result<()> {
     let args = Args::parse();
     shutdown::install();
     let pipeline = Pipeline::join("probe")?;
+    if let Some(n) = args.publish_bad {
+        return publish_bad(&pipeline, n);
+    }
     match args.stream.as_str() {
         "depth" => depth(&pipeline, &args),
         "skeleton" => messages(pipeline.skeleton_receiver()?, &args, |m: &SkeletonMsg| {
@@ -55,6 +62,25 @@ fn main() -> anyhow::Result<()> {
         ),
         other => anyhow::bail!("unknown stream {other:?}: expected depth, skeleton or gesture"),
     }
+}
+
+fn publish_bad(pipeline: &Pipeline, n: u64) -> anyhow::Result<()> {
+    let mut publisher = pipeline.depth_publisher(64 * 48)?;
+    for i in 0..n {
+        let now = monotonic_ns();
+        // Claims 640×480 but carries 64×48 pixels.
+        let mut h = DepthHeader {
+            sequence: i,
+            session: now,
+            capture_ns: now,
+            publish_ns: now,
+            ..Default::default()
+        };
+        h.set_intrinsics(&Intrinsics::default());
+        publisher.publish_raw(h, &vec![1000u16; 64 * 48])?;
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    Ok(())
 }
 
 fn ready() -> anyhow::Result<()> {

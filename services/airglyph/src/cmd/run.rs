@@ -4,14 +4,17 @@ use airglyph_capture::SourceSpec;
 use airglyph_ipc::{shutdown, Pipeline, Stage};
 use anyhow::{bail, Context};
 use std::collections::VecDeque;
+use std::os::unix::process::CommandExt;
 use std::path::PathBuf;
 use std::process::{Child, Command, ExitStatus};
 use std::time::{Duration, Instant};
 
 /// Start the pipeline (capture → pose → gesture) and print each gesture it recognizes.
 ///
-/// Each stage is a child process; one that crashes is restarted with backoff (from 100 ms,
-/// doubling to 5 s), and after too many crashes in a row the pipeline stops and says so.
+/// Each stage is a child process; one that dies is restarted after 100 ms. One that dies
+/// again within 2 s of its start is in a crash loop: each such restart waits twice as long
+/// (up to 5 s), and after --max-restarts of them within a minute the pipeline stops and
+/// says which stage and why.
 /// SIGINT/SIGTERM stop every stage cleanly.
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
@@ -36,7 +39,8 @@ pub struct Args {
     /// Extra arguments for one stage, as STAGE=ARGS (e.g. `gesture=--model m.json`).
     #[arg(long = "stage-args", value_name = "STAGE=ARGS")]
     pub stage_args: Vec<String>,
-    /// Crashes of one stage within a minute after which the pipeline gives up.
+    /// Crash-loop restarts of one stage (deaths within 2 s of starting) within a minute
+    /// after which the pipeline gives up.
     #[arg(long, default_value_t = 5)]
     pub max_restarts: usize,
 }
@@ -44,8 +48,8 @@ pub struct Args {
 /// The first restart waits this long; each further one twice as long, up to `MAX_BACKOFF`.
 const MIN_BACKOFF: Duration = Duration::from_millis(100);
 const MAX_BACKOFF: Duration = Duration::from_secs(5);
-/// A stage that ran this long without crashing has its backoff reset.
-const HEALTHY_AFTER: Duration = Duration::from_secs(10);
+/// A stage that dies sooner than this after its start counts towards a crash loop.
+const HEALTHY_AFTER: Duration = Duration::from_secs(2);
 const CRASH_WINDOW: Duration = Duration::from_secs(60);
 /// How long a stage gets to stop after SIGTERM before SIGKILL.
 const STOP_GRACE: Duration = Duration::from_secs(3);
@@ -76,8 +80,18 @@ struct Supervised {
 impl Supervised {
     fn spawn(&mut self) -> anyhow::Result<()> {
         let bin = stage_binary(self.stage);
-        let child = Command::new(&bin)
-            .args(&self.args)
+        let mut cmd = Command::new(&bin);
+        cmd.args(&self.args);
+        // SAFETY: prctl is async-signal-safe; the closure touches nothing else.
+        unsafe {
+            // A stage whose supervisor died (even by SIGKILL) stops too, instead of
+            // running on unsupervised.
+            cmd.pre_exec(|| {
+                libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM);
+                Ok(())
+            });
+        }
+        let child = cmd
             .spawn()
             .with_context(|| format!("cannot start {} ({})", self.stage.binary(), bin.display()))?;
         tracing::debug!(stage = self.stage.name(), pid = child.id(), "started");
@@ -218,9 +232,11 @@ fn supervise(
                 // Free the dead stage's shared memory now, not only when it restarts.
                 pipeline.cleanup_dead_nodes();
                 if s.started.elapsed() > HEALTHY_AFTER {
+                    // It was working: a one-off death (OOM, a kill), not a crash loop.
                     s.backoff = MIN_BACKOFF;
+                } else {
+                    s.crashes.push_back(now);
                 }
-                s.crashes.push_back(now);
                 while s
                     .crashes
                     .front()
@@ -230,7 +246,7 @@ fn supervise(
                 }
                 if s.crashes.len() > args.max_restarts {
                     bail!(
-                        "stage {} crashed {} times within a minute ({}); giving up — run `{}` alone to see why",
+                        "stage {} died {} times within 2 s of starting, in a minute (last: {}); giving up — run `{}` alone to see why",
                         s.stage.name(),
                         s.crashes.len(),
                         describe(status),
@@ -244,7 +260,9 @@ fn supervise(
                     "stage died; restarting"
                 );
                 s.restart_at = Some(now + s.backoff);
-                s.backoff = (s.backoff * 2).min(MAX_BACKOFF);
+                if !s.crashes.is_empty() {
+                    s.backoff = (s.backoff * 2).min(MAX_BACKOFF);
+                }
             } else if s.restart_at.is_some_and(|t| now >= t) {
                 s.spawn()?;
                 tracing::info!(
