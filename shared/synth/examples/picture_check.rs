@@ -3,6 +3,9 @@
 //! (green = visible joint, red = hidden by another body part).
 //!
 //! cargo run -p airglyph-synth --example picture_check -- [OUT_DIR] [--makehuman]
+//!
+//! The white trail of an air-drawing frame is the ground-truth right hand since the
+//! symbol began.
 
 use airglyph_core::{Joint, Skeleton};
 use airglyph_synth::{
@@ -57,9 +60,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         eprintln!("skipping the BVH frame: install assimp-testmodels");
     }
     shots.push((
-        "draw-7".into(),
+        "draw-3".into(),
         MotionSpec::Draw(DrawSpec {
-            symbols: "7".into(),
+            symbols: "3".into(),
             samples: None,
             repeat: false,
         }),
@@ -128,7 +131,7 @@ fn overlay(synth: &Synthesizer, depth: &[u16], truth: &FrameTruth, trail: &[Skel
         .map(|(d, _)| *d)
         .collect();
     let near = person.iter().copied().min().unwrap_or(1000) as f32;
-    let far = (person.iter().copied().max().unwrap_or(4000) as f32).max(near + 400.0) + 1500.0;
+    let far = (person.iter().copied().max().unwrap_or(4000) as f32).max(near + 300.0) + 150.0;
     let mut img = RgbImage::from_fn(k.width, k.height, |u, v| {
         colour(depth[(v * k.width + u) as usize], near, far)
     });
