@@ -60,7 +60,17 @@ fn bench(c: &mut Criterion) {
             .fit(&points, &mask, wu, hu, &cfg, None, up)
             .expect("torso");
         g.bench_function("2b torso registration from last frame", |b| {
-            b.iter(|| black_box(torso.fit(&points, &mask, wu, hu, &cfg, Some(fit.pose), up)))
+            b.iter(|| {
+                black_box(torso.fit(
+                    &points,
+                    &mask,
+                    wu,
+                    hu,
+                    &cfg,
+                    Some((fit.pose, Vector3::zeros())),
+                    up,
+                ))
+            })
         });
         let mut graph = GeoGraph::default();
         g.bench_function("3 geodesic graph", |b| {

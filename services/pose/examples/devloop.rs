@@ -113,9 +113,20 @@ fn main() {
                     est.debug().bridges,
                 );
                 eprintln!("  maxima dist {:?}", est.debug().maxima_dist);
-                eprintln!("  targets {:?}", est.debug().targets.iter().map(|t| t.len()).collect::<Vec<_>>());
+                eprintln!(
+                    "  targets {:?}",
+                    est.debug()
+                        .targets
+                        .iter()
+                        .map(|t| t.len())
+                        .collect::<Vec<_>>()
+                );
                 for j in [Joint::LeftHip, Joint::LeftKnee, Joint::LeftFoot] {
-                    eprintln!("  {j:?} est {:?} truth {:?}", r.skeleton[j].coords.as_slice(), truth.skeleton[j].coords.as_slice());
+                    eprintln!(
+                        "  {j:?} est {:?} truth {:?}",
+                        r.skeleton[j].coords.as_slice(),
+                        truth.skeleton[j].coords.as_slice()
+                    );
                 }
                 for row in &est.debug().cost {
                     eprintln!("  cost {row:?}");

@@ -85,6 +85,8 @@ pub struct PoseEstimator {
     path: Vec<u32>,
     small: Vec<u16>,
     prev_torso: Option<TorsoPose>,
+    /// The torso origin's offset from the torso region's PCA centre, in the torso frame.
+    prev_offset: Option<Vector3<f32>>,
     prev_floor: Option<Plane>,
     prev_centroid: Option<Point3<f32>>,
     limbs: [Option<LimbState>; 5],
@@ -112,6 +114,7 @@ impl PoseEstimator {
             path: Vec::new(),
             small: Vec::new(),
             prev_torso: None,
+            prev_offset: None,
             prev_floor: None,
             prev_centroid: None,
             limbs: [None; 5],
@@ -131,6 +134,7 @@ impl PoseEstimator {
     /// Forgets everything learned from earlier frames.
     pub fn reset(&mut self) {
         self.prev_torso = None;
+        self.prev_offset = None;
         self.prev_floor = None;
         self.prev_centroid = None;
         self.limbs = [None; 5];
@@ -264,7 +268,7 @@ impl PoseEstimator {
             w,
             h,
             cfg,
-            self.prev_torso,
+            self.prev_torso.zip(self.prev_offset),
             up_hint,
         )?;
         let mut torso = fit.pose;
@@ -288,10 +292,13 @@ impl PoseEstimator {
         self.debug.bridges = self.graph.bridges.len();
         self.debug.joins = self.graph.joins.len();
         let mut centre = kp[6];
-        let root = self.graph.nearest_node(&k, &Point3::from(torso.t), 12).or_else(|| {
-            let a = self.graph.node_of_pixel[fit.core_pixel];
-            (a != NONE && self.graph.comp[a as usize] != NONE).then_some(a)
-        })?;
+        let root = self
+            .graph
+            .nearest_node(&k, &Point3::from(torso.t), 12)
+            .or_else(|| {
+                let a = self.graph.node_of_pixel[fit.core_pixel];
+                (a != NONE && self.graph.comp[a as usize] != NONE).then_some(a)
+            })?;
         let t3 = Instant::now();
         self.times.graph = (t3 - t2).as_secs_f64();
 
@@ -415,6 +422,8 @@ impl PoseEstimator {
             roots = [kp[0], kp[2], kp[3], kp[4], kp[5]];
             inv = torso.inverse();
         }
+
+        self.prev_offset = Some(fit.pose.r.inverse() * (fit.pose.t - fit.pca.t));
 
         // 6. Target points and chain fitting per limb.
         let mut skel = Skeleton::new([Point3::origin(); Joint::COUNT]);

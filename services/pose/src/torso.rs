@@ -21,6 +21,8 @@ pub struct TorsoFit {
     pub reinitialised: bool,
     /// The pixel of the largest distance-transform value (inside the torso).
     pub core_pixel: usize,
+    /// The PCA frame of the torso region this frame.
+    pub pca: TorsoPose,
 }
 
 /// A point cloud of the torso model with outward normals, in the torso frame.
@@ -322,11 +324,18 @@ impl TorsoEstimator {
         width: usize,
         height: usize,
         cfg: &PoseConfig,
-        prev: Option<TorsoPose>,
+        prev: Option<(TorsoPose, Vector3<f32>)>,
         up_hint: Vector3<f32>,
     ) -> Option<TorsoFit> {
         let (init, core) = self.initial_pose(points, mask, width, height, cfg, up_hint)?;
-        if let Some(prev) = prev {
+        // Tracking starts from the last orientation, placed where the torso region is now
+        // (the last frame's offset from its centre kept): a cylinder cannot be pulled
+        // along its axis by closest points, so a jump would otherwise be lost.
+        if let Some((prev, offset)) = prev {
+            let prev = Rigid {
+                r: prev.r,
+                t: init.t + prev.r * offset,
+            };
             let (pose, residual, matches) = self.register(points, mask, width, height, cfg, prev);
             if residual <= cfg.icp_reinit_residual && pose.is_finite() {
                 return Some(TorsoFit {
@@ -335,6 +344,7 @@ impl TorsoEstimator {
                     matches,
                     reinitialised: false,
                     core_pixel: core,
+                    pca: init,
                 });
             }
         }
@@ -346,6 +356,7 @@ impl TorsoEstimator {
             matches,
             reinitialised: true,
             core_pixel: core,
+            pca: init,
         })
     }
 }

@@ -76,7 +76,11 @@ fn noise_garbage_and_wrong_sizes_do_not_panic() {
         x ^= x << 13;
         x ^= x >> 17;
         x ^= x << 5;
-        *p = if x.is_multiple_of(3) { 0 } else { (x % 9000) as u16 };
+        *p = if x.is_multiple_of(3) {
+            0
+        } else {
+            (x % 9000) as u16
+        };
     }
     estimate_n(&img, k, 2);
     // A frame of another size than the intrinsics, and a tiny one.
