@@ -16,10 +16,14 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     // One variant a subcommand; its arguments and `run` live in `cmd/<name>.rs`.
+    /// A synthetic person draws symbols; the full pipeline names them (no camera needed).
+    Demo(cmd::demo::Args),
     /// Start the pipeline and print each gesture it recognizes.
     Run(cmd::run::Args),
     /// Write a recording (depth PNGs, frames.csv) from any source.
     Record(cmd::record::Args),
+    /// List depth cameras (V4L2, OpenNI2) and their depth modes.
+    Devices(cmd::devices::Args),
     /// Show each stage's frame rate, drops and latency, live.
     Top(cmd::top::Args),
     /// Measure each stage's latency frame by frame; write CSV, JSON and histograms.
@@ -47,8 +51,10 @@ fn main() -> std::process::ExitCode {
         .init();
     let cli = Cli::parse();
     let result: anyhow::Result<()> = match cli.command {
+        Command::Demo(a) => cmd::demo::run(a),
         Command::Run(a) => cmd::run::run(a),
         Command::Record(a) => cmd::record::run(a),
+        Command::Devices(a) => cmd::devices::run(a),
         Command::Top(a) => cmd::top::run(a),
         Command::Profile(a) => cmd::profile::run(a),
         Command::Synth(a) => cmd::synth::run(a),

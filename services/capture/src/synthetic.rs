@@ -57,6 +57,17 @@ pub fn motion(script: Option<&str>, repeat: bool) -> Result<MotionSpec, SourceEr
     )))
 }
 
+/// The scene `synthetic:SCRIPT` renders: a Kinect v1 at 640×480, 30 fps. Public so
+/// tools can know the ground truth (e.g. which symbol is drawn when) of what capture sends.
+pub fn scene(script: Option<&str>, looping: bool) -> Result<SceneConfig, SourceError> {
+    Ok(SceneConfig {
+        motion: motion(script, looping)?,
+        intrinsics: Preset::KinectV1Vga.intrinsics(),
+        fps: 30.0,
+        ..SceneConfig::default()
+    })
+}
+
 pub struct SyntheticSource {
     synth: Synthesizer,
     script: String,
@@ -68,12 +79,7 @@ pub struct SyntheticSource {
 
 impl SyntheticSource {
     pub fn open(script: Option<&str>, opts: &SourceOptions) -> Result<Self, SourceError> {
-        let cfg = SceneConfig {
-            motion: motion(script, opts.looping)?,
-            intrinsics: Preset::KinectV1Vga.intrinsics(),
-            fps: 30.0,
-            ..SceneConfig::default()
-        };
+        let cfg = scene(script, opts.looping)?;
         let synth = Synthesizer::new(cfg).map_err(|e| SourceError::Fatal(e.to_string()))?;
         Ok(Self {
             synth,

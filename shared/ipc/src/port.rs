@@ -313,6 +313,25 @@ impl Pipeline {
         })
     }
 
+    /// Subscribers of `airglyph/depth` now: lets a supervisor start capture only once
+    /// the stages after it listen.
+    pub fn depth_subscribers(&self) -> Result<usize, IpcError> {
+        let service = self
+            .pubsub::<[u16], DepthHeader>(&DEPTH, DEPTH.name)?
+            .open_or_create()
+            .map_err(|e| IpcError::service(DEPTH.name, e))?;
+        Ok(service.dynamic_config().number_of_subscribers())
+    }
+
+    /// Subscribers of `airglyph/skeleton` now.
+    pub fn skeleton_subscribers(&self) -> Result<usize, IpcError> {
+        let service = self
+            .pubsub::<SkeletonMsg, ()>(&SKELETON, SKELETON.name)?
+            .open_or_create()
+            .map_err(|e| IpcError::service(SKELETON.name, e))?;
+        Ok(service.dynamic_config().number_of_subscribers())
+    }
+
     pub fn skeleton_publisher(&self) -> Result<Publisher<SkeletonMsg>, IpcError> {
         self.publisher(&SKELETON, SKELETON.name)
     }

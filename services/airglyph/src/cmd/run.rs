@@ -1,7 +1,7 @@
 //! `airglyph run`: starts the stages as child processes, supervises them, prints gestures.
 
 use airglyph_capture::SourceSpec;
-use airglyph_ipc::{shutdown, Pipeline, Stage};
+use airglyph_ipc::{shutdown, GestureEventMsg, Pipeline, Stage};
 use anyhow::{bail, Context};
 use std::collections::VecDeque;
 use std::os::unix::process::CommandExt;
@@ -140,6 +140,38 @@ fn describe(status: ExitStatus) -> String {
 
 /// Runs the stages until SIGINT/SIGTERM, a finished source, or a crash loop.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    let json = args.json;
+    run_with(args, |event| crate::cmd::print_gesture(event, json))
+}
+
+/// Starts downstream stages first and capture last, once pose and gesture listen, so
+/// the first frames are not sent to nobody.
+fn start_in_order(stages: &mut [Supervised], pipeline: &Pipeline) -> anyhow::Result<()> {
+    let has = |stages: &[Supervised], st: Stage| stages.iter().any(|s| s.stage == st);
+    let (depth0, skeleton0) = (pipeline.depth_subscribers()?, pipeline.skeleton_subscribers()?);
+    for s in stages.iter_mut().filter(|s| s.stage != Stage::Capture) {
+        s.spawn()?;
+    }
+    let ready = |p: &Pipeline| -> anyhow::Result<bool> {
+        Ok((!has(stages, Stage::Pose) || p.depth_subscribers()? > depth0)
+            && (!has(stages, Stage::Gesture) || p.skeleton_subscribers()? > skeleton0))
+    };
+    let deadline = Instant::now() + Duration::from_secs(15);
+    while !ready(pipeline)? && !shutdown::requested() {
+        if Instant::now() > deadline {
+            tracing::warn!("pose or gesture not listening after 15 s; starting capture anyway");
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    for s in stages.iter_mut().filter(|s| s.stage == Stage::Capture) {
+        s.spawn()?;
+    }
+    Ok(())
+}
+
+/// [`run`], handing each gesture event to `on_event` instead of printing it.
+pub fn run_with(args: Args, mut on_event: impl FnMut(&GestureEventMsg)) -> anyhow::Result<()> {
     shutdown::install();
     let mut stages = Vec::new();
     for name in &args.stages {
@@ -190,11 +222,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     } else {
         None
     };
-    // Downstream stages first, so they are subscribed when the first frame is sent.
-    for s in stages.iter_mut().rev() {
-        s.spawn()?;
-    }
-    let outcome = supervise(&mut stages, &pipeline, gestures.as_mut(), &args);
+    start_in_order(&mut stages, &pipeline)?;
+    let outcome = supervise(&mut stages, &pipeline, gestures.as_mut(), &args, &mut on_event);
     for s in stages.iter_mut() {
         s.stop();
     }
@@ -205,14 +234,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 fn supervise(
     stages: &mut [Supervised],
     pipeline: &Pipeline,
-    mut gestures: Option<&mut airglyph_ipc::Receiver<airglyph_ipc::GestureEventMsg>>,
+    mut gestures: Option<&mut airglyph_ipc::Receiver<GestureEventMsg>>,
     args: &Args,
+    on_event: &mut impl FnMut(&GestureEventMsg),
 ) -> anyhow::Result<()> {
     while !shutdown::requested() {
         match gestures.as_deref_mut() {
             Some(rx) => {
                 if let Some(event) = rx.recv(Duration::from_millis(50))? {
-                    crate::cmd::print_gesture(&event.msg, args.json);
+                    on_event(&event.msg);
                 }
             }
             None => std::thread::sleep(Duration::from_millis(50)),
@@ -280,7 +310,7 @@ fn supervise(
             std::thread::sleep(Duration::from_millis(500));
             while let Some(rx) = gestures.as_deref_mut() {
                 match rx.try_recv()? {
-                    Some(event) => crate::cmd::print_gesture(&event.msg, args.json),
+                    Some(event) => on_event(&event.msg),
                     None => break,
                 }
             }
