@@ -42,6 +42,9 @@ pub struct PoseConfig {
     pub icp_iterations: usize,
     /// Registration whose RMS residual exceeds this is redone from the PCA initialisation.
     pub icp_reinit_residual: f32,
+    /// Turns (degrees, about the torso axis) of the PCA frame tried when registering
+    /// afresh; the lowest residual wins (the first unless another is 10 % better).
+    pub reinit_yaws: Vec<f32>,
     /// Half-axes of the elliptic-cylinder torso model (lateral, front-back) and its
     /// vertical extent below/above the torso joint.
     pub torso_half_width: f32,
@@ -123,6 +126,7 @@ impl Default for PoseConfig {
             icp_max_dist: 0.1,
             icp_iterations: 12,
             icp_reinit_residual: 0.035,
+            reinit_yaws: vec![0.0],
             torso_half_width: 0.16,
             torso_half_depth: 0.11,
             torso_bottom: -0.30,

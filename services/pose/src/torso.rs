@@ -348,8 +348,22 @@ impl TorsoEstimator {
                 });
             }
         }
-        let (pose, residual, matches) = self.register(points, mask, width, height, cfg, init);
-        let pose = if pose.is_finite() { pose } else { init };
+        // From PCA the torso is taken to face the camera; a person seen from the side
+        // fits the model turned a quarter, so those are tried as well.
+        let mut best: Option<(TorsoPose, f32, usize)> = None;
+        for yaw in cfg.reinit_yaws.iter() {
+            let turn = Rotation3::from_axis_angle(&Vector3::y_axis(), yaw.to_radians());
+            let start = Rigid {
+                r: init.r * turn,
+                t: init.t,
+            };
+            let (pose, residual, matches) =
+                self.register(points, mask, width, height, cfg, start);
+            if pose.is_finite() && best.is_none_or(|b| residual < b.1 * 0.9) {
+                best = Some((pose, residual, matches));
+            }
+        }
+        let (pose, residual, matches) = best.unwrap_or((init, f32::INFINITY, 0));
         Some(TorsoFit {
             pose,
             residual,
