@@ -849,7 +849,9 @@ impl DepthSource for OpenNi2Source {
         }
         Ok(Some(Frame {
             capture_ns: monotonic_ns(),
-            source_ns: source_us.saturating_mul(1000),
+            // 0 means "no source time" on the wire, and OpenNI2's recorder starts a
+            // file's clock at 0: its first frame is reported at 1 ns.
+            source_ns: source_us.saturating_mul(1000).max(1),
         }))
     }
 }

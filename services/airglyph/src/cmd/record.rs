@@ -23,6 +23,10 @@ pub struct Args {
     /// Take frames as fast as the source gives them, not at its frame rate.
     #[arg(long)]
     fast: bool,
+    /// Also record the depth stream to this .oni file through OpenNI2's own recorder
+    /// (openni2 sources only; play it back with --source openni2:FILE.oni).
+    #[arg(long, value_name = "FILE.oni")]
+    oni: Option<PathBuf>,
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
@@ -35,8 +39,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         },
         looping: false,
     };
-    let mut source = airglyph_capture::open(&args.source, &opts)
-        .with_context(|| format!("cannot open source {}", args.source))?;
+    let mut source = match &args.oni {
+        Some(oni) => airglyph_capture::open_recording_oni(&args.source, &opts, oni),
+        None => airglyph_capture::open(&args.source, &opts),
+    }
+    .with_context(|| format!("cannot open source {}", args.source))?;
     let k = source.intrinsics();
     let mut px = vec![0u16; k.width as usize * k.height as usize];
     // The first frame tells whether this source has ground truth to record.
@@ -88,6 +95,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         };
     }
     bar.finish_and_clear();
+    // Dropping the source stops an OpenNI2 recorder, which writes the .oni's frame count.
+    drop(source);
+    if let Some(oni) = &args.oni {
+        eprintln!("recorded the OpenNI2 stream to {}", oni.display());
+    }
     eprintln!(
         "recorded {} frames to {}{}",
         writer.frames_written(),

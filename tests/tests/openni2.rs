@@ -1,0 +1,180 @@
+//! Real OpenNI2 runtime, real processes: the capture stage streams OpenNI2's `Dummy`
+//! device to a subscriber, and a `.oni` recorded from it plays back through the capture
+//! stage frame for frame, bit for bit. Needs the workspace built with --all-features
+//! (scripts/test does) and libopenni2-0 (scripts/setup installs it).
+#![cfg(feature = "openni2")]
+
+use airglyph_core::recording::Recording;
+use airglyph_system_tests::{signal, Isolated};
+use std::io::{BufRead, BufReader};
+use std::process::{Child, Stdio};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+fn start_probe(p: &Isolated, extra: &[&str]) -> (Child, mpsc::Receiver<serde_json::Value>) {
+    let mut child = p
+        .command("airglyph-probe")
+        .args(extra)
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let stdout = child.stdout.take().unwrap();
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+            if let Ok(v) = serde_json::from_str::<serde_json::Value>(&line) {
+                if tx.send(v).is_err() {
+                    break;
+                }
+            }
+        }
+    });
+    let ready = rx
+        .recv_timeout(Duration::from_secs(10))
+        .expect("probe ready");
+    assert_eq!(ready["ready"], true);
+    (child, rx)
+}
+
+/// Waits for a child to exit by itself (SIGTERM after the deadline).
+fn wait_exit(mut child: Child, secs: u64) -> std::process::ExitStatus {
+    let deadline = Instant::now() + Duration::from_secs(secs);
+    while Instant::now() < deadline {
+        if let Some(s) = child.try_wait().unwrap() {
+            return s;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    signal(&child, libc::SIGTERM);
+    let _ = child.wait();
+    panic!("process {} did not exit within {secs} s", child.id());
+}
+
+#[test]
+fn capture_streams_60_frames_of_the_openni2_dummy_device_to_another_process() {
+    let p = Isolated::new();
+    let tmp = tempfile::tempdir().unwrap();
+    let got = tmp.path().join("got");
+    let (probe, rx) = start_probe(&p, &["--out", got.to_str().unwrap(), "--frames", "60"]);
+    let capture = p
+        .command("airglyph-capture")
+        .args(["--source", "openni2:Dummy", "--frames", "60"])
+        .output()
+        .unwrap();
+    assert!(
+        capture.status.success(),
+        "{}",
+        String::from_utf8_lossy(&capture.stderr)
+    );
+    let meta: Vec<serde_json::Value> = rx.iter().take(60).collect();
+    assert!(wait_exit(probe, 10).success());
+    assert_eq!(meta.len(), 60, "every frame arrives");
+    for (i, m) in meta.iter().enumerate() {
+        assert_eq!(m["sequence"], i as u64, "in order");
+        assert_eq!(m["dropped"], 0);
+        assert_eq!(m["rejected"], 0, "headers and intrinsics pass the checks");
+    }
+    let received = Recording::open(&got).unwrap();
+    assert_eq!(received.len(), 60);
+    let k = received.intrinsics();
+    assert_eq!((k.width, k.height), (320, 240), "Dummy's depth mode");
+    // The Dummy device's frames change: a stuck stream would not.
+    assert_ne!(
+        received.read_frame(0).unwrap(),
+        received.read_frame(59).unwrap()
+    );
+    // Device time travels along and moves on at ~30 fps.
+    let span = received.capture_ns(59) - received.capture_ns(0);
+    assert!((1_500_000_000..2_500_000_000).contains(&span), "{span} ns");
+    assert!(p.shm_files().is_empty(), "left behind: {:?}", p.shm_files());
+}
+
+#[test]
+fn an_oni_recorded_from_the_dummy_device_plays_back_through_capture_with_every_frame_bit_exact() {
+    let p = Isolated::new();
+    let tmp = tempfile::tempdir().unwrap();
+    let (dir, oni, got) = (
+        tmp.path().join("rec"),
+        tmp.path().join("dummy.oni"),
+        tmp.path().join("got"),
+    );
+    // Record 60 frames: our recording of the frames as read, and the .oni that OpenNI2's
+    // recorder writes from the same stream meanwhile.
+    let rec = p
+        .command("airglyph")
+        .args(["record", "--source", "openni2:Dummy", "--frames", "60"])
+        .arg("--out")
+        .arg(&dir)
+        .arg("--oni")
+        .arg(&oni)
+        .output()
+        .unwrap();
+    assert!(
+        rec.status.success(),
+        "{}",
+        String::from_utf8_lossy(&rec.stderr)
+    );
+    let read = Recording::open(&dir).unwrap();
+    assert_eq!(read.len(), 60);
+    let nodes = airglyph_capture::onifile::depth_nodes(&std::fs::read(&oni).unwrap()).unwrap();
+    assert_eq!(nodes.len(), 1, "one depth stream in {}", oni.display());
+    assert!(
+        !nodes[0].has_cropping,
+        "the Dummy trap is present in the file"
+    );
+    let in_file = nodes[0].frames as usize;
+    assert!(in_file >= 60, "the recorder kept every frame: {nodes:?}");
+
+    // Play it back through the capture stage in real time (a subscriber that writes PNGs
+    // cannot keep up with --fast, and the pipeline drops frames rather than queue them).
+    let (probe, rx) = start_probe(&p, &["--out", got.to_str().unwrap(), "--idle", "3"]);
+    let capture = p
+        .command("airglyph-capture")
+        .arg("--source")
+        .arg(format!("openni2:{}", oni.display()))
+        .output()
+        .unwrap();
+    let log = String::from_utf8_lossy(&capture.stderr);
+    assert!(capture.status.success(), "{log}");
+    assert!(
+        log.contains("lacks the cropping property") && log.contains("copy"),
+        "the user is told the file is played through a repaired copy: {log}"
+    );
+    assert!(wait_exit(probe, 15).success());
+    let meta: Vec<serde_json::Value> = rx.try_iter().collect();
+    assert_eq!(
+        meta.len(),
+        in_file,
+        "exactly the file's frames, then the end"
+    );
+    assert!(meta.iter().all(|m| m["dropped"] == 0));
+
+    // Bit-exact: every frame read while recording is in the playback, at the same time
+    // relative to the first frame (OpenNI2's recorder starts the file's clock at 0).
+    let played = Recording::open(&got).unwrap();
+    assert_eq!(played.len(), in_file);
+    // (The recorder may have caught a frame before the first one we read.)
+    let first = read.read_frame(0).unwrap();
+    let j0 = (0..played.len().min(10))
+        .find(|&j| played.read_frame(j).unwrap() == first)
+        .expect("the first frame read is among the first ones played");
+    let t0_read = read.capture_ns(0);
+    let t0_played = played.capture_ns(j0);
+    let mut j = j0;
+    for i in 0..read.len() {
+        let t = read.capture_ns(i) - t0_read;
+        // Within a millisecond: a file's first frame (time 0) travels as 1 ns.
+        while j < played.len() && played.capture_ns(j) - t0_played + 1_000_000 < t {
+            j += 1;
+        }
+        assert!(
+            j < played.len() && (played.capture_ns(j) - t0_played).abs_diff(t) < 1_000_000,
+            "frame {i} (t = {t} ns) is in the playback"
+        );
+        assert!(
+            played.read_frame(j).unwrap() == read.read_frame(i).unwrap(),
+            "frame {i} bit-exact"
+        );
+    }
+    assert!(p.shm_files().is_empty(), "left behind: {:?}", p.shm_files());
+}
