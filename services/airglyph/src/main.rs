@@ -20,6 +20,8 @@ enum Command {
     Demo(cmd::demo::Args),
     /// Start the pipeline and print each gesture it recognizes.
     Run(cmd::run::Args),
+    /// Find the gestures drawn in a recording, offline (pose, then the spotter).
+    Spot(cmd::spot::Args),
     /// Write a recording (depth PNGs, frames.csv) from any source.
     Record(cmd::record::Args),
     /// List depth cameras (V4L2, OpenNI2) and their depth modes.
@@ -53,6 +55,7 @@ fn main() -> std::process::ExitCode {
     let result: anyhow::Result<()> = match cli.command {
         Command::Demo(a) => cmd::demo::run(a),
         Command::Run(a) => cmd::run::run(a),
+        Command::Spot(a) => cmd::spot::run(a),
         Command::Record(a) => cmd::record::run(a),
         Command::Devices(a) => cmd::devices::run(a),
         Command::Top(a) => cmd::top::run(a),

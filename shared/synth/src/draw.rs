@@ -143,9 +143,11 @@ impl Drawing {
                 shoulder.y - 0.1 * h + rng.gen_range(-0.03..0.03),
                 shoulder.z + 0.26 * h + rng.gen_range(-0.02..0.02),
             );
-            // Image right is the person's left (+x); image down is −y.
+            // The person writes as they see it, on a pane in front of them: the symbol's
+            // right is the person's right (−x), its down is −y. From the camera it
+            // appears mirrored, as writing on a window does from outside.
             let place = |p: Point2<f32>| {
-                centre + Vector3::new((p.x - 0.5) * size, -(p.y - 0.5) * size, 0.0)
+                centre + Vector3::new(-(p.x - 0.5) * size, -(p.y - 0.5) * size, 0.0)
             };
             let path = g.path();
             let start = place(path[0]);

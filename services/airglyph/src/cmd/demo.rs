@@ -26,7 +26,7 @@ pub struct Args {
 }
 
 /// The drawn symbol a spotted gesture belongs to: the one its frames overlap most.
-fn drawn_for(truth: &[GestureTruth], start: u64, end: u64) -> Option<usize> {
+pub fn drawn_for(truth: &[GestureTruth], start: u64, end: u64) -> Option<usize> {
     truth
         .iter()
         .enumerate()

@@ -9,6 +9,7 @@ pub mod demo;
 pub mod profile;
 pub mod record;
 pub mod run;
+pub mod spot;
 pub mod synth;
 pub mod top;
 pub mod train;

@@ -1,0 +1,105 @@
+//! `airglyph spot DIR`: the gesture stage's spotter over a recording, offline.
+
+use crate::cmd::demo::drawn_for;
+use airglyph_core::recording::Recording;
+use airglyph_gesture::{Model, Spotter, SpotterConfig};
+use airglyph_pose::{PoseConfig, PoseEstimator};
+use airglyph_synth::GestureTruth;
+use anyhow::Context;
+use std::path::{Path, PathBuf};
+
+/// Find the gestures drawn in a recording: the pose estimator on every frame (or the
+/// recording's ground-truth joints with --truth), then the spotter. When the recording
+/// has a gestures.csv (synthetic air-drawing), each spotted gesture is shown beside the
+/// symbol drawn.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Recording directory.
+    dir: PathBuf,
+    /// Use the recording's joints.csv instead of estimating the pose.
+    #[arg(long)]
+    truth: bool,
+    /// The gesture model (default: the shipped 36-symbol model).
+    #[arg(long, default_value = "models/unipen-36.json")]
+    model: PathBuf,
+    /// One JSON object a line.
+    #[arg(long)]
+    json: bool,
+}
+
+fn read_gestures_csv(path: &Path) -> anyhow::Result<Vec<GestureTruth>> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("{}", path.display()))?;
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        let bad = || anyhow::anyhow!("{}:{}: expected label,start_frame,end_frame", path.display(), i + 1);
+        if f.len() != 3 {
+            return Err(bad());
+        }
+        out.push(GestureTruth {
+            label: f[0].to_owned(),
+            start_frame: f[1].trim().parse().map_err(|_| bad())?,
+            end_frame: f[2].trim().parse().map_err(|_| bad())?,
+        });
+    }
+    Ok(out)
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let rec = Recording::open(&args.dir)?;
+    if args.truth && !rec.has_joints() {
+        anyhow::bail!("{}: --truth needs a joints.csv", args.dir.display());
+    }
+    let model = Model::load(&args.model)?;
+    let mut spotter = Spotter::new(model, SpotterConfig::default())?;
+    let k = rec.intrinsics();
+    let mut estimator = PoseEstimator::new(k, PoseConfig::default());
+    let mut px = vec![0u16; k.width as usize * k.height as usize];
+    let truth_path = args.dir.join("gestures.csv");
+    let truth = if truth_path.exists() { read_gestures_csv(&truth_path)? } else { Vec::new() };
+    let mut recognized = vec![None; truth.len()];
+    let mut spotted = 0;
+    for i in 0..rec.len() {
+        let skeleton = if args.truth {
+            rec.joints(i).copied()
+        } else {
+            rec.read_frame_into(i, &mut px)?;
+            let r = estimator.estimate(airglyph_core::DepthView::new(k.width, k.height, &px)?);
+            r.person_found.then_some(r.skeleton)
+        };
+        let Some(s) = skeleton else { continue };
+        let Some(g) = spotter.push(&s, i as u64, rec.capture_ns(i)) else { continue };
+        spotted += 1;
+        let drawn = drawn_for(&truth, g.start_seq, g.end_seq);
+        if let Some(d) = drawn {
+            recognized[d].get_or_insert(g.label.clone());
+        }
+        let drawn = drawn.map(|d| truth[d].label.as_str());
+        if args.json {
+            println!(
+                "{}",
+                serde_json::json!({"label": g.label, "score": g.score, "start_frame": g.start_seq,
+                    "end_frame": g.end_seq, "drawn": drawn})
+            );
+        } else {
+            println!(
+                "frames {}–{}: {} (score {:.2}){}",
+                g.start_seq,
+                g.end_seq,
+                g.label,
+                g.score,
+                drawn.map_or(String::new(), |d| format!("   drawn: {d}"))
+            );
+        }
+    }
+    if !truth.is_empty() {
+        let correct = truth.iter().zip(&recognized).filter(|(t, r)| r.as_deref() == Some(t.label.as_str())).count();
+        let summary = serde_json::json!({"drawn": truth.len(), "correct": correct, "spotted": spotted});
+        if args.json {
+            println!("{summary}");
+        } else {
+            println!("{correct} of {} drawn symbols recognized ({spotted} gestures spotted)", truth.len());
+        }
+    }
+    Ok(())
+}
