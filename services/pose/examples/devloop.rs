@@ -49,7 +49,11 @@ fn main() {
     let mut synth = Synthesizer::new(cfg).expect("scene");
     let k = synth.intrinsics();
     let n = synth.len().map_or(frames, |l| l.min(frames));
-    let mut est = PoseEstimator::new(k, PoseConfig::default());
+    let mut pcfg = PoseConfig::default();
+    if args.iter().any(|a| a == "full") {
+        pcfg.work_width = 0;
+    }
+    let mut est = PoseEstimator::new(k, pcfg);
     let mut ev = PoseEval::default();
     if let Some(d) = &out {
         std::fs::create_dir_all(d).unwrap();

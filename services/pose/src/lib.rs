@@ -42,7 +42,7 @@
 //!    footprint z/f; edges bridging occluding foreground along rows and columns; stray
 //!    components joined to the rest, nearest first.
 //! 4. [`dijkstra`]: geodesic distances from the torso centre with a radix heap; five
-//!    maxima, each joined to the root by a zero-weight edge and the search continued
+//!    (and spare) maxima, each joined to the root by a zero-weight edge and the search continued
 //!    incrementally.
 //! 5. [`limbs`]: maxima assigned to the five limb roots by least total cost (geodesic
 //!    cost from the limb root, distance to the limb's last extremity, side of the body);
@@ -50,6 +50,26 @@
 //!    within d_e (5 cm arms, 10 cm legs and head) of the geodesic path (Eq. 16.10); a
 //!    two-joint chain fitted by weighted closed-form rotations (ω_succ = 0.05) until the
 //!    error stops falling.
+//!
+//! # Beyond the seed (and why)
+//!
+//! * Frames wider than [`PoseConfig::work_width`] (320) are reduced by an integer factor,
+//!   each pixel the nearest depth of its block: 640×480 then costs what 320×240 does.
+//! * Up to eight geodesic maxima are taken, not five: the middle of a long leg can lie
+//!   geodesically farther from every source than the top of the head, so the fifth
+//!   maximum is often a thigh. The assignment leaves the spares out.
+//! * Assignment cost: |geodesic length from the limb root − the limb's expected length|
+//!   (a limb's geodesic length hardly depends on how it is bent), plus the gap between
+//!   the limb root and the path, the side of the body, feet below the hips, and the
+//!   distance to the limb's last extremity.
+//! * A cylinder-like torso model slides along its axis under closest-point registration;
+//!   tracking therefore starts where the torso region is now, and the head's geodesic
+//!   maximum, when assigned and plausible, fixes the torso's height.
+//! * Target points are pushed back along their viewing ray by a per-limb surface offset
+//!   (the seen surface lies in front of the bone), and targets beyond the chain's end
+//!   (fingers, toes) weigh 0.1.
+//! * Key points and bone lengths in [`PoseConfig::default`] were measured on the
+//!   MakeHuman body of airglyph-synth standing still; another body needs its own.
 //!
 //! [`metrics`] holds the evaluation against ground truth (Eq. 16.20–16.22, share within
 //! 10 cm, mAP at 10 cm), [`overlay`] draws skeletons on depth images.

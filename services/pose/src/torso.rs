@@ -357,8 +357,7 @@ impl TorsoEstimator {
                 r: init.r * turn,
                 t: init.t,
             };
-            let (pose, residual, matches) =
-                self.register(points, mask, width, height, cfg, start);
+            let (pose, residual, matches) = self.register(points, mask, width, height, cfg, start);
             if pose.is_finite() && best.is_none_or(|b| residual < b.1 * 0.9) {
                 best = Some((pose, residual, matches));
             }
