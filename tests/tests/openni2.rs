@@ -9,7 +9,12 @@ use airglyph_system_tests::{signal, Isolated};
 use std::io::{BufRead, BufReader};
 use std::process::{Child, Stdio};
 use std::sync::mpsc;
+use std::sync::Mutex;
 use std::time::{Duration, Instant};
+
+/// The streaming tests run one at a time: each keeps a 30 fps subscriber busy writing
+/// PNGs, and two at once on a small machine would drop frames (by design) and fail.
+static SERIAL: Mutex<()> = Mutex::new(());
 
 fn start_probe(p: &Isolated, extra: &[&str]) -> (Child, mpsc::Receiver<serde_json::Value>) {
     let mut child = p
@@ -52,6 +57,7 @@ fn wait_exit(mut child: Child, secs: u64) -> std::process::ExitStatus {
 
 #[test]
 fn capture_streams_60_frames_of_the_openni2_dummy_device_to_another_process() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let p = Isolated::new();
     let tmp = tempfile::tempdir().unwrap();
     let got = tmp.path().join("got");
@@ -91,6 +97,7 @@ fn capture_streams_60_frames_of_the_openni2_dummy_device_to_another_process() {
 
 #[test]
 fn an_oni_recorded_from_the_dummy_device_plays_back_through_capture_with_every_frame_bit_exact() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let p = Isolated::new();
     let tmp = tempfile::tempdir().unwrap();
     let (dir, oni, got) = (
@@ -177,4 +184,58 @@ fn an_oni_recorded_from_the_dummy_device_plays_back_through_capture_with_every_f
         );
     }
     assert!(p.shm_files().is_empty(), "left behind: {:?}", p.shm_files());
+}
+
+#[test]
+fn devices_lists_both_backends_and_cameras_that_are_not_there_fail_clearly() {
+    let p = Isolated::new();
+    let out = p
+        .command("airglyph")
+        .args(["devices", "--json", "--openni2-uri", "Dummy"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let lines: Vec<serde_json::Value> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 2, "one line a backend: {lines:?}");
+    assert_eq!(lines[0]["backend"], "v4l2");
+    assert_eq!(lines[1]["backend"], "openni2");
+    let dummy = lines[1]["devices"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|d| d["source"] == "openni2:Dummy")
+        .expect("Dummy listed");
+    assert_eq!(dummy["modes"][0]["width"], 320);
+    assert_eq!(dummy["modes"][0]["format"], "DEPTH_1_MM");
+
+    for (source, want) in [
+        (
+            "v4l2:/dev/video-airglyph-none",
+            "no V4L2 device /dev/video-airglyph-none",
+        ),
+        (
+            "openni2:NoSuchCamera",
+            "cannot open device \"NoSuchCamera\"",
+        ),
+        (
+            "openni2:Dummy?mode=640x480@30",
+            "does not support the depth mode 640x480@30",
+        ),
+    ] {
+        let out = p
+            .command("airglyph-capture")
+            .args(["--source", source])
+            .output()
+            .unwrap();
+        assert!(!out.status.success(), "{source} opened");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(want), "{source}: {err}");
+    }
 }

@@ -559,7 +559,23 @@ impl OpenNi2Source {
                 p.frames = n as u64;
             }
         }
-        Ok(Self {
+        let start = cam.start.unwrap_or(0);
+        match &playback {
+            Some(p) if start >= p.frames => {
+                return Err(fatal(format!(
+                    "{name}: start={start} but the recording has {} frames (0 to {})",
+                    p.frames,
+                    p.frames - 1
+                )))
+            }
+            None if start > 0 => {
+                return Err(fatal(format!(
+                    "{name}: start= applies to .oni recordings, not to a live device"
+                )))
+            }
+            _ => {}
+        }
+        let mut me = Self {
             _recorder: recorder,
             stream,
             _device: device,
@@ -572,7 +588,24 @@ impl OpenNi2Source {
             pixel_format: mode.pixelFormat,
             delivered: 0,
             epoch: None,
-        })
+        };
+        // No seeking in this OpenNI2 (it hangs): read and drop frames up to `start`.
+        for i in 0..start {
+            if !me.wait(PLAYBACK_TIMEOUT_MS)? {
+                return Err(fatal(format!(
+                    "{name}: the recording ended at frame {i} of {start} skipped"
+                )));
+            }
+            let mut ptr: *mut OniFrame = std::ptr::null_mut();
+            // SAFETY: a frame is ready; released at once.
+            let rc = unsafe { oniStreamReadFrame(me.stream.0, &mut ptr) };
+            check(rc, "skipping to the start frame")?;
+            if !ptr.is_null() {
+                unsafe { oniFrameRelease(ptr) };
+            }
+            me.delivered += 1;
+        }
+        Ok(me)
     }
 
     /// Frames in the `.oni` file being played, if this is playback.

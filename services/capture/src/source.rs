@@ -77,7 +77,8 @@ pub enum SourceSpec {
 /// Camera settings after `?` in a `v4l2:` or `openni2:` source, `&`-separated:
 /// `mode=640x480@30` (any part may be left out: `mode=@60`, `mode=848x480`),
 /// `format=Z16|Y16|Y10B` (V4L2), `intrinsics=PRESET` or `intrinsics=fx,fy,cx,cy`,
-/// `scale=0.1` (device depth unit in millimetres).
+/// `scale=0.1` (device depth unit in millimetres), `start=N` (a `.oni` plays from its
+/// frame N: OpenNI2 cannot seek, so the file is read from the start and N frames skipped).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct CameraOptions {
     pub width: Option<u32>,
@@ -86,6 +87,7 @@ pub struct CameraOptions {
     pub format: Option<crate::pixfmt::DepthFormat>,
     pub intrinsics: Option<IntrinsicsChoice>,
     pub scale: Option<f32>,
+    pub start: Option<u64>,
 }
 
 /// Where a camera's intrinsics come from when the user names them.
@@ -171,6 +173,11 @@ impl CameraOptions {
                         },
                     )
                 }
+                "start" => {
+                    o.start = Some(value.parse().map_err(|_| {
+                        format!("start={value}: expected a frame number (0 is the first)")
+                    })?)
+                }
                 "scale" => {
                     o.scale = Some(
                         value
@@ -184,7 +191,7 @@ impl CameraOptions {
                 }
                 other => {
                     return Err(format!(
-                        "unknown camera option {other:?}: expected mode, format, intrinsics or scale"
+                        "unknown camera option {other:?}: expected mode, format, intrinsics, scale or start"
                     ))
                 }
             }
@@ -218,6 +225,9 @@ impl std::fmt::Display for CameraOptions {
         }
         if let Some(s) = self.scale {
             items.push(format!("scale={s}"));
+        }
+        if let Some(s) = self.start {
+            items.push(format!("start={s}"));
         }
         if !items.is_empty() {
             write!(f, "?{}", items.join("&"))?;
@@ -347,7 +357,7 @@ mod tests {
             "v4l2:/dev/video2",
             "openni2",
             "openni2:Dummy",
-            "openni2:/data/a.oni?mode=320x240@30",
+            "openni2:/data/a.oni?mode=320x240@30&start=12",
             "v4l2:/dev/video0?mode=848x480@30&format=Z16&intrinsics=realsense-d435&scale=0.1",
             "v4l2:/dev/video0?mode=@60&intrinsics=380,381,320,240",
         ] {

@@ -200,6 +200,26 @@ fn an_oni_recorded_from_dummy_plays_back_every_frame_bit_exact_and_loops_by_reop
     }
     drop(p);
 
+    // start=N: reopen-and-skip stands in for OpenNI2's broken seek.
+    let (_, c) = cam("openni2:x.oni?start=5");
+    let mut s = OpenNi2Source::open(Some(uri), &c, &opts(Pacing::Fast, false)).unwrap();
+    let mut n = 0;
+    while s.next_frame(&mut px).unwrap().is_some() {
+        assert!(px == played[5 + n].1, "frame {} after start=5", 5 + n);
+        n += 1;
+    }
+    assert_eq!(n as u64, in_file - 5);
+    let (_, c) = cam(&format!("openni2:x.oni?start={in_file}"));
+    let err = fatal(OpenNi2Source::open(
+        Some(uri),
+        &c,
+        &opts(Pacing::Fast, false),
+    ));
+    assert!(
+        err.contains(&format!("the recording has {in_file} frames")),
+        "{err}"
+    );
+
     // Looping starts the file over (by reopening it) with the same frames.
     let mut l = OpenNi2Source::open(
         Some(uri),
