@@ -461,6 +461,17 @@ impl OpenNi2Source {
         opts: &SourceOptions,
         record_to: Option<&Path>,
     ) -> Result<Self, SourceError> {
+        if let Some(f) = cam.format {
+            return Err(fatal(format!(
+                "format={} applies to v4l2 sources; OpenNI2 depth is always millimetres",
+                f.name()
+            )));
+        }
+        if cam.scale.is_some() {
+            return Err(fatal(
+                "scale= applies to v4l2 sources; OpenNI2 reports its depth unit itself",
+            ));
+        }
         let playback = match uri {
             Some(u) if looks_like_file(u) => Some(prepare_playback(u)?),
             _ => None,
@@ -742,10 +753,10 @@ fn choose_mode(
     candidates.sort_by_key(|m| (m.pixelFormat != ONI_PIXEL_FORMAT_DEPTH_1_MM) as u8);
     candidates.into_iter().next().ok_or_else(|| {
         let asked = crate::source::CameraOptions {
-            format: None,
-            intrinsics: None,
-            scale: None,
-            ..cam.clone()
+            width: cam.width,
+            height: cam.height,
+            fps: cam.fps,
+            ..Default::default()
         };
         fatal(format!(
             "OpenNI2 device {name} does not support the depth mode {} (it offers: {})",

@@ -264,6 +264,11 @@ pub struct V4l2Source {
 impl V4l2Source {
     pub fn open(path: &Path, cam: &CameraOptions) -> Result<Self, SourceError> {
         let name = path.display().to_string();
+        if cam.start.is_some() {
+            return Err(fatal(format!(
+                "{name}: start= applies to .oni recordings, not to a live camera"
+            )));
+        }
         if !path.exists() {
             let nodes = device_nodes();
             return Err(fatal(if nodes.is_empty() {

@@ -100,6 +100,13 @@ fn bad_uri_unsupported_mode_and_no_device_are_clear_errors() {
             && err.contains("320x240@30 DEPTH_1_MM"),
         "{err}"
     );
+    let (uri, c) = cam("openni2:Dummy?format=Z16");
+    let err = fatal(OpenNi2Source::open(
+        uri.as_deref(),
+        &c,
+        &opts(Pacing::Fast, false),
+    ));
+    assert!(err.contains("format=Z16 applies to v4l2 sources"), "{err}");
     let (uri, c) = cam("openni2:Dummy?mode=@60");
     let err = fatal(OpenNi2Source::open(
         uri.as_deref(),
