@@ -45,6 +45,8 @@ pub struct PoseConfig {
     /// Turns (degrees, about the torso axis) of the PCA frame tried when registering
     /// afresh; the lowest residual wins (the first unless another is 10 % better).
     pub reinit_yaws: Vec<f32>,
+    /// Turn the torso to face where the toes point when they disagree by over 45°.
+    pub feet_facing: bool,
     /// Half-axes of the elliptic-cylinder torso model (lateral, front-back) and its
     /// vertical extent below/above the torso joint.
     pub torso_half_width: f32,
@@ -127,6 +129,7 @@ impl Default for PoseConfig {
             icp_iterations: 12,
             icp_reinit_residual: 0.035,
             reinit_yaws: vec![0.0],
+            feet_facing: true,
             torso_half_width: 0.16,
             torso_half_depth: 0.11,
             torso_bottom: -0.30,
@@ -145,7 +148,7 @@ impl Default for PoseConfig {
 
             head_top_height: 0.60,
             edge_min: 0.012,
-            edge_px: 6.0,
+            edge_px: 3.0,
             bridge_max: 0.35,
             bridge_occluder: 0.05,
             min_component: 8,

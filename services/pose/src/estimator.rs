@@ -334,6 +334,18 @@ impl PoseEstimator {
         let t4 = Instant::now();
         self.times.geodesic = (t4 - t3).as_secs_f64();
 
+        // The torso model cannot tell front from back, nor well a quarter turn; the feet
+        // can: toes point where the person faces.
+        if cfg.feet_facing {
+            if let Some(turned) = self.facing_from_feet(&torso, &maxima) {
+                torso = turned;
+                self.prev_torso = Some(torso);
+                kp = keypoints(&torso, cfg);
+                centre = kp[6];
+            }
+        }
+        let reg_pose = torso;
+
         // 5. Maxima to limbs by least total cost.
         let mut roots = [kp[0], kp[2], kp[3], kp[4], kp[5]];
         let mut inv = torso.inverse();
@@ -423,7 +435,7 @@ impl PoseEstimator {
             inv = torso.inverse();
         }
 
-        self.prev_offset = Some(fit.pose.r.inverse() * (fit.pose.t - fit.pca.t));
+        self.prev_offset = Some(reg_pose.r.inverse() * (reg_pose.t - fit.pca.t));
 
         // 6. Target points and chain fitting per limb.
         let mut skel = Skeleton::new([Point3::origin(); Joint::COUNT]);
@@ -571,6 +583,60 @@ impl PoseEstimator {
         let t5 = Instant::now();
         self.times.limbs = (t5 - t4).as_secs_f64();
         Some(skel)
+    }
+
+    /// The torso turned about its axis to face where the toes point, when the two
+    /// lowest maxima (the feet) agree on a direction more than 45° away from the
+    /// torso's; `None` to keep it.
+    fn facing_from_feet(&self, torso: &TorsoPose, maxima: &[u32]) -> Option<TorsoPose> {
+        let inv = torso.inverse();
+        let up = torso.r * Vector3::y();
+        let mut feet: Vec<(f32, u32)> = maxima
+            .iter()
+            .map(|&m| (inv.apply(&self.graph.pos[m as usize]).y, m))
+            .filter(|&(y, _)| y < -0.7)
+            .collect();
+        feet.sort_by(|a, b| a.0.total_cmp(&b.0));
+        if feet.len() < 2 {
+            return None;
+        }
+        let mut dirs = Vec::with_capacity(2);
+        for &(_, m) in &feet[..2] {
+            // Back along the geodesic path to about the ankle.
+            let toe = self.graph.pos[m as usize];
+            let d_toe = self.dist0[m as usize];
+            let mut a = m;
+            let mut guard = 0;
+            while a != NONE && d_toe.saturating_sub(self.dist0[a as usize]) < 150 && guard < 10_000
+            {
+                a = self.pred0[a as usize];
+                guard += 1;
+            }
+            if a == NONE {
+                return None;
+            }
+            let d = toe - self.graph.pos[a as usize];
+            let h = d - up * d.dot(&up);
+            if h.norm() < 0.05 {
+                return None;
+            }
+            dirs.push(h.normalize());
+        }
+        if dirs[0].dot(&dirs[1]) < 0.5 {
+            return None;
+        }
+        let feet_dir = (dirs[0] + dirs[1]).try_normalize(1e-6)?;
+        let fwd = torso.r * Vector3::z();
+        let fwd_h = (fwd - up * fwd.dot(&up)).try_normalize(1e-6)?;
+        let angle = fwd_h.cross(&feet_dir).dot(&up).atan2(fwd_h.dot(&feet_dir));
+        if angle.abs() < std::f32::consts::FRAC_PI_4 {
+            return None;
+        }
+        let turn = nalgebra::Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(up), angle);
+        Some(TorsoPose {
+            r: turn * torso.r,
+            t: torso.t,
+        })
     }
 
     /// Target points of a limb (seed Eq. 16.10): the person's points within `d_e` of
