@@ -15,6 +15,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
+    #[cfg_attr(not(feature = "openni2"), allow(unused_mut))]
     let mut listing = devices::list();
     #[cfg(feature = "openni2")]
     for uri in &args.openni2_uris {
