@@ -45,14 +45,11 @@ enum Command {
 }
 
 fn main() -> std::process::ExitCode {
-    tracing_subscriber::fmt()
-        .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()),
-        )
-        .with_writer(std::io::stderr)
-        .init();
-    let cli = Cli::parse();
-    let result: anyhow::Result<()> = match cli.command {
+    airglyph_ipc::process::main("airglyph", || dispatch(Cli::parse()))
+}
+
+fn dispatch(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
         Command::Demo(a) => cmd::demo::run(a),
         Command::Run(a) => cmd::run::run(a),
         Command::Spot(a) => cmd::spot::run(a),
@@ -66,12 +63,5 @@ fn main() -> std::process::ExitCode {
         Command::EvalSpotting(a) => cmd::eval_spotting::run(a),
         Command::Pose(a) => cmd::pose::run(a),
         Command::EvalPose(a) => cmd::eval_pose::run(a),
-    };
-    match result {
-        Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("airglyph: {e:#}");
-            std::process::ExitCode::FAILURE
-        }
     }
 }

@@ -31,23 +31,10 @@ struct Args {
 }
 
 fn main() -> std::process::ExitCode {
-    tracing_subscriber::fmt()
-        .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()),
-        )
-        .with_writer(std::io::stderr)
-        .init();
-    match run(Args::parse()) {
-        Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("airglyph-capture: {e:#}");
-            std::process::ExitCode::FAILURE
-        }
-    }
+    airglyph_ipc::process::main("airglyph-capture", || run(Args::parse()))
 }
 
 fn run(args: Args) -> anyhow::Result<()> {
-    shutdown::install();
     let opts = SourceOptions {
         pacing: if args.fast {
             Pacing::Fast

@@ -42,20 +42,7 @@ fn default_model() -> PathBuf {
 }
 
 fn main() -> std::process::ExitCode {
-    tracing_subscriber::fmt()
-        .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()),
-        )
-        .with_writer(std::io::stderr)
-        .init();
-    shutdown::install();
-    match run(Args::parse()) {
-        Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("airglyph-gesture: {e:#}");
-            std::process::ExitCode::FAILURE
-        }
-    }
+    airglyph_ipc::process::main("airglyph-gesture", || run(Args::parse()))
 }
 
 fn run(args: Args) -> anyhow::Result<()> {

@@ -29,20 +29,7 @@ struct Args {
 }
 
 fn main() -> std::process::ExitCode {
-    tracing_subscriber::fmt()
-        .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()),
-        )
-        .with_writer(std::io::stderr)
-        .init();
-    shutdown::install();
-    match run(Args::parse()) {
-        Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("airglyph-pose: {e:#}");
-            std::process::ExitCode::FAILURE
-        }
-    }
+    airglyph_ipc::process::main("airglyph-pose", || run(Args::parse()))
 }
 
 /// One estimator for the stream; remade when the camera changes.

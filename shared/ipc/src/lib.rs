@@ -16,6 +16,7 @@ pub mod clock;
 pub mod config;
 mod error;
 pub mod port;
+pub mod process;
 pub mod shutdown;
 pub mod stats;
 pub mod wire;
@@ -23,4 +24,6 @@ pub mod wire;
 pub use config::IpcConfig;
 pub use error::IpcError;
 pub use port::{DepthPublisher, Pipeline, Publisher, Received, Receiver, Stage};
-pub use wire::{DecisionMsg, DepthHeader, GestureEventMsg, LatencyChain, SkeletonMsg, StageStatsMsg};
+pub use wire::{
+    DecisionMsg, DepthHeader, GestureEventMsg, LatencyChain, SkeletonMsg, StageStatsMsg,
+};

@@ -3,7 +3,8 @@
 use crate::clock::monotonic_ns;
 use crate::stats::SequenceTracker;
 use crate::wire::{
-    DecisionMsg, DepthHeader, GestureEventMsg, HeaderError, MessageError, SkeletonMsg, StageStatsMsg,
+    DecisionMsg, DepthHeader, GestureEventMsg, HeaderError, MessageError, SkeletonMsg,
+    StageStatsMsg,
 };
 use crate::{IpcConfig, IpcError};
 use iceoryx2::port::listener::Listener;
@@ -87,7 +88,12 @@ const GESTURE: Settings = Settings {
     max_publishers: 2,
     max_subscribers: 8,
 };
-const DECISION: Settings = Settings { name: "airglyph/decision", buffer: 8, max_publishers: 2, max_subscribers: 8 };
+const DECISION: Settings = Settings {
+    name: "airglyph/decision",
+    buffer: 8,
+    max_publishers: 2,
+    max_subscribers: 8,
+};
 const STATS: Settings = Settings {
     name: "airglyph/stats",
     buffer: 4,
@@ -522,6 +528,42 @@ fn wait(listener: &Listener<Ipc>, ns: u64) -> Result<(), IpcError> {
     }
 }
 
+/// What every receiver does with its subscriber: block on the publisher's event with a
+/// deadline, and skip to the newest message when asked.
+trait Inbox {
+    type Item;
+    fn listener(&self) -> &Listener<Ipc>;
+    /// The next valid item already in the buffer.
+    fn take(&mut self) -> Result<Option<Self::Item>, IpcError>;
+    fn dropped(item: &mut Self::Item) -> &mut u64;
+
+    fn next_before(&mut self, timeout: Duration) -> Result<Option<Self::Item>, IpcError> {
+        let deadline = monotonic_ns() + timeout.as_nanos() as u64;
+        loop {
+            if let Some(item) = self.take()? {
+                return Ok(Some(item));
+            }
+            let now = monotonic_ns();
+            if now >= deadline {
+                return Ok(None);
+            }
+            wait(self.listener(), deadline - now)?;
+        }
+    }
+
+    fn newest_before(&mut self, timeout: Duration) -> Result<Option<Self::Item>, IpcError> {
+        let Some(mut newest) = self.next_before(timeout)? else {
+            return Ok(None);
+        };
+        while let Some(mut next) = self.take()? {
+            // The item we skip is lost to this stage too.
+            *Self::dropped(&mut next) += *Self::dropped(&mut newest) + 1;
+            newest = next;
+        }
+        Ok(Some(newest))
+    }
+}
+
 /// What a receiver hands out: a validated message and how many were lost before it.
 #[derive(Debug)]
 pub struct Received<T> {
@@ -550,17 +592,7 @@ impl<T: Message> Receiver<T> {
 
     /// The next valid message, or `None` if none arrives before `timeout`.
     pub fn recv(&mut self, timeout: Duration) -> Result<Option<Received<T>>, IpcError> {
-        let deadline = monotonic_ns() + timeout.as_nanos() as u64;
-        loop {
-            if let Some(r) = self.try_recv()? {
-                return Ok(Some(r));
-            }
-            let now = monotonic_ns();
-            if now >= deadline {
-                return Ok(None);
-            }
-            wait(&self.listener, deadline - now)?;
-        }
+        Inbox::next_before(self, timeout)
     }
 
     /// The next valid message already in the buffer, without blocking.
@@ -590,15 +622,20 @@ impl<T: Message> Receiver<T> {
 
     /// The newest valid message in the buffer, skipping (and counting as dropped) older ones.
     pub fn latest(&mut self, timeout: Duration) -> Result<Option<Received<T>>, IpcError> {
-        let Some(mut newest) = self.recv(timeout)? else {
-            return Ok(None);
-        };
-        while let Some(next) = self.try_recv()? {
-            // The frame we skip is lost to this stage too.
-            let dropped = newest.dropped + next.dropped + 1;
-            newest = Received { dropped, ..next };
-        }
-        Ok(Some(newest))
+        Inbox::newest_before(self, timeout)
+    }
+}
+
+impl<T: Message> Inbox for Receiver<T> {
+    type Item = Received<T>;
+    fn listener(&self) -> &Listener<Ipc> {
+        &self.listener
+    }
+    fn take(&mut self) -> Result<Option<Received<T>>, IpcError> {
+        self.try_recv()
+    }
+    fn dropped(item: &mut Received<T>) -> &mut u64 {
+        &mut item.dropped
     }
 }
 
@@ -675,30 +712,25 @@ impl DepthReceiver {
 
     /// The next valid frame, or `None` if none arrives before `timeout`.
     pub fn recv(&mut self, timeout: Duration) -> Result<Option<DepthFrame>, IpcError> {
-        let deadline = monotonic_ns() + timeout.as_nanos() as u64;
-        loop {
-            if let Some(f) = self.try_recv()? {
-                return Ok(Some(f));
-            }
-            let now = monotonic_ns();
-            if now >= deadline {
-                return Ok(None);
-            }
-            wait(&self.listener, deadline - now)?;
-        }
+        Inbox::next_before(self, timeout)
     }
 
     /// The newest valid frame, releasing older ones unprocessed (counted as dropped): a
     /// stage slower than the camera works on the present, not on a backlog.
     pub fn latest(&mut self, timeout: Duration) -> Result<Option<DepthFrame>, IpcError> {
-        let Some(mut newest) = self.recv(timeout)? else {
-            return Ok(None);
-        };
-        while let Some(next) = self.try_recv()? {
-            // The frame we skip is lost to this stage too.
-            let dropped = newest.dropped + next.dropped + 1;
-            newest = DepthFrame { dropped, ..next };
-        }
-        Ok(Some(newest))
+        Inbox::newest_before(self, timeout)
+    }
+}
+
+impl Inbox for DepthReceiver {
+    type Item = DepthFrame;
+    fn listener(&self) -> &Listener<Ipc> {
+        &self.listener
+    }
+    fn take(&mut self) -> Result<Option<DepthFrame>, IpcError> {
+        self.try_recv()
+    }
+    fn dropped(item: &mut DepthFrame) -> &mut u64 {
+        &mut item.dropped
     }
 }

@@ -1,0 +1,8 @@
+//! Trajectory JSONL on arbitrary bytes.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| {
+    let _ = airglyph_gesture::data::parse_jsonl(data, std::path::Path::new("fuzz.jsonl"));
+});
