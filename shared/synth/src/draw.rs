@@ -1,5 +1,5 @@
 //! Air-drawing: the right hand traces each symbol on a plane in front of the body by
-//! arm IK, at a natural speed (1–1.5 s a symbol, minimum-jerk timing), with idle and
+//! arm IK (written as the person sees it, so mirrored in the camera's view), at a natural speed (1–1.5 s a symbol, minimum-jerk timing), with idle and
 //! random non-gesture hand movement between symbols. The left arm hangs.
 //!
 //! Timeline of one symbol: idle at rest (0.4–1.0 s), in half the cases a random

@@ -2,7 +2,7 @@
 //! trajectory JSONL reader (DESIGN.md "Files") for drawing real samples instead.
 //!
 //! A template is a list of strokes (pen-down ink) in a unit box, x right and y down,
-//! as the camera sees it. An air-drawn symbol is its strokes joined by the hand's travel
+//! as the writer sees it (air-drawing mirrors it for the camera facing the writer). An air-drawn symbol is its strokes joined by the hand's travel
 //! between them: [`Glyph::path`].
 
 use crate::error::SynthError;

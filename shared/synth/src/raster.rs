@@ -74,10 +74,12 @@ impl Raster {
                 std::mem::swap(&mut a, &mut c);
                 area = -area;
             }
-            let x0 = a[0].min(b[0]).min(c[0]).max(0.0).ceil();
-            let x1 = a[0].max(b[0]).max(c[0]).min(maxx).floor();
-            let y0 = a[1].min(b[1]).min(c[1]).max(0.0).ceil();
-            let y1 = a[1].max(b[1]).max(c[1]).min(maxy).floor();
+            // (ceil/floor of non-negative values by integer conversion: the libm calls
+            // were a tenth of the frame time in the profile.)
+            let x0 = ceil_pos(a[0].min(b[0]).min(c[0]).max(0.0));
+            let x1 = floor_pos(a[0].max(b[0]).max(c[0]).min(maxx));
+            let y0 = ceil_pos(a[1].min(b[1]).min(c[1]).max(0.0));
+            let y1 = floor_pos(a[1].max(b[1]).max(c[1]).min(maxy));
             if !(x0 <= x1 && y0 <= y1) {
                 continue;
             }
@@ -127,5 +129,26 @@ impl Raster {
                 }
             }
         }
+    }
+}
+
+/// `x.ceil()` for finite `x` in [0, 2²⁴).
+#[inline]
+fn ceil_pos(x: f32) -> f32 {
+    let t = x as i32 as f32;
+    if t < x {
+        t + 1.0
+    } else {
+        t
+    }
+}
+
+/// `x.floor()` for `x` ≥ 0 (negative values, an empty range anyway, give -1).
+#[inline]
+fn floor_pos(x: f32) -> f32 {
+    if x < 0.0 {
+        -1.0
+    } else {
+        x as i32 as f32
     }
 }

@@ -63,7 +63,7 @@ fn synth_gesture(s: &Synthesizer, f: usize) -> Option<String> {
 }
 
 #[test]
-fn the_hand_traces_the_symbol_as_the_camera_sees_it() {
+fn the_hand_traces_the_symbol_mirrored_as_the_camera_sees_it() {
     let mut synth = Synthesizer::new(draw("L", None, false)).unwrap();
     let g = synth.gestures()[0].clone();
     let k = synth.intrinsics();
@@ -73,16 +73,17 @@ fn the_hand_traces_the_symbol_as_the_camera_sees_it() {
             k.project(&p).unwrap()
         })
         .collect();
-    // "L": down, then right (image coordinates).
+    // The person writes "L" as they see it: down, then to their right, which the camera
+    // facing them sees mirrored: down, then left in the image.
     let (start, end) = (uv[0], uv[uv.len() - 1]);
     let corner = uv
         .iter()
         .copied()
-        .max_by(|a, b| (a.1 - a.0).total_cmp(&(b.1 - b.0)))
+        .max_by(|a, b| (a.1 + a.0).total_cmp(&(b.1 + b.0)))
         .unwrap();
     assert!(corner.1 - start.1 > 40.0, "{start:?} -> {corner:?}");
     assert!((corner.0 - start.0).abs() < 12.0, "{start:?} -> {corner:?}");
-    assert!(end.0 - corner.0 > 25.0, "{corner:?} -> {end:?}");
+    assert!(corner.0 - end.0 > 25.0, "{corner:?} -> {end:?}");
     assert!((end.1 - corner.1).abs() < 12.0, "{corner:?} -> {end:?}");
     // The hand is in front of the body while drawing.
     let (_, t) = synth.render((g.start_frame + g.end_frame) / 2);
