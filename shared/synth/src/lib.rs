@@ -42,6 +42,31 @@
 //! Frames: frame `i` is at time `i / fps`; [`Synthesizer::len`] is `None` for endless
 //! motion (scripted poses, repeating air-drawing: the live demo) and `Some(n)` for a
 //! clip or a finite list of symbols. Frames past the end hold the last pose.
+//!
+//! Frames of reference: the person's [`Pose`] lives in the body frame (metres, y up,
+//! facing +z, +x the person's left, floor y = 0); [`Placement`] puts it in front of the
+//! camera (by default 2.7 m away, camera 1 m high, facing it), and everything reported
+//! ([`FrameTruth::skeleton`]) is in airglyph-core's camera frame (x right, y down, z
+//! forward). Facing the camera, the person's left is on the image's right. An
+//! air-drawn symbol is written as the person sees it, so the camera sees it mirrored.
+//!
+//! The calls other crates make:
+//!
+//! ```text
+//! Synthesizer::new(cfg: SceneConfig) -> Result<Synthesizer, SynthError>
+//! synth.render_into(index: usize, depth: &mut [u16]) -> Result<FrameTruth, SynthError>
+//! synth.render(index: usize) -> (DepthImage, FrameTruth)
+//! synth.len() -> Option<usize>          synth.intrinsics() -> Intrinsics
+//! synth.fps() -> f32                    synth.gestures() -> Vec<GestureTruth>
+//! synth.labels() -> &[u8]               (per pixel: the Bone seen, or raster::NO_LABEL)
+//! write_recording(cfg, frames, dir: &Path, progress: impl FnMut(usize))
+//!     -> Result<RecordingSummary, SynthError>   (+ joints.csv, gestures.csv)
+//! makehuman::default_assets_dir() -> PathBuf;  makehuman::assets_present(&Path) -> bool
+//! ```
+//!
+//! Benchmark (`cargo bench -p airglyph-synth`): skinning + rendering the MakeHuman body
+//! (13,380 vertices, 26,756 triangles) at 640×480 on one thread runs at 700+ frames/s on
+//! a quiet machine (≈ 960 frames per CPU second); the rasterizer takes 80% of it.
 
 pub mod body;
 pub mod bvh;

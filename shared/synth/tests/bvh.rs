@@ -452,3 +452,29 @@ fn the_cmu_clips_load_when_installed() {
         assert!(poses.iter().all(|p| p.root.y > 0.0 && p.root.y < 2.5));
     }
 }
+
+#[test]
+fn truncated_or_garbled_bvh_never_panics() {
+    let good = write_bvh(
+        &skeleton(Convention::MotionBuilder, true),
+        &test_frames(Convention::MotionBuilder),
+        [0.0, 95.0, 0.0],
+        0.01,
+    );
+    for end in (0..good.len()).step_by(3) {
+        let _ = BvhClip::parse(Path::new("t.bvh"), &good[..end]);
+    }
+    for (i, bad) in ["nan", "-1e39", "{", "}", "JOINT", "End", "9999999999"]
+        .iter()
+        .enumerate()
+    {
+        let mut words: Vec<&str> = good.split(' ').collect();
+        for k in (i..words.len()).step_by(17) {
+            words[k] = bad;
+        }
+        let text = words.join(" ");
+        if let Ok(clip) = BvhClip::parse(Path::new("t.bvh"), &text) {
+            let _ = clip.retarget(body().tpose(), 30.0);
+        }
+    }
+}
