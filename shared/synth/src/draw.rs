@@ -24,6 +24,7 @@ pub(crate) struct Drawing {
     gestures: Vec<GestureTruth>,
     repeat: bool,
     pole: Vector3<f32>,
+    sway: crate::motion::Sway,
 }
 
 /// Minimum-jerk timing: 0 → 1 with zero speed and acceleration at both ends.
@@ -177,6 +178,7 @@ impl Drawing {
             gestures,
             repeat: d.repeat,
             pole: Vector3::new(-1.0, -1.2, -0.4),
+            sway: crate::motion::Sway::new(seed, fps),
         })
     }
 
@@ -197,6 +199,7 @@ impl Drawing {
         let (_, i) = self.cycle(frame);
         let mut p = self.rest;
         poses::arm_ik(&self.sk, &mut p, Side::Right, self.targets[i], &self.pole);
+        self.sway.apply(&mut p, frame);
         p
     }
 

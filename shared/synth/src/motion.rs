@@ -9,7 +9,8 @@ use std::path::PathBuf;
 /// What the person does.
 #[derive(Debug, Clone, PartialEq)]
 pub enum MotionSpec {
-    /// Cycles through every [`ScriptedPose`] (1 s each, 0.5 s blends); endless.
+    /// Cycles through every [`ScriptedPose`] (1 s each, 0.5 s blends, with a slow
+    /// seeded sway of the body); endless.
     Poses,
     /// Holds one scripted pose; endless.
     Pose(ScriptedPose),
@@ -33,6 +34,40 @@ pub struct DrawSpec {
     pub repeat: bool,
 }
 
+/// Standing still is never still: a slow seeded sway of the whole body (a few degrees
+/// of turn, a centimetre or two of weight shift) over endless and air-drawing motion.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Sway {
+    phase: [f32; 3],
+    period_s: [f32; 3],
+    fps: f32,
+}
+
+impl Sway {
+    pub(crate) fn new(seed: u64, fps: f32) -> Self {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x5157_4159);
+        Self {
+            phase: [0.0; 3].map(|_| rng.gen_range(0.0..std::f32::consts::TAU)),
+            period_s: [
+                rng.gen_range(4.0..7.0),
+                rng.gen_range(5.0..9.0),
+                rng.gen_range(3.0..6.0),
+            ],
+            fps,
+        }
+    }
+
+    pub(crate) fn apply(&self, p: &mut Pose, frame: usize) {
+        let t = frame as f32 / self.fps;
+        let w = |i: usize| (std::f32::consts::TAU * t / self.period_s[i] + self.phase[i]).sin();
+        let turn = 2.5f32.to_radians() * w(0);
+        p.root.x += 0.015 * w(1);
+        p.root.z += 0.01 * w(2);
+        p.rotate_all(crate::poses::yaw(turn));
+    }
+}
+
 /// A label and its frames, inclusive.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct GestureTruth {
@@ -47,6 +82,7 @@ pub(crate) enum Motion {
         poses: Vec<Pose>,
         hold: usize,
         blend: usize,
+        sway: Sway,
     },
     Clip(Vec<Pose>),
     Draw(Box<crate::draw::Drawing>),
@@ -65,6 +101,7 @@ impl Motion {
                 poses: ScriptedPose::ALL.iter().map(|p| p.pose(sk)).collect(),
                 hold: (fps * 1.0).round().max(1.0) as usize,
                 blend: (fps * 0.5).round().max(1.0) as usize,
+                sway: Sway::new(seed, fps),
             },
             MotionSpec::Bvh(path) => {
                 let clip = crate::bvh::BvhClip::load(path)?;
@@ -87,17 +124,24 @@ impl Motion {
     pub(crate) fn pose(&self, frame: usize) -> Pose {
         match self {
             Motion::Static(p) => **p,
-            Motion::Cycle { poses, hold, blend } => {
+            Motion::Cycle {
+                poses,
+                hold,
+                blend,
+                sway,
+            } => {
                 let period = hold + blend;
                 let i = (frame / period) % poses.len();
                 let t = frame % period;
-                if t < *hold {
+                let mut p = if t < *hold {
                     poses[i]
                 } else {
                     let s = (t - hold) as f32 / *blend as f32;
                     let s = s * s * (3.0 - 2.0 * s);
                     poses[i].lerp(&poses[(i + 1) % poses.len()], s)
-                }
+                };
+                sway.apply(&mut p, frame);
+                p
             }
             Motion::Clip(c) => c[frame.min(c.len().saturating_sub(1))],
             Motion::Draw(d) => d.pose(frame),
