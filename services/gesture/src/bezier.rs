@@ -109,7 +109,7 @@ mod tests {
     fn endpoints_are_interpolated_and_high_degree_is_stable() {
         let ctrl: Vec<Point> = (0..400)
             .map(|i| {
-                let a = i as f32 / 400.0 * 6.28;
+                let a = i as f32 / 400.0 * std::f32::consts::TAU;
                 [1000.0 * a.cos(), 1000.0 * a.sin()]
             })
             .collect();
@@ -117,7 +117,9 @@ mod tests {
         assert_eq!(b.len(), 15);
         assert!((b[0][0] - 1000.0).abs() < 1e-6);
         assert!((b[14][0] - ctrl[399][0] as f64).abs() < 1e-3);
-        assert!(b.iter().all(|p| p[0].is_finite() && p[0].abs() <= 1000.0 + 1e-6));
+        assert!(b
+            .iter()
+            .all(|p| p[0].is_finite() && p[0].abs() <= 1000.0 + 1e-6));
     }
 
     #[test]

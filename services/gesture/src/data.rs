@@ -188,7 +188,10 @@ pub fn load_jsonl(path: &Path) -> Result<Vec<Sample>, DataError> {
     drop(file);
     let file = std::fs::File::open(path).map_err(io)?;
     let samples = if n == 2 && magic == [0x1f, 0x8b] {
-        parse_jsonl(BufReader::new(flate2::read::MultiGzDecoder::new(file)), path)?
+        parse_jsonl(
+            BufReader::new(flate2::read::MultiGzDecoder::new(file)),
+            path,
+        )?
     } else {
         parse_jsonl(BufReader::new(file), path)?
     };
@@ -226,7 +229,7 @@ pub fn folds_by_subject(samples: &[Sample], k: usize, seed: u64) -> Vec<usize> {
     let mut subjects: Vec<(&str, usize)> = counts.into_iter().collect();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     subjects.shuffle(&mut rng);
-    subjects.sort_by(|a, b| b.1.cmp(&a.1));
+    subjects.sort_by_key(|s| std::cmp::Reverse(s.1));
     let mut load = vec![0usize; k];
     let mut fold_of: BTreeMap<&str, usize> = BTreeMap::new();
     for (subj, n) in subjects {
@@ -262,9 +265,10 @@ mod tests {
 
     #[test]
     fn empty_stroke_is_an_error_with_line() {
-        let e = parse("{\"label\":\"1\",\"strokes\":[[[0,0]]]}\n{\"label\":\"7\",\"strokes\":[[]]}")
-            .unwrap_err()
-            .to_string();
+        let e =
+            parse("{\"label\":\"1\",\"strokes\":[[[0,0]]]}\n{\"label\":\"7\",\"strokes\":[[]]}")
+                .unwrap_err()
+                .to_string();
         assert!(e.contains("mem.jsonl:2"), "{e}");
         assert!(e.contains("empty"), "{e}");
     }

@@ -23,7 +23,8 @@ impl DtwClassifier {
     }
 
     pub fn add(&mut self, t: &Trajectory, class: usize) {
-        self.templates.push((resample(t, self.points).points, class));
+        self.templates
+            .push((resample(t, self.points).points, class));
     }
 
     /// The class of the nearest template (None without templates).

@@ -60,7 +60,7 @@ impl Confusion {
                 }
             }
         }
-        v.sort_by(|a, b| b.2.cmp(&a.2));
+        v.sort_by_key(|x| std::cmp::Reverse(x.2));
         v.truncate(k);
         v
     }

@@ -121,7 +121,11 @@ pub fn feature_vector(t: &Trajectory, cfg: &FeatureConfig, out: &mut Vec<f32>) {
         let b = r.points[(i + 1).min(n - 1)];
         let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
         let l = (dx * dx + dy * dy).sqrt();
-        let (c, s) = if l > 1e-6 { (dx / l, dy / l) } else { (0.0, 0.0) };
+        let (c, s) = if l > 1e-6 {
+            (dx / l, dy / l)
+        } else {
+            (0.0, 0.0)
+        };
         let up = if cfg.pen_up && r.pen_up[i] { 1.0 } else { 0.0 };
         out.extend_from_slice(&[p[0] * 2.0, p[1] * 2.0, c, s, up]);
     }
@@ -139,7 +143,11 @@ pub fn feature_vector(t: &Trajectory, cfg: &FeatureConfig, out: &mut Vec<f32>) {
             if l < 1e-7 {
                 continue;
             }
-            let w = if fine.pen_up[i] && cfg.pen_up { 0.5 } else { 1.0 };
+            let w = if fine.pen_up[i] && cfg.pen_up {
+                0.5
+            } else {
+                1.0
+            };
             // Direction split between the two nearest of 8 bins.
             let mut ang = dy.atan2(dx);
             if ang < 0.0 {
@@ -252,7 +260,10 @@ mod tests {
                 [a.cos(), a.sin()]
             })
             .collect();
-        let big: Vec<Point> = pts.iter().map(|p| [p[0] * 300.0 + 7.0, p[1] * 300.0]).collect();
+        let big: Vec<Point> = pts
+            .iter()
+            .map(|p| [p[0] * 300.0 + 7.0, p[1] * 300.0])
+            .collect();
         let (mut f1, mut f2) = (Vec::new(), Vec::new());
         feature_vector(&Trajectory::from_points(pts), &cfg, &mut f1);
         feature_vector(&Trajectory::from_points(big), &cfg, &mut f2);

@@ -94,10 +94,16 @@ impl DiscreteHmm {
         check(&self.pi, "initial distribution")?;
         for i in 0..n {
             if self.a[i].len() != n {
-                return Err(format!("transition row {i} has {} entries, expected {n}", self.a[i].len()));
+                return Err(format!(
+                    "transition row {i} has {} entries, expected {n}",
+                    self.a[i].len()
+                ));
             }
             if self.b[i].len() != m {
-                return Err(format!("emission row {i} has {} entries, expected {m}", self.b[i].len()));
+                return Err(format!(
+                    "emission row {i} has {} entries, expected {m}",
+                    self.b[i].len()
+                ));
             }
             check(&self.a[i], &format!("transition row {i}"))?;
             check(&self.b[i], &format!("emission row {i}"))?;
@@ -310,11 +316,9 @@ impl DiscreteHmm {
                         }
                         for j in 0..n {
                             if self.a[i][j] > 0.0 {
-                                num_a[i][j] += ai
-                                    * self.a[i][j]
-                                    * self.b[j][s[t + 1]]
-                                    * beta[(t + 1) * n + j]
-                                    / scale[t + 1];
+                                num_a[i][j] +=
+                                    ai * self.a[i][j] * self.b[j][s[t + 1]] * beta[(t + 1) * n + j]
+                                        / scale[t + 1];
                             }
                         }
                     }

@@ -17,6 +17,9 @@
 //! # Ok(()) }
 //! ```
 
+// Numeric code indexes several arrays with one index; iterators would obscure it.
+#![allow(clippy::needless_range_loop)]
+
 pub mod bezier;
 pub mod crf;
 pub mod data;

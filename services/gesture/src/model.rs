@@ -227,7 +227,10 @@ impl Model {
                         .validate()
                         .map_err(|e| format!("HMM of label {:?}: {e}", m.label))?;
                     if m.hmm.n_symbols() < 8 {
-                        return Err(format!("HMM of label {:?} has fewer than 8 symbols", m.label));
+                        return Err(format!(
+                            "HMM of label {:?} has fewer than 8 symbols",
+                            m.label
+                        ));
                     }
                 }
             }

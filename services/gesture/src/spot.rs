@@ -14,13 +14,13 @@
 
 use crate::data::{Sample, Trajectory};
 use crate::features::{feature_vector, resample, FeatureConfig};
-use crate::mlp::{Mlp, MlpTrainConfig};
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
 use crate::hmm::{DiscreteHmm, HmmTrainConfig};
+use crate::mlp::{Mlp, MlpTrainConfig};
 use crate::model::{LabelledHmm, Model};
 use crate::tracker::{Hand, HandPoint, HandTracker, TrackerConfig};
 use airglyph_core::Skeleton;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -53,7 +53,11 @@ impl Verifier {
     pub fn log_p_gesture(&self, points: &[[f32; 2]]) -> f64 {
         let mut f = Vec::with_capacity(self.features.dim() + 1);
         verifier_features(points, &self.features, &mut f);
-        self.net.log_probs(&f).get(1).copied().unwrap_or(f32::NEG_INFINITY) as f64
+        self.net
+            .log_probs(&f)
+            .get(1)
+            .copied()
+            .unwrap_or(f32::NEG_INFINITY) as f64
     }
 
     /// Trains on the samples (positives) and movement around them (negatives).
@@ -76,9 +80,10 @@ impl Verifier {
         };
         let feats = |epoch: usize, i: usize| {
             let mut rng = ChaCha8Rng::seed_from_u64(
-                seed ^ ((epoch as u64).wrapping_mul(0x1000_0001)) ^ (i as u64).wrapping_mul(0x9E37_79B9),
+                seed ^ ((epoch as u64).wrapping_mul(0x1000_0001))
+                    ^ (i as u64).wrapping_mul(0x9E37_79B9),
             );
-            let pts = verifier_example(&shapes, i / 2, i % 2 == 0, &mut rng);
+            let pts = verifier_example(&shapes, i / 2, i.is_multiple_of(2), &mut rng);
             let mut f = Vec::new();
             verifier_features(&pts, &features, &mut f);
             f
@@ -167,10 +172,28 @@ fn verifier_example(
             let n = g.len();
             let keep = ((n as f32) * rng.gen_range(0.3..0.85)) as usize;
             let keep = keep.clamp(2, n);
-            if rng.gen_bool(0.5) {
+            let part = if rng.gen_bool(0.5) {
                 g[..keep].to_vec()
             } else {
                 g[n - keep..].to_vec()
+            };
+            // Part of a gesture, sometimes with movement before or after it.
+            match rng.gen_range(0..3) {
+                0 => part,
+                1 => {
+                    let l = rng.gen_range(0.1..0.8);
+                    let mut v = lead(rng, part[0], l);
+                    v.extend(part);
+                    v
+                }
+                _ => {
+                    let l = rng.gen_range(0.1..0.8);
+                    let mut t = lead(rng, part[part.len() - 1], l);
+                    t.reverse();
+                    let mut v = part;
+                    v.extend(t);
+                    v
+                }
             }
         }
     }
@@ -182,7 +205,9 @@ impl SpottingModel {
             return Err(format!("spotting step {} is not in (0, 1)", self.step));
         }
         if let Some(v) = &self.verifier {
-            v.net.validate().map_err(|e| format!("spotting verifier: {e}"))?;
+            v.net
+                .validate()
+                .map_err(|e| format!("spotting verifier: {e}"))?;
             if v.net.inputs() != v.features.dim() + 1 || v.net.outputs() != 2 {
                 return Err("spotting verifier has the wrong dimensions".into());
             }
@@ -314,8 +339,11 @@ pub struct SpotterConfig {
     pub min_score: f64,
     /// Smallest verifier probability that the segment is a whole gesture.
     pub min_gesture_prob: f64,
-    /// Boundary refinement: try start/end moved by up to this many codes.
+    /// Boundary search: starts up to 3 × this many codes around the candidate's.
     pub refine: usize,
+    /// Log-score bonus per code in the boundary search (prefers the longer of two
+    /// segments that both look like whole gestures).
+    pub length_bonus: f64,
     pub tracker: TrackerConfig,
 }
 
@@ -331,8 +359,9 @@ impl Default for SpotterConfig {
             min_codes: 6,
             max_codes: 120,
             min_score: 0.5,
-            min_gesture_prob: 0.5,
-            refine: 4,
+            min_gesture_prob: 0.7,
+            refine: 6,
+            length_bonus: 0.02,
             tracker: TrackerConfig::default(),
         }
     }
@@ -452,7 +481,11 @@ impl Spotter {
         thr_stay.push(0.9f64.ln());
         thr_leave.push(0.1f64.ln());
         for k in 0..m {
-            thr_log_b.push(if k == REST_CODE { 0.9f64.ln() } else { (0.1 / 8.0f64).ln() });
+            thr_log_b.push(if k == REST_CODE {
+                0.9f64.ln()
+            } else {
+                (0.1 / 8.0f64).ln()
+            });
         }
         let nthr = thr_stay.len();
         let step = (sm.step as f32) * cfg.gesture_size;
@@ -545,7 +578,9 @@ impl Spotter {
         let first_pt = self
             .obs
             .first()
-            .map_or(self.pts_base + self.pts.len().saturating_sub(1), |o| o.point)
+            .map_or(self.pts_base + self.pts.len().saturating_sub(1), |o| {
+                o.point
+            })
             .saturating_sub(1);
         if first_pt > self.pts_base + 256 {
             let drop = first_pt - self.pts_base;
@@ -670,71 +705,109 @@ impl Spotter {
         (i1 < self.pts.len() && i0 < i1).then_some((i0, i1))
     }
 
-    /// Scores the segment of codes s..=e: (verifier log P(gesture) + log classifier
-    /// score, P(gesture), class, classifier score, first point, last point).
-    fn judge(&self, s: usize, e: usize) -> Option<(f64, f64, usize, f64, usize, usize)> {
+    /// The hand points of codes s..=e in gesture-size units, with their point range.
+    fn segment_points(&self, s: usize, e: usize) -> Option<(Vec<[f32; 2]>, usize, usize)> {
         if e <= s || e >= self.obs_base + self.obs.len() || e + 1 - s < self.cfg.min_codes {
             return None;
         }
         let (i0, i1) = self.segment(s, e)?;
         let inv = 1.0 / self.cfg.gesture_size.max(1e-3);
-        let pts: Vec<[f32; 2]> = self.pts[i0..=i1]
+        let pts = self.pts[i0..=i1]
             .iter()
             .map(|p| [p.0[0] * inv, p.0[1] * inv])
             .collect();
-        let verifier = self.model.spotting.as_ref().and_then(|m| m.verifier.as_ref());
-        let lpg = verifier.map_or(0.0, |v| v.log_p_gesture(&pts));
-        let cl = self.model.classify(&Trajectory::from_points(pts));
-        Some((lpg + cl.score.max(1e-12).ln(), lpg.exp(), cl.class, cl.score, i0, i1))
+        Some((pts, i0, i1))
     }
 
-    /// Classifies a candidate with its boundaries refined: a coarse search over starts
-    /// around the candidate's and ends up to its end, then a fine one around the best.
+    /// Classifies a candidate with its boundaries refined: the verifier scores segments
+    /// starting around the candidate's start and ending anywhere up to now (coarse grid,
+    /// then a fine one around the best); the best few are classified, and the segment
+    /// with the largest log P(gesture) + log P(class) wins.
     /// Returns the gesture (if accepted) and the last code it used.
     fn publish(&self, c: Candidate) -> (Option<SpottedGesture>, usize) {
         let r = self.cfg.refine as isize;
-        let better = |b: &Option<(f64, f64, usize, f64, usize, usize, usize)>, v: f64| {
-            b.is_none_or(|b| v > b.0)
+        let verifier = self
+            .model
+            .spotting
+            .as_ref()
+            .and_then(|m| m.verifier.as_ref());
+        let now = (self.obs_base + self.obs.len()) as isize - 1;
+        // Verifier log-probability plus a small bonus per code: of two segments that
+        // both look whole, the longer explains more (a "4" rather than its last stroke).
+        let bonus = self.cfg.length_bonus;
+        let lpg = |s: isize, e: isize| -> Option<f64> {
+            if s < self.barrier as isize || e < 0 {
+                return None;
+            }
+            let (pts, _, _) = self.segment_points(s as usize, e as usize)?;
+            Some(verifier.map_or(0.0, |v| v.log_p_gesture(&pts)) + bonus * (e - s) as f64)
         };
-        let mut best: Option<(f64, f64, usize, f64, usize, usize, usize)> = None;
-        let (s0, s1) = (c.start as isize - r, c.start as isize + 3 * r);
-        let (e0, e1) = (
-            c.start as isize + self.cfg.min_codes as isize,
-            (self.obs_base + self.obs.len()) as isize - 1,
-        );
-        let mut s = s0;
-        while s <= s1 {
-            let mut e = e0.max(s + 1);
-            while e <= e1 {
-                if s >= 0 {
-                    if let Some(j) = self.judge(s as usize, e as usize) {
-                        if better(&best, j.0) {
-                            best = Some((j.0, j.1, j.2, j.3, j.4, j.5, e as usize));
+        // (log P(gesture), start, end)
+        // Verifier scores on a grid (stride 2), smoothed over the four grid neighbours
+        // so that a single spurious peak does not win.
+        let s_lo = c.start as isize - 3 * r;
+        let s_hi = c.start as isize + 3 * r;
+        let e_lo = s_lo + self.cfg.min_codes as isize;
+        let ns = ((s_hi - s_lo) / 2 + 1).max(0) as usize;
+        let ne = ((now - e_lo) / 2 + 1).max(0) as usize;
+        let mut grid = vec![f64::NAN; ns * ne];
+        for si in 0..ns {
+            for ei in 0..ne {
+                let (s, e) = (s_lo + 2 * si as isize, e_lo + 2 * ei as isize);
+                if let Some(v) = lpg(s, e) {
+                    grid[si * ne + ei] = v;
+                }
+            }
+        }
+        let mut scored: Vec<(f64, isize, isize)> = Vec::new();
+        for si in 0..ns {
+            for ei in 0..ne {
+                let v = grid[si * ne + ei];
+                if v.is_nan() {
+                    continue;
+                }
+                let mut acc = v;
+                let mut n = 1.0;
+                for (dsi, dei) in [(-1isize, 0isize), (1, 0), (0, -1), (0, 1)] {
+                    let (a, b) = (si as isize + dsi, ei as isize + dei);
+                    if a >= 0 && b >= 0 && (a as usize) < ns && (b as usize) < ne {
+                        let w = grid[a as usize * ne + b as usize];
+                        if !w.is_nan() {
+                            acc += w;
+                            n += 1.0;
                         }
                     }
                 }
-                e += 2;
+                scored.push((acc / n, s_lo + 2 * si as isize, e_lo + 2 * ei as isize));
             }
-            s += 2;
         }
-        let Some(coarse) = best else {
+        scored.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let Some(&(_, bs, be)) = scored.first() else {
             return (None, c.end);
         };
-        // Fine search around the coarse optimum (its start is recovered from the point).
-        let cs = (c.start as isize - r..=c.start as isize + 3 * r)
-            .find(|&s| s >= 0 && self.segment(s as usize, coarse.6).map(|x| x.0) == Some(coarse.4))
-            .unwrap_or(c.start as isize);
+        // The fine step keeps the smoothed optimum and adds its unsmoothed neighbours.
+        scored.truncate(1);
         for ds in -1..=1isize {
             for de in -1..=1isize {
-                let (s, e) = (cs + ds, coarse.6 as isize + de);
-                if s < 0 || e < 0 {
-                    continue;
-                }
-                if let Some(j) = self.judge(s as usize, e as usize) {
-                    if better(&best, j.0) {
-                        best = Some((j.0, j.1, j.2, j.3, j.4, j.5, e as usize));
+                if (ds, de) != (0, 0) {
+                    if let Some(v) = lpg(bs + ds, be + de) {
+                        scored.push((v, bs + ds, be + de));
                     }
                 }
+            }
+        }
+        scored.sort_by(|a, b| b.0.total_cmp(&a.0));
+        // (combined, P(gesture), class, score, i0, i1, end code)
+        let mut best: Option<(f64, f64, usize, f64, usize, usize, usize)> = None;
+        for &(v, s, e) in scored.iter().take(if verifier.is_some() { 3 } else { 1 }) {
+            let Some((pts, i0, i1)) = self.segment_points(s as usize, e as usize) else {
+                continue;
+            };
+            let cl = self.model.classify(&Trajectory::from_points(pts));
+            let comb = v + cl.score.max(1e-12).ln();
+            let p_gesture = (v - bonus * (e - s) as f64).exp();
+            if best.is_none_or(|b| comb > b.0) {
+                best = Some((comb, p_gesture, cl.class, cl.score, i0, i1, e as usize));
             }
         }
         let Some((_, p_gesture, class, score, i0, i1, used_end)) = best else {

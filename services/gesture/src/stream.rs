@@ -24,6 +24,8 @@ pub struct StreamConfig {
     pub noise: f32,
     /// Distance of the person from the camera, metres.
     pub distance: f32,
+    /// Probability that the hand pauses (0.1–0.3 s) before and after a gesture.
+    pub pause_prob: f64,
 }
 
 impl Default for StreamConfig {
@@ -35,6 +37,7 @@ impl Default for StreamConfig {
             moves: (1, 3),
             noise: 0.004,
             distance: 2.2,
+            pause_prob: 0.3,
         }
     }
 }
@@ -80,7 +83,12 @@ fn walk(points: &mut Vec<[f32; 2]>, path: &[[f32; 2]], step: f32) {
 
 /// A smooth random movement from `from` to `to` through random curves (quadratic Bezier
 /// pieces through `segments − 1` random waypoints).
-pub fn random_path<R: Rng>(rng: &mut R, from: [f32; 2], to: [f32; 2], segments: usize) -> Vec<[f32; 2]> {
+pub fn random_path<R: Rng>(
+    rng: &mut R,
+    from: [f32; 2],
+    to: [f32; 2],
+    segments: usize,
+) -> Vec<[f32; 2]> {
     let mut way = vec![from];
     for _ in 1..segments {
         way.push([rng.gen_range(-1.2..1.6), rng.gen_range(-0.8..1.6)]);
@@ -111,7 +119,11 @@ pub fn random_path<R: Rng>(rng: &mut R, from: [f32; 2], to: [f32; 2], segments: 
 }
 
 /// Builds one stream from the samples, in the given order.
-pub fn build_stream<R: Rng>(samples: &[&Sample], cfg: &StreamConfig, rng: &mut R) -> SyntheticStream {
+pub fn build_stream<R: Rng>(
+    samples: &[&Sample],
+    cfg: &StreamConfig,
+    rng: &mut R,
+) -> SyntheticStream {
     let step = cfg.speed / cfg.fps;
     let mut s = SyntheticStream::default();
     let mut pos = [rng.gen_range(-0.5..0.5), rng.gen_range(0.5..1.2)];
@@ -130,15 +142,19 @@ pub fn build_stream<R: Rng>(samples: &[&Sample], cfg: &StreamConfig, rng: &mut R
         let moves = rng.gen_range(cfg.moves.0..=cfg.moves.1);
         let path = random_path(rng, pos, g[0], moves);
         walk(&mut s.points, &path, step * rng.gen_range(0.8..1.3));
-        if rng.gen_bool(0.3) {
-            let last = *s.points.last().unwrap_or(&pos);
-            for _ in 0..rng.gen_range(1..10) {
-                s.points.push(last);
+        let pause = |s: &mut SyntheticStream, rng: &mut R| {
+            if rng.gen_bool(cfg.pause_prob) {
+                let last = *s.points.last().unwrap_or(&pos);
+                for _ in 0..rng.gen_range(3..10) {
+                    s.points.push(last);
+                }
             }
-        }
+        };
+        pause(&mut s, rng);
         let start = s.points.len() as u64;
         walk(&mut s.points, &g, step);
         let end = s.points.len().saturating_sub(1) as u64;
+        pause(&mut s, rng);
         s.truth.push(TruthGesture {
             label: sample.label.clone(),
             start,
@@ -219,7 +235,9 @@ pub fn score(truth: &[TruthGesture], spotted: &[SpottedGesture]) -> SpottingScor
             let lo = t.start.max(g.start_seq);
             let hi = t.end.min(g.end_seq);
             let ov = hi.saturating_sub(lo) as f64;
-            let shorter = (t.end - t.start).min(g.end_seq.saturating_sub(g.start_seq)).max(1) as f64;
+            let shorter = (t.end - t.start)
+                .min(g.end_seq.saturating_sub(g.start_seq))
+                .max(1) as f64;
             if hi > lo && ov >= 0.5 * shorter {
                 found = Some(i);
                 break;

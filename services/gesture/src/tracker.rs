@@ -241,7 +241,11 @@ pub fn skeleton_with_hand(x: f32, y: f32, distance: f32) -> Skeleton {
     set(&mut j, Joint::LeftElbow, [0.22, -0.05, z]);
     set(&mut j, Joint::LeftHand, [0.24, 0.2, z]);
     set(&mut j, Joint::RightHand, [-x * sw, -0.3 + y * sw, z - 0.35]);
-    set(&mut j, Joint::RightElbow, [-0.2 - x * sw * 0.3, -0.1, z - 0.15]);
+    set(
+        &mut j,
+        Joint::RightElbow,
+        [-0.2 - x * sw * 0.3, -0.1, z - 0.15],
+    );
     set(&mut j, Joint::LeftHip, [0.1, 0.22, z]);
     set(&mut j, Joint::RightHip, [-0.1, 0.22, z]);
     set(&mut j, Joint::LeftKnee, [0.1, 0.65, z]);
@@ -262,7 +266,10 @@ mod tests {
         let pa = a.update(&skeleton_with_hand(0.4, -0.2, 2.0), 0).unwrap();
         let pb = b.update(&skeleton_with_hand(0.4, -0.2, 3.5), 0).unwrap();
         assert_eq!(pa.hand, Hand::Right);
-        assert!((pa.x - 0.4).abs() < 1e-4 && (pa.y + 0.2).abs() < 1e-4, "{pa:?}");
+        assert!(
+            (pa.x - 0.4).abs() < 1e-4 && (pa.y + 0.2).abs() < 1e-4,
+            "{pa:?}"
+        );
         assert!((pa.x - pb.x).abs() < 1e-4 && (pa.y - pb.y).abs() < 1e-4);
     }
 

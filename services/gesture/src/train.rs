@@ -104,7 +104,11 @@ pub enum TrainError {
 pub type Progress<'a> = &'a (dyn Fn(u64, u64) + Sync);
 
 /// Trains a model on the samples.
-pub fn train(samples: &[Sample], cfg: &TrainConfig, progress: Progress) -> Result<Model, TrainError> {
+pub fn train(
+    samples: &[Sample],
+    cfg: &TrainConfig,
+    progress: Progress,
+) -> Result<Model, TrainError> {
     if samples.is_empty() {
         return Err(TrainError::NoSamples);
     }
@@ -124,10 +128,7 @@ pub fn train(samples: &[Sample], cfg: &TrainConfig, progress: Progress) -> Resul
                 .map(|s| bezier_codes(&s.trajectory().points, cfg.bezier_points, cfg.zero_frac))
                 .collect();
             let symbols = if cfg.zero_frac > 0.0 { 9 } else { 8 };
-            let hcfg = HmmTrainConfig {
-                symbols,
-                ..cfg.hmm
-            };
+            let hcfg = HmmTrainConfig { symbols, ..cfg.hmm };
             let done = std::sync::atomic::AtomicU64::new(0);
             let models = labels
                 .par_iter()

@@ -36,6 +36,9 @@ pub struct Args {
     /// Seconds of pure random movement to test for insertions.
     #[arg(long, default_value_t = 300.0)]
     pub random_seconds: f32,
+    /// Probability that the hand pauses briefly before and after each gesture.
+    #[arg(long, default_value_t = 0.3)]
+    pub pause_prob: f64,
     /// Print every drawn and spotted gesture (to stderr).
     #[arg(long)]
     pub verbose: bool,
@@ -84,7 +87,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut rng = ChaCha8Rng::seed_from_u64(args.seed);
     known.shuffle(&mut rng);
     known.truncate(args.gestures.max(1));
-    let cfg = StreamConfig::default();
+    if !(0.0..=1.0).contains(&args.pause_prob) {
+        bail!("--pause-prob {} is not in [0, 1]", args.pause_prob);
+    }
+    let cfg = StreamConfig {
+        pause_prob: args.pause_prob,
+        ..StreamConfig::default()
+    };
     let scfg = spotter_config(args.spotter.as_deref())?;
     let per = args.per_stream.max(1);
     let chunks: Vec<(u64, Vec<&Sample>)> = known
@@ -104,12 +113,27 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             let s = build_stream(c, &cfg, &mut r);
             let spotted = run_stream(&model, &scfg, &s, &cfg)?;
             if args.verbose {
+                let mut tr = airglyph_gesture::HandTracker::new(Default::default());
+                let dt = (1e9 / cfg.fps as f64) as u64;
+                let filtered: Vec<[f32; 2]> = (0..s.points.len())
+                    .map(|i| {
+                        let p = tr.update(&s.skeleton(i, cfg.distance), i as u64 * dt);
+                        p.map_or([0.0, 0.0], |p| [p.x, p.y])
+                    })
+                    .collect();
                 for t in &s.truth {
-                    let seg = &s.points[t.start as usize..=t.end as usize];
+                    let seg = &filtered[t.start as usize..=t.end as usize];
                     let oracle = model.classify(&airglyph_gesture::stream::trajectory(seg));
+                    let v = model.spotting.as_ref().and_then(|m| m.verifier.as_ref());
+                    let pg = |a: i64, b: i64| {
+                        let a = (t.start as i64 + a).max(0) as usize;
+                        let b = ((t.end as i64 + b).max(0) as usize).min(filtered.len() - 1);
+                        v.map_or(0.0, |v| v.log_p_gesture(&filtered[a..=b.max(a + 1)]).exp())
+                    };
                     eprintln!(
-                        "drawn   {:>4} {:>6}..{:<6} (classified alone: {})",
-                        t.label, t.start, t.end, model.labels[oracle.class]
+                        "drawn   {:>4} {:>6}..{:<6} (classified alone: {}) pg {:.2} | s-10 {:.2} s+10 {:.2} e-10 {:.2} e+10 {:.2} s-20 {:.2} e+20 {:.2}",
+                        t.label, t.start, t.end, model.labels[oracle.class],
+                        pg(0, 0), pg(-10, 0), pg(10, 0), pg(0, -10), pg(0, 10), pg(-20, 0), pg(0, 20)
                     );
                 }
                 for g in &spotted {

@@ -36,6 +36,10 @@ pub struct Args {
     pub pen_up: bool,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Keep the classifier of this model (same labels) and retrain only the spotting
+    /// part (HMMs and verifier).
+    #[arg(long)]
+    pub reuse_classifier: Option<PathBuf>,
 }
 
 /// The training configuration the arguments describe.
@@ -87,7 +91,27 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         bar.set_length(total);
         bar.set_position(done);
     };
-    let model = train(&samples, &cfg, &progress)?;
+    let model = match &args.reuse_classifier {
+        None => train(&samples, &cfg, &progress)?,
+        Some(path) => {
+            let mut old = airglyph_gesture::Model::load(path)?;
+            let labels = airglyph_gesture::data::labels_of(&samples);
+            if labels != old.labels {
+                anyhow::bail!(
+                    "{}: its labels differ from the data's; cannot reuse its classifier",
+                    path.display()
+                );
+            }
+            bar.set_message("spotting");
+            old.spotting = Some(airglyph_gesture::spot::SpottingModel::train(
+                &samples,
+                &labels,
+                cfg.spotting_step,
+                cfg.spotting_states,
+            ));
+            old
+        }
+    };
     bar.finish_and_clear();
     model
         .save(&args.out)
