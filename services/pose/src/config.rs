@@ -151,7 +151,7 @@ impl Default for PoseConfig {
             edge_px: 3.0,
             bridge_max: 0.35,
             bridge_occluder: 0.05,
-            min_component: 8,
+            min_component: 20,
             min_extremity: 0.12,
             max_maxima: 8,
 
