@@ -425,7 +425,11 @@ impl PoseEstimator {
             let dy = top.y - cfg.head_top_height;
             // Only a head top straight above the torso, not far off, is trusted; the
             // registration of the next frame starts from the unanchored pose.
-            if dy.abs() < 0.15 && top.x.abs() < 0.12 && top.z.abs() < 0.2 {
+            // A head cut by the image border has its top out of sight.
+            let px = self.graph.pixel_of_node[maxima[mi] as usize] as usize;
+            let (pu, pv) = (px % w, px / w);
+            let inside = pu > 2 && pv > 2 && pu + 3 < w && pv + 3 < h;
+            if inside && dy.abs() < 0.15 && top.x.abs() < 0.12 && top.z.abs() < 0.2 {
                 torso.t += torso.r * nalgebra::Vector3::new(0.0, dy, 0.0);
             }
             self.debug.torso_pose = Some(torso);
