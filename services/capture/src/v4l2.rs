@@ -64,12 +64,23 @@ pub fn device_nodes() -> Vec<PathBuf> {
 pub fn list_devices() -> Vec<V4l2Listing> {
     let mut out = Vec::new();
     for path in device_nodes() {
-        match describe(&path) {
+        match guarded(&path, || describe(&path)) {
             Ok(l) => out.push(l),
             Err(e) => tracing::debug!(device = %path.display(), "{e}"),
         }
     }
     out
+}
+
+/// Runs `f`, turning a panic inside the v4l crate (it unwraps driver strings as UTF-8)
+/// into an error about that device.
+fn guarded<T>(path: &Path, f: impl FnOnce() -> Result<T, String>) -> Result<T, String> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)).unwrap_or_else(|_| {
+        Err(format!(
+            "{}: the driver returned data the v4l crate cannot read",
+            path.display()
+        ))
+    })
 }
 
 fn fourcc_text(f: &FourCC) -> String {
@@ -263,6 +274,21 @@ pub struct V4l2Source {
 
 impl V4l2Source {
     pub fn open(path: &Path, cam: &CameraOptions) -> Result<Self, SourceError> {
+        let mut fatal_msg = None;
+        let r = guarded(path, || {
+            Self::open_unguarded(path, cam).map_err(|e| {
+                fatal_msg = Some(e);
+                String::new()
+            })
+        });
+        match (r, fatal_msg) {
+            (Ok(s), _) => Ok(s),
+            (Err(_), Some(e)) => Err(e),
+            (Err(m), None) => Err(fatal(m)),
+        }
+    }
+
+    fn open_unguarded(path: &Path, cam: &CameraOptions) -> Result<Self, SourceError> {
         let name = path.display().to_string();
         if cam.start.is_some() {
             return Err(fatal(format!(
