@@ -60,6 +60,8 @@ fn main() {
     }
     let mut local = [nalgebra::Vector3::<f32>::zeros(); Joint::COUNT];
     let mut nlocal = [0f32; Joint::COUNT];
+    let mut cpu = 0.0f64;
+    let mut ncpu = 0usize;
     let mut bias = [nalgebra::Vector3::<f32>::zeros(); Joint::COUNT];
     for i in 0..n {
         let (img, truth) = synth.render(i);
@@ -68,11 +70,15 @@ fn main() {
             probe(&img, 300);
         }
         let t = Instant::now();
+        let c0 = cpu_seconds();
         let r = est.estimate(img.view());
+        let c1 = cpu_seconds();
         if !airglyph_pose::metrics::in_view(&truth.skeleton, &k) {
             continue;
         }
         ev.seconds += t.elapsed().as_secs_f64();
+        cpu += c1 - c0;
+        ncpu += 1;
         let fe = ev.add(&r, &truth.skeleton);
         if let (true, Some(tp)) = (r.person_found, est.debug().torso_pose) {
             let inv = tp.inverse();
@@ -145,6 +151,11 @@ fn main() {
         let lo = local[j.index()] / nlocal[j.index()].max(1.0);
         println!("{:15} e_j {:6.2} cm  bias ({:6.2} {:6.2} {:6.2}) cm  truth in torso frame [{:.3}, {:.3}, {:.3}]", j.name(), s.per_joint_cm[j.name()], b.x, b.y, b.z, lo.x, lo.y, lo.z);
     }
+    eprintln!(
+        "thread CPU time per frame {:.3} ms = {:.0} frames/s on one core",
+        cpu / ncpu.max(1) as f64 * 1e3,
+        ncpu as f64 / cpu.max(1e-9)
+    );
     let t = est.step_times();
     eprintln!("last frame steps: {t:?}");
 }
@@ -156,4 +167,15 @@ pub fn probe(img: &airglyph_core::DepthImage, u: u32) {
         s += &format!("{} ", img.get(u, v));
     }
     eprintln!("col {u}: {s}");
+}
+
+/// CPU time of this thread, seconds (unaffected by other processes on the machine).
+fn cpu_seconds() -> f64 {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: clock_gettime writes into the timespec we own.
+    unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+    ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9
 }
