@@ -68,14 +68,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                     );
                 } else {
                     let mark = if *drawn == label { "✓" } else { "✗" };
-                    println!("drew {drawn}  →  recognized {label}  {mark}  (score {:.2})", e.score);
+                    println!(
+                        "drew {drawn}  →  recognized {label}  {mark}  (score {:.2})",
+                        e.score
+                    );
                 }
                 recognized[i] = Some((label, e.score));
             }
             _ => {
                 stray += 1;
                 if json {
-                    println!("{}", serde_json::json!({"drawn": null, "recognized": label, "score": e.score}));
+                    println!(
+                        "{}",
+                        serde_json::json!({"drawn": null, "recognized": label, "score": e.score})
+                    );
                 } else {
                     println!("(spotted {label} while no symbol was drawn)");
                 }
@@ -104,8 +110,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .zip(&recognized)
         .filter(|(t, r)| r.as_ref().is_some_and(|(l, _)| *l == t.label))
         .count();
-    let missed: Vec<&str> =
-        truth.iter().zip(&recognized).filter(|(_, r)| r.is_none()).map(|(t, _)| t.label.as_str()).collect();
+    let missed: Vec<&str> = truth
+        .iter()
+        .zip(&recognized)
+        .filter(|(_, r)| r.is_none())
+        .map(|(t, _)| t.label.as_str())
+        .collect();
     if args.json {
         println!(
             "{}",
@@ -115,8 +125,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         println!(
             "{correct} of {} symbols recognized{}{}",
             truth.len(),
-            if missed.is_empty() { String::new() } else { format!("; not spotted: {}", missed.join(" ")) },
-            if stray > 0 { format!("; {stray} spotted between symbols") } else { String::new() }
+            if missed.is_empty() {
+                String::new()
+            } else {
+                format!("; not spotted: {}", missed.join(" "))
+            },
+            if stray > 0 {
+                format!("; {stray} spotted between symbols")
+            } else {
+                String::new()
+            }
         );
     }
     Ok(())

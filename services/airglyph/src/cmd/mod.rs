@@ -1,11 +1,11 @@
 //! One module a subcommand: its clap `Args` and a `run(args) -> anyhow::Result<()>`.
 
+pub mod demo;
 pub mod devices;
 pub mod eval_gestures;
 pub mod eval_pose;
 pub mod eval_spotting;
 pub mod pose;
-pub mod demo;
 pub mod profile;
 pub mod record;
 pub mod run;

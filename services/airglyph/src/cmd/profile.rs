@@ -51,10 +51,16 @@ const MEASURES: [(&str, fn(&FrameTimes) -> Option<u64>); 7] = [
     ("capture_processing", |f| span(f.capture, f.capture_publish)),
     ("pose_waiting", |f| span(f.capture_publish, f.pose_receive)),
     ("pose_processing", |f| span(f.pose_receive, f.pose_publish)),
-    ("gesture_waiting", |f| span(f.pose_publish, f.gesture_receive)),
-    ("gesture_processing", |f| span(f.gesture_receive, f.gesture_publish)),
+    ("gesture_waiting", |f| {
+        span(f.pose_publish, f.gesture_receive)
+    }),
+    ("gesture_processing", |f| {
+        span(f.gesture_receive, f.gesture_publish)
+    }),
     ("capture_to_skeleton", |f| span(f.capture, f.skeleton_seen)),
-    ("capture_to_decision", |f| span(f.capture, f.gesture_publish)),
+    ("capture_to_decision", |f| {
+        span(f.capture, f.gesture_publish)
+    }),
 ];
 
 fn span(from: u64, to: u64) -> Option<u64> {
@@ -67,7 +73,8 @@ fn quantile(sorted: &[u64], q: f64) -> f64 {
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     shutdown::install();
-    std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
     let mut pipeline_child = match &args.source {
         Some(source) => {
             let exe = std::env::current_exe()?;
@@ -94,8 +101,10 @@ fn measure(args: &Args) -> anyhow::Result<()> {
     let pipeline = Pipeline::join("profile")?;
     let mut skeletons = pipeline.skeleton_receiver()?;
     let mut decisions = pipeline.decision_receiver()?;
-    let mut stats: Vec<_> =
-        Stage::PIPELINE.iter().map(|&s| Ok((s, pipeline.stats_receiver(s)?))).collect::<anyhow::Result<_>>()?;
+    let mut stats: Vec<_> = Stage::PIPELINE
+        .iter()
+        .map(|&s| Ok((s, pipeline.stats_receiver(s)?)))
+        .collect::<anyhow::Result<_>>()?;
     let mut frames: BTreeMap<(u64, u64), FrameTimes> = BTreeMap::new();
     let mut first_stats: BTreeMap<&str, StageStatsMsg> = BTreeMap::new();
     let mut last_stats: BTreeMap<&str, StageStatsMsg> = BTreeMap::new();
@@ -106,15 +115,23 @@ fn measure(args: &Args) -> anyhow::Result<()> {
         if let Some(r) = skeletons.recv(Duration::from_millis(20))? {
             let c = r.msg.chain;
             let f = frames.entry((r.msg.session, r.msg.sequence)).or_default();
-            (f.capture, f.capture_publish, f.pose_receive, f.pose_publish) =
-                (c.capture_ns, c.capture_publish_ns, c.pose_receive_ns, c.pose_publish_ns);
+            (f.capture, f.capture_publish, f.pose_receive, f.pose_publish) = (
+                c.capture_ns,
+                c.capture_publish_ns,
+                c.pose_receive_ns,
+                c.pose_publish_ns,
+            );
             f.skeleton_seen = r.receive_ns;
         }
         while let Some(r) = decisions.try_recv()? {
             let c = r.msg.chain;
             let f = frames.entry((r.msg.session, r.msg.sequence)).or_default();
-            (f.capture, f.capture_publish, f.pose_receive, f.pose_publish) =
-                (c.capture_ns, c.capture_publish_ns, c.pose_receive_ns, c.pose_publish_ns);
+            (f.capture, f.capture_publish, f.pose_receive, f.pose_publish) = (
+                c.capture_ns,
+                c.capture_publish_ns,
+                c.pose_receive_ns,
+                c.pose_publish_ns,
+            );
             (f.gesture_receive, f.gesture_publish) = (c.gesture_receive_ns, c.gesture_publish_ns);
         }
         for (stage, rx) in stats.iter_mut() {
@@ -138,7 +155,12 @@ fn measure(args: &Args) -> anyhow::Result<()> {
             continue;
         }
         v.sort_unstable();
-        let (p50, p90, p99, max) = (quantile(&v, 0.5), quantile(&v, 0.9), quantile(&v, 0.99), quantile(&v, 1.0));
+        let (p50, p90, p99, max) = (
+            quantile(&v, 0.5),
+            quantile(&v, 0.9),
+            quantile(&v, 0.99),
+            quantile(&v, 1.0),
+        );
         csv += &format!("{name},{},{p50:.3},{p90:.3},{p99:.3},{max:.3}\n", v.len());
         summary.insert(
             name.into(),
@@ -165,7 +187,10 @@ fn measure(args: &Args) -> anyhow::Result<()> {
         "latency": summary,
         "stages": drops,
     });
-    std::fs::write(args.out.join("profile.json"), serde_json::to_string_pretty(&report)?)?;
+    std::fs::write(
+        args.out.join("profile.json"),
+        serde_json::to_string_pretty(&report)?,
+    )?;
     std::fs::write(args.out.join("summary.csv"), csv.as_bytes())?;
     write_frames_csv(&args.out.join("frames.csv"), &frames)?;
     if args.json {
@@ -216,7 +241,11 @@ fn histogram_png(path: &Path, title: &str, sorted_ns: &[u64]) -> anyhow::Result<
         .x_label_area_size(40)
         .y_label_area_size(50)
         .build_cartesian_2d(0.0..hi, 0.0..top)?;
-    chart.configure_mesh().x_desc("ms").y_desc("frames").draw()?;
+    chart
+        .configure_mesh()
+        .x_desc("ms")
+        .y_desc("frames")
+        .draw()?;
     chart.draw_series(counts.iter().enumerate().map(|(i, &c)| {
         let x0 = i as f64 * width;
         Rectangle::new([(x0, 0.0), (x0 + width, c as f64)], BLUE.mix(0.6).filled())
@@ -228,7 +257,11 @@ fn histogram_png(path: &Path, title: &str, sorted_ns: &[u64]) -> anyhow::Result<
             .label(format!("p{} = {x:.2} ms", (q * 100.0) as u32))
             .legend(move |(x, y)| PathElement::new([(x, y), (x + 15, y)], color));
     }
-    chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw()?;
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()?;
     root.present()?;
     Ok(())
 }

@@ -148,13 +148,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 /// the first frames are not sent to nobody.
 fn start_in_order(stages: &mut [Supervised], pipeline: &Pipeline) -> anyhow::Result<()> {
     let has = |stages: &[Supervised], st: Stage| stages.iter().any(|s| s.stage == st);
-    let (depth0, skeleton0) = (pipeline.depth_subscribers()?, pipeline.skeleton_subscribers()?);
+    let (depth0, skeleton0) = (
+        pipeline.depth_subscribers()?,
+        pipeline.skeleton_subscribers()?,
+    );
     for s in stages.iter_mut().filter(|s| s.stage != Stage::Capture) {
         s.spawn()?;
     }
     let ready = |p: &Pipeline| -> anyhow::Result<bool> {
-        Ok((!has(stages, Stage::Pose) || p.depth_subscribers()? > depth0)
-            && (!has(stages, Stage::Gesture) || p.skeleton_subscribers()? > skeleton0))
+        Ok(
+            (!has(stages, Stage::Pose) || p.depth_subscribers()? > depth0)
+                && (!has(stages, Stage::Gesture) || p.skeleton_subscribers()? > skeleton0),
+        )
     };
     let deadline = Instant::now() + Duration::from_secs(15);
     while !ready(pipeline)? && !shutdown::requested() {
@@ -223,7 +228,13 @@ pub fn run_with(args: Args, mut on_event: impl FnMut(&GestureEventMsg)) -> anyho
         None
     };
     start_in_order(&mut stages, &pipeline)?;
-    let outcome = supervise(&mut stages, &pipeline, gestures.as_mut(), &args, &mut on_event);
+    let outcome = supervise(
+        &mut stages,
+        &pipeline,
+        gestures.as_mut(),
+        &args,
+        &mut on_event,
+    );
     for s in stages.iter_mut() {
         s.stop();
     }

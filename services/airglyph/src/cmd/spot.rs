@@ -32,7 +32,13 @@ fn read_gestures_csv(path: &Path) -> anyhow::Result<Vec<GestureTruth>> {
     let mut out = Vec::new();
     for (i, line) in text.lines().enumerate().skip(1) {
         let f: Vec<&str> = line.split(',').collect();
-        let bad = || anyhow::anyhow!("{}:{}: expected label,start_frame,end_frame", path.display(), i + 1);
+        let bad = || {
+            anyhow::anyhow!(
+                "{}:{}: expected label,start_frame,end_frame",
+                path.display(),
+                i + 1
+            )
+        };
         if f.len() != 3 {
             return Err(bad());
         }
@@ -56,7 +62,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut estimator = PoseEstimator::new(k, PoseConfig::default());
     let mut px = vec![0u16; k.width as usize * k.height as usize];
     let truth_path = args.dir.join("gestures.csv");
-    let truth = if truth_path.exists() { read_gestures_csv(&truth_path)? } else { Vec::new() };
+    let truth = if truth_path.exists() {
+        read_gestures_csv(&truth_path)?
+    } else {
+        Vec::new()
+    };
     let mut recognized = vec![None; truth.len()];
     let mut spotted = 0;
     for i in 0..rec.len() {
@@ -68,7 +78,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             r.person_found.then_some(r.skeleton)
         };
         let Some(s) = skeleton else { continue };
-        let Some(g) = spotter.push(&s, i as u64, rec.capture_ns(i)) else { continue };
+        let Some(g) = spotter.push(&s, i as u64, rec.capture_ns(i)) else {
+            continue;
+        };
         spotted += 1;
         let drawn = drawn_for(&truth, g.start_seq, g.end_seq);
         if let Some(d) = drawn {
@@ -93,12 +105,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     }
     if !truth.is_empty() {
-        let correct = truth.iter().zip(&recognized).filter(|(t, r)| r.as_deref() == Some(t.label.as_str())).count();
-        let summary = serde_json::json!({"drawn": truth.len(), "correct": correct, "spotted": spotted});
+        let correct = truth
+            .iter()
+            .zip(&recognized)
+            .filter(|(t, r)| r.as_deref() == Some(t.label.as_str()))
+            .count();
+        let summary =
+            serde_json::json!({"drawn": truth.len(), "correct": correct, "spotted": spotted});
         if args.json {
             println!("{summary}");
         } else {
-            println!("{correct} of {} drawn symbols recognized ({spotted} gestures spotted)", truth.len());
+            println!(
+                "{correct} of {} drawn symbols recognized ({spotted} gestures spotted)",
+                truth.len()
+            );
         }
     }
     Ok(())
