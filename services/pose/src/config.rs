@@ -167,9 +167,9 @@ impl Default for PoseConfig {
             shin: 0.382,
             neck_to_head: 0.104,
             surface_offset_arm: 0.03,
-            surface_offset_leg: 0.05,
+            surface_offset_leg: 0.065,
             surface_offset_head: 0.07,
-            unassigned_cost: 0.8,
+            unassigned_cost: 1.2,
             temporal_weight: 0.3,
             occluded_decay: 0.7,
         }
