@@ -46,8 +46,11 @@ struct FrameTimes {
     gesture_publish: u64,
 }
 
+/// A measure of the report: its name and how to take it from one frame's times.
+type Measure = (&'static str, fn(&FrameTimes) -> Option<u64>);
+
 /// The measures of the report, each a difference of two frame times.
-const MEASURES: [(&str, fn(&FrameTimes) -> Option<u64>); 7] = [
+const MEASURES: [Measure; 7] = [
     ("capture_processing", |f| span(f.capture, f.capture_publish)),
     ("pose_waiting", |f| span(f.capture_publish, f.pose_receive)),
     ("pose_processing", |f| span(f.pose_receive, f.pose_publish)),
