@@ -412,8 +412,8 @@ mod tests {
             }
         }
         // A separate small piece, far from the rest in depth.
-        for v in 0..3 {
-            for u in 0..3 {
+        for v in 0..5 {
+            for u in 0..5 {
                 pts[v * w + u] = k.back_project(u as f32, v as f32, 2.6);
             }
         }
