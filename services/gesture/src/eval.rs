@@ -78,7 +78,7 @@ impl Confusion {
             .margin(10)
             .x_label_area_size(40)
             .y_label_area_size(40)
-            .build_cartesian_2d(0..n, 0..n)
+            .build_cartesian_2d((0..n - 1).into_segmented(), (0..n - 1).into_segmented())
             .map_err(|e| err(&e))?;
         let labels = self.labels.clone();
         let labels2 = self.labels.clone();
@@ -89,12 +89,13 @@ impl Confusion {
             .y_labels(n)
             .x_desc("predicted")
             .y_desc("true")
-            .x_label_formatter(&move |i| labels.get(*i).cloned().unwrap_or_default())
-            .y_label_formatter(&move |i| {
-                labels2
-                    .get(n.saturating_sub(1 + *i))
-                    .cloned()
-                    .unwrap_or_default()
+            .x_label_formatter(&move |v| match v {
+                SegmentValue::CenterOf(i) => labels.get(*i).cloned().unwrap_or_default(),
+                _ => String::new(),
+            })
+            .y_label_formatter(&move |v| match v {
+                SegmentValue::CenterOf(i) if *i < n => labels2[n - 1 - *i].clone(),
+                _ => String::new(),
             })
             .draw()
             .map_err(|e| err(&e))?;
@@ -111,11 +112,41 @@ impl Confusion {
                     255,
                 );
                 let y = n - 1 - i;
-                rects.push(Rectangle::new([(j, y), (j + 1, y + 1)], c.filled()));
+                rects.push(Rectangle::new(
+                    [
+                        (SegmentValue::Exact(j), SegmentValue::Exact(y)),
+                        (SegmentValue::Exact(j + 1), SegmentValue::Exact(y + 1)),
+                    ],
+                    c.filled(),
+                ));
             }
         }
         chart.draw_series(rects).map_err(|e| err(&e))?;
         root.present().map_err(|e| err(&e))?;
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn confusion_counts_and_plot() {
+        let mut c = Confusion::new(vec!["a".into(), "b".into(), "c".into()]);
+        c.add(0, 0);
+        c.add(0, 1);
+        c.add(1, 1);
+        c.add(2, 2);
+        assert_eq!(c.total(), 4);
+        assert!((c.accuracy() - 0.75).abs() < 1e-12);
+        assert_eq!(c.recall()[0].1, Some(0.5));
+        assert_eq!(c.top_confusions(1), vec![("a".into(), "b".into(), 1)]);
+        let dir = std::env::temp_dir().join(format!("ag-conf-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("c.png");
+        c.plot(&path, "test").unwrap();
+        assert!(std::fs::metadata(&path).unwrap().len() > 100);
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

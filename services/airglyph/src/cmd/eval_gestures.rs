@@ -236,25 +236,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         bar.finish_and_clear();
     } else {
-        let map: Vec<usize> = model
-            .labels
-            .iter()
-            .map(|l| labels.iter().position(|x| x == l).unwrap_or(usize::MAX))
-            .collect();
-        let mut conf = Confusion::new(labels.clone());
+        // The model's own labels (a superset of the data's).
+        let mut conf = Confusion::new(model.labels.clone());
         let preds: Vec<usize> = samples
             .par_iter()
             .map(|s| model.classify(&s.trajectory()).class)
             .collect();
         for (s, p) in samples.iter().zip(preds) {
-            let t = labels.iter().position(|l| *l == s.label).unwrap_or(0);
-            // A prediction outside the data's labels counts as wrong.
-            let pr = map[p];
-            if pr == usize::MAX {
-                conf.add(t, (t + 1) % labels.len().max(1));
-            } else {
-                conf.add(t, pr);
-            }
+            conf.add(model.label_index(&s.label).unwrap_or(0), p);
         }
         let timed = samples.len().min(500);
         let t0 = Instant::now();
