@@ -72,7 +72,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                     overlay::skeleton(&mut im, &k, &r.skeleton, overlay::RED);
                 }
                 let p = d.join(format!("overlay_{i:06}.png"));
-                im.save(&p).with_context(|| format!("writing {}", p.display()))?;
+                im.save(&p)
+                    .with_context(|| format!("writing {}", p.display()))?;
             }
         }
         bar.inc(1);
@@ -141,7 +142,7 @@ fn plot_frames(ev: &PoseEval, path: &Path) -> anyhow::Result<()> {
         .map_err(plot_err)?;
     chart
         .configure_mesh()
-        .x_desc("frame")
+        .x_desc("frame (of those in view)")
         .y_desc("error (cm)")
         .draw()
         .map_err(plot_err)?;
