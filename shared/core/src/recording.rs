@@ -283,20 +283,19 @@ impl Recording {
     }
 }
 
-fn read_lines(path: &Path) -> Result<impl Iterator<Item = (usize, String)>, RecordingError> {
+fn read_lines(path: &Path) -> Result<Vec<(usize, String)>, RecordingError> {
     let file = File::open(path).map_err(|e| RecordingError::io(path, e))?;
-    let path = path.to_owned();
-    Ok(BufReader::new(file)
+    BufReader::new(file)
         .lines()
         .enumerate()
-        .map_while(move |(i, l)| match l {
-            Ok(l) => Some((i + 1, l)),
-            Err(e) => {
-                // An unreadable line ends the file early; the row-count checks then report it.
-                eprintln!("{}:{}: {e}", path.display(), i + 1);
-                None
-            }
-        }))
+        .map(|(i, l)| {
+            l.map(|l| (i + 1, l)).map_err(|e| RecordingError::Csv {
+                path: path.to_owned(),
+                line: i + 1,
+                reason: e.to_string(),
+            })
+        })
+        .collect()
 }
 
 fn read_frames_csv(path: &Path) -> Result<Vec<u64>, RecordingError> {
@@ -633,6 +632,21 @@ mod tests {
         let err = Recording::open(tmp.path()).unwrap_err().to_string();
         assert!(
             err.contains("frames.csv:4") && err.contains("not after"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn a_csv_line_that_is_not_utf8_is_named() {
+        let tmp = tempfile::tempdir().unwrap();
+        write(tmp.path(), 1, true);
+        let csv = tmp.path().join("joints.csv");
+        let mut bytes = fs::read(&csv).unwrap();
+        bytes.extend_from_slice(b"1,\xff\xfe\n");
+        fs::write(&csv, bytes).unwrap();
+        let err = Recording::open(tmp.path()).unwrap_err().to_string();
+        assert!(
+            err.contains("joints.csv:3") && err.contains("UTF-8"),
             "{err}"
         );
     }
