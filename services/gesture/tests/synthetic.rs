@@ -193,5 +193,8 @@ fn spotter_finds_gestures_in_a_stream_and_none_in_random_movement() {
     }
     // The random paths turn sharply at their waypoints, which can pass for a corner of
     // a square or a zigzag: at most one false alarm in a minute.
-    assert!(spotted.len() <= 1, "gestures spotted in random movement: {spotted:?}");
+    assert!(
+        spotted.len() <= 1,
+        "gestures spotted in random movement: {spotted:?}"
+    );
 }
