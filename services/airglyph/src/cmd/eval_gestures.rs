@@ -85,7 +85,7 @@ impl Method {
 
 /// A trained predictor of class indices into `labels`.
 enum Predictor {
-    Model(Model, Vec<usize>),
+    Model(Box<Model>, Vec<usize>),
     Dtw(DtwClassifier),
 }
 
@@ -127,7 +127,7 @@ fn fit(method: &Method, train_set: &[Sample], labels: &[String]) -> anyhow::Resu
         .iter()
         .map(|l| labels.iter().position(|x| x == l).unwrap_or(0))
         .collect();
-    Ok(Predictor::Model(model, map))
+    Ok(Predictor::Model(Box::new(model), map))
 }
 
 struct Outcome {
