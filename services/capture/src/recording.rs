@@ -85,12 +85,14 @@ impl DepthSource for RecordingSource {
         if self.opts.pacing == Pacing::Realtime {
             self.wait_until_due(index);
         }
+        // Decoding is part of capture's latency.
+        let capture_ns = monotonic_ns();
         self.recording
             .read_frame_into(index, out)
             .map_err(|e| SourceError::Skipped(e.to_string()))?;
         self.last = Some(index);
         Ok(Some(Frame {
-            capture_ns: monotonic_ns(),
+            capture_ns,
             source_ns: self.recording.capture_ns(index),
         }))
     }

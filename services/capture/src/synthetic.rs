@@ -131,13 +131,16 @@ impl DepthSource for SyntheticSource {
                 std::thread::sleep(Duration::from_nanos(due - now));
             }
         }
+        // The virtual shutter closes now; rendering is the sensor's readout, part of
+        // capture's latency.
+        let capture_ns = monotonic_ns();
         let truth = self
             .synth
             .render_into(index, out)
             .map_err(|e| SourceError::Fatal(e.to_string()))?;
         self.last = Some(truth.skeleton);
         Ok(Some(Frame {
-            capture_ns: monotonic_ns(),
+            capture_ns,
             source_ns: truth.capture_ns,
         }))
     }
