@@ -195,23 +195,29 @@ mod tests {
 
     #[test]
     fn bad_intrinsics_are_refused() {
-        let mut k = Intrinsics::default();
-        k.fx = f32::NAN;
+        let k = Intrinsics {
+            fx: f32::NAN,
+            ..Intrinsics::default()
+        };
         assert!(matches!(k.validate(), Err(IntrinsicsError::Focal { .. })));
-        let mut k = Intrinsics::default();
-        k.cx = 2000.0;
+        let k = Intrinsics {
+            cx: 2000.0,
+            ..Intrinsics::default()
+        };
         assert!(matches!(
             k.validate(),
             Err(IntrinsicsError::Principal { .. })
         ));
-        let mut k = Intrinsics::default();
-        k.width = 0;
+        let k = Intrinsics {
+            width: 0,
+            ..Intrinsics::default()
+        };
         assert!(matches!(k.validate(), Err(IntrinsicsError::Size { .. })));
     }
 
     #[test]
     fn from_fov_matches_kinect_focal_length() {
-        let k = Intrinsics::from_fov(640, 480, 1.0144686, 0.7898090);
+        let k = Intrinsics::from_fov(640, 480, 1.014_468_6, 0.789_809);
         assert!((k.fx - 575.8).abs() < 1.0, "{}", k.fx);
     }
 }
