@@ -2,9 +2,12 @@
 
 use airglyph_core::recording::{RecordingInfo, RecordingWriter};
 use airglyph_core::{DepthImage, Intrinsics};
+use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command};
+use std::process::{Child, ChildStdout, Command, Stdio};
 use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
 
 /// A pipeline of its own: a fresh iceoryx2 root and /dev/shm prefix, so tests run side
 /// by side without seeing each other.
@@ -130,4 +133,47 @@ pub fn children_named(parent: u32, name: &str) -> Vec<u32> {
         }
     }
     out
+}
+
+/// Streams a child's JSON lines to a channel.
+fn lines(stdout: ChildStdout) -> mpsc::Receiver<serde_json::Value> {
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+            if let Ok(v) = serde_json::from_str(&line) {
+                if tx.send(v).is_err() {
+                    break;
+                }
+            }
+        }
+    });
+    rx
+}
+
+pub fn start_probe(p: &Isolated, extra: &[&str]) -> (Child, mpsc::Receiver<serde_json::Value>) {
+    let mut child = p
+        .command("airglyph-probe")
+        .args(extra)
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let rx = lines(child.stdout.take().unwrap());
+    let ready = rx
+        .recv_timeout(Duration::from_secs(10))
+        .expect("probe ready");
+    assert_eq!(ready["ready"], true);
+    (child, rx)
+}
+
+pub fn stop(mut child: Child) -> std::process::ExitStatus {
+    signal(&child, libc::SIGTERM);
+    let deadline = Instant::now() + Duration::from_secs(5);
+    while Instant::now() < deadline {
+        if let Some(status) = child.try_wait().unwrap() {
+            return status;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.kill().unwrap();
+    panic!("process {} ignored SIGTERM for 5 s", child.id());
 }

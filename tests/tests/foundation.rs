@@ -1,54 +1,11 @@
 //! The pipeline's foundation with real processes: replay, supervision, recording.
 
 use airglyph_core::recording::Recording;
-use airglyph_system_tests::{children_named, ramp, signal, write_ramp_recording, Isolated};
-use std::io::{BufRead, BufReader};
-use std::process::{Child, ChildStdout, Stdio};
-use std::sync::mpsc;
+use airglyph_system_tests::{
+    children_named, ramp, start_probe, stop, write_ramp_recording, Isolated,
+};
+use std::process::Stdio;
 use std::time::{Duration, Instant};
-
-/// Streams the probe's JSON lines to a channel.
-fn lines(stdout: ChildStdout) -> mpsc::Receiver<serde_json::Value> {
-    let (tx, rx) = mpsc::channel();
-    std::thread::spawn(move || {
-        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
-            if let Ok(v) = serde_json::from_str(&line) {
-                if tx.send(v).is_err() {
-                    break;
-                }
-            }
-        }
-    });
-    rx
-}
-
-fn start_probe(p: &Isolated, extra: &[&str]) -> (Child, mpsc::Receiver<serde_json::Value>) {
-    let mut child = p
-        .command("airglyph-probe")
-        .args(extra)
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let rx = lines(child.stdout.take().unwrap());
-    let ready = rx
-        .recv_timeout(Duration::from_secs(10))
-        .expect("probe ready");
-    assert_eq!(ready["ready"], true);
-    (child, rx)
-}
-
-fn stop(mut child: Child) -> std::process::ExitStatus {
-    signal(&child, libc::SIGTERM);
-    let deadline = Instant::now() + Duration::from_secs(5);
-    while Instant::now() < deadline {
-        if let Some(status) = child.try_wait().unwrap() {
-            return status;
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    child.kill().unwrap();
-    panic!("process {} ignored SIGTERM for 5 s", child.id());
-}
 
 #[test]
 fn capture_replays_a_recording_to_another_process_bit_exact_in_order() {

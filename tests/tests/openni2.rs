@@ -5,41 +5,14 @@
 #![cfg(feature = "openni2")]
 
 use airglyph_core::recording::Recording;
-use airglyph_system_tests::{signal, Isolated};
-use std::io::{BufRead, BufReader};
-use std::process::{Child, Stdio};
-use std::sync::mpsc;
+use airglyph_system_tests::{signal, start_probe, Isolated};
+use std::process::Child;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 /// The streaming tests run one at a time: each keeps a 30 fps subscriber busy writing
 /// PNGs, and two at once on a small machine would drop frames (by design) and fail.
 static SERIAL: Mutex<()> = Mutex::new(());
-
-fn start_probe(p: &Isolated, extra: &[&str]) -> (Child, mpsc::Receiver<serde_json::Value>) {
-    let mut child = p
-        .command("airglyph-probe")
-        .args(extra)
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let stdout = child.stdout.take().unwrap();
-    let (tx, rx) = mpsc::channel();
-    std::thread::spawn(move || {
-        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
-            if let Ok(v) = serde_json::from_str::<serde_json::Value>(&line) {
-                if tx.send(v).is_err() {
-                    break;
-                }
-            }
-        }
-    });
-    let ready = rx
-        .recv_timeout(Duration::from_secs(10))
-        .expect("probe ready");
-    assert_eq!(ready["ready"], true);
-    (child, rx)
-}
 
 /// Waits for a child to exit by itself (SIGTERM after the deadline).
 fn wait_exit(mut child: Child, secs: u64) -> std::process::ExitStatus {

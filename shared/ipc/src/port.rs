@@ -273,45 +273,61 @@ impl Pipeline {
         })
     }
 
-    fn publisher<T: Message>(&self, s: &Settings, name: &str) -> Result<Publisher<T>, IpcError> {
+    /// A fixed-size message service and the event service its publisher wakes.
+    #[allow(clippy::type_complexity)]
+    fn fixed<T: Message>(
+        &self,
+        s: &Settings,
+        name: &str,
+    ) -> Result<
+        (
+            publish_subscribe::PortFactory<Ipc, T, ()>,
+            event::PortFactory<Ipc>,
+        ),
+        IpcError,
+    > {
         let service = self
             .pubsub::<T, ()>(s, name)?
             .open_or_create()
             .map_err(|e| IpcError::service(name, e))?;
-        let publisher = service
-            .publisher_builder()
-            .create()
-            .map_err(|e| IpcError::service(name, e))?;
-        let events = self.event(name)?;
-        let notifier = events
-            .notifier_builder()
-            .create()
-            .map_err(|e| IpcError::service(name, e))?;
+        Ok((service, self.event(name)?))
+    }
+
+    fn publisher<T: Message>(&self, s: &Settings, name: &str) -> Result<Publisher<T>, IpcError> {
+        let (service, events) = self.fixed::<T>(s, name)?;
+        let err = |reason: String| IpcError::Service {
+            service: name.to_owned(),
+            reason,
+        };
         Ok(Publisher {
-            publisher,
-            notifier,
+            publisher: service
+                .publisher_builder()
+                .create()
+                .map_err(|e| err(format!("{e:?}")))?,
+            notifier: events
+                .notifier_builder()
+                .create()
+                .map_err(|e| err(format!("{e:?}")))?,
             _service: service,
             _events: events,
         })
     }
 
     fn receiver<T: Message>(&self, s: &Settings, name: &str) -> Result<Receiver<T>, IpcError> {
-        let service = self
-            .pubsub::<T, ()>(s, name)?
-            .open_or_create()
-            .map_err(|e| IpcError::service(name, e))?;
-        let subscriber = service
-            .subscriber_builder()
-            .create()
-            .map_err(|e| IpcError::service(name, e))?;
-        let events = self.event(name)?;
-        let listener = events
-            .listener_builder()
-            .create()
-            .map_err(|e| IpcError::service(name, e))?;
+        let (service, events) = self.fixed::<T>(s, name)?;
+        let err = |reason: String| IpcError::Service {
+            service: name.to_owned(),
+            reason,
+        };
         Ok(Receiver {
-            subscriber,
-            listener,
+            subscriber: service
+                .subscriber_builder()
+                .create()
+                .map_err(|e| err(format!("{e:?}")))?,
+            listener: events
+                .listener_builder()
+                .create()
+                .map_err(|e| err(format!("{e:?}")))?,
             tracker: SequenceTracker::default(),
             rejected: 0,
             _service: service,
