@@ -27,26 +27,15 @@ struct Args {
     delay_ms: u64,
 }
 
-/// The shipped model: looked for under the working directory, then in the source tree
-/// this binary was built from.
-pub const DEFAULT_MODEL: &str = "models/unipen-36.json";
-
-fn default_model() -> PathBuf {
-    let here = PathBuf::from(DEFAULT_MODEL);
-    if here.exists() {
-        return here;
-    }
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../..")
-        .join(DEFAULT_MODEL)
-}
-
 fn main() -> std::process::ExitCode {
     airglyph_ipc::process::main("airglyph-gesture", || run(Args::parse()))
 }
 
 fn run(args: Args) -> anyhow::Result<()> {
-    let path = args.model.clone().unwrap_or_else(default_model);
+    let path = args
+        .model
+        .clone()
+        .unwrap_or_else(airglyph_gesture::model::default_model_path);
     let model = Model::load(&path).with_context(|| {
         format!(
             "cannot load the gesture model {} (train one with `airglyph train`, or pass --model)",

@@ -360,3 +360,18 @@ fn softmax(ll: &[f64]) -> Vec<f64> {
     let s: f64 = e.iter().sum();
     e.iter().map(|v| v / s).collect()
 }
+
+/// The shipped 36-symbol model, relative to the repository.
+pub const DEFAULT_MODEL: &str = "models/unipen-36.json";
+
+/// Where the shipped model is: under the working directory, else in the source tree
+/// this crate was built from.
+pub fn default_model_path() -> std::path::PathBuf {
+    let here = std::path::PathBuf::from(DEFAULT_MODEL);
+    if here.exists() {
+        return here;
+    }
+    std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .join(DEFAULT_MODEL)
+}

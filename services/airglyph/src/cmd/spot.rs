@@ -20,8 +20,8 @@ pub struct Args {
     #[arg(long)]
     truth: bool,
     /// The gesture model (default: the shipped 36-symbol model).
-    #[arg(long, default_value = "models/unipen-36.json")]
-    model: PathBuf,
+    #[arg(long)]
+    model: Option<PathBuf>,
     /// One JSON object a line.
     #[arg(long)]
     json: bool,
@@ -56,7 +56,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.truth && !rec.has_joints() {
         anyhow::bail!("{}: --truth needs a joints.csv", args.dir.display());
     }
-    let model = Model::load(&args.model)?;
+    let path = args
+        .model
+        .clone()
+        .unwrap_or_else(airglyph_gesture::model::default_model_path);
+    let model = Model::load(&path)?;
     let mut spotter = Spotter::new(model, SpotterConfig::default())?;
     let k = rec.intrinsics();
     let mut estimator = PoseEstimator::new(k, PoseConfig::default());
