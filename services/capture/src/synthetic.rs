@@ -5,56 +5,24 @@ use airglyph_core::camera::Preset;
 use airglyph_core::{Intrinsics, Skeleton};
 use airglyph_ipc::clock::monotonic_ns;
 use airglyph_ipc::wire::SourceKind;
-use airglyph_synth::{DrawSpec, MotionSpec, SceneConfig, ScriptedPose, Synthesizer};
-use std::path::PathBuf;
+use airglyph_synth::{DrawSpec, MotionSpec, SceneConfig, Synthesizer};
 use std::time::Duration;
 
 /// What the demo person draws when no script is given: every built-in symbol, forever.
 pub const DEMO_SYMBOLS: &str = "0123456789ABCDEFGHIJKLMNOPQRSTUVWXYZ";
 
-/// Parses the script of `synthetic:SCRIPT`: `draw:SYMBOLS`, `poses`, `pose:NAME` or a
-/// BVH file. No script: the person draws every symbol, forever.
+/// The motion of `synthetic:SCRIPT` (see [`MotionSpec::parse`]); no script: the person
+/// draws every symbol, forever.
 pub fn motion(script: Option<&str>, repeat: bool) -> Result<MotionSpec, SourceError> {
-    let bad = |m: String| SourceError::Fatal(m);
-    let Some(script) = script else {
-        return Ok(MotionSpec::Draw(DrawSpec {
+    match script {
+        None => Ok(MotionSpec::Draw(DrawSpec {
             symbols: DEMO_SYMBOLS.into(),
             samples: None,
             repeat: true,
-        }));
-    };
-    if script == "poses" {
-        return Ok(MotionSpec::Poses);
+        })),
+        Some(s) => MotionSpec::parse(s, None, repeat)
+            .map_err(|e| SourceError::Fatal(format!("synthetic: {e}"))),
     }
-    if let Some(name) = script.strip_prefix("pose:") {
-        return ScriptedPose::from_name(name)
-            .map(MotionSpec::Pose)
-            .ok_or_else(|| {
-                let names: Vec<_> = ScriptedPose::ALL.iter().map(|p| p.name()).collect();
-                bad(format!(
-                    "synthetic:{script}: known poses are {}",
-                    names.join(", ")
-                ))
-            });
-    }
-    if let Some(symbols) = script.strip_prefix("draw:") {
-        if symbols.is_empty() {
-            return Err(bad(
-                "synthetic:draw: needs symbols, e.g. synthetic:draw:0123ABC".into(),
-            ));
-        }
-        return Ok(MotionSpec::Draw(DrawSpec {
-            symbols: symbols.into(),
-            samples: None,
-            repeat,
-        }));
-    }
-    if script.to_ascii_lowercase().ends_with(".bvh") {
-        return Ok(MotionSpec::Bvh(PathBuf::from(script)));
-    }
-    Err(bad(format!(
-        "synthetic:{script}: expected draw:SYMBOLS, poses, pose:NAME or a .bvh file"
-    )))
 }
 
 /// The scene `synthetic:SCRIPT` renders: a Kinect v1 at 640×480, 30 fps. Public so

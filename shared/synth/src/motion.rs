@@ -20,6 +20,47 @@ pub enum MotionSpec {
     Draw(DrawSpec),
 }
 
+impl MotionSpec {
+    /// Parses the command-line form: `poses`, `pose:NAME`, `draw:SYMBOLS` or a BVH file.
+    /// `samples` gives air-drawn symbols their shapes from a trajectory JSONL; `repeat`
+    /// makes the drawing endless.
+    pub fn parse(spec: &str, samples: Option<PathBuf>, repeat: bool) -> Result<Self, SynthError> {
+        let bad = |m: String| SynthError::Config(format!("motion {spec:?}: {m}"));
+        if spec == "poses" {
+            return Ok(MotionSpec::Poses);
+        }
+        if let Some(name) = spec.strip_prefix("pose:") {
+            return ScriptedPose::from_name(name)
+                .map(MotionSpec::Pose)
+                .ok_or_else(|| {
+                    let names: Vec<_> = ScriptedPose::ALL.iter().map(|p| p.name()).collect();
+                    bad(format!("known poses are {}", names.join(", ")))
+                });
+        }
+        if let Some(symbols) = spec.strip_prefix("draw:") {
+            if symbols.is_empty() {
+                return Err(bad("draw: needs symbols, e.g. draw:0123ABC".into()));
+            }
+            return Ok(MotionSpec::Draw(DrawSpec {
+                symbols: symbols.into(),
+                samples,
+                repeat,
+            }));
+        }
+        let path = PathBuf::from(spec);
+        if path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("bvh"))
+            || path.is_file()
+        {
+            return Ok(MotionSpec::Bvh(path));
+        }
+        Err(bad(
+            "expected poses, pose:NAME, draw:SYMBOLS or a .bvh file".into(),
+        ))
+    }
+}
+
 /// Air-drawing: the right hand traces each symbol on a plane in front of the body, with
 /// idle and random non-gesture movement between symbols.
 #[derive(Debug, Clone, PartialEq)]

@@ -1,7 +1,7 @@
 //! `airglyph profile`: per-stage latency of a running pipeline, frame by frame.
 
 use airglyph_capture::SourceSpec;
-use airglyph_ipc::{shutdown, Pipeline, Stage, StageStatsMsg};
+use airglyph_ipc::{shutdown, LatencyChain, Pipeline, Stage, StageStatsMsg};
 use anyhow::Context;
 use plotters::prelude::*;
 use std::collections::BTreeMap;
@@ -66,6 +66,18 @@ const MEASURES: [Measure; 7] = [
     }),
 ];
 
+impl FrameTimes {
+    /// The times a message's latency chain carries (those not reached yet stay 0).
+    fn take(&mut self, c: &LatencyChain) {
+        self.capture = c.capture_ns;
+        self.capture_publish = c.capture_publish_ns;
+        self.pose_receive = c.pose_receive_ns;
+        self.pose_publish = c.pose_publish_ns;
+        self.gesture_receive = self.gesture_receive.max(c.gesture_receive_ns);
+        self.gesture_publish = self.gesture_publish.max(c.gesture_publish_ns);
+    }
+}
+
 fn span(from: u64, to: u64) -> Option<u64> {
     (from != 0 && to >= from).then(|| to - from)
 }
@@ -116,26 +128,13 @@ fn measure(args: &Args) -> anyhow::Result<()> {
     while started.elapsed().as_secs_f64() < args.seconds && !shutdown::requested() {
         bar.set_position((started.elapsed().as_secs_f64() * 10.0) as u64);
         if let Some(r) = skeletons.recv(Duration::from_millis(20))? {
-            let c = r.msg.chain;
             let f = frames.entry((r.msg.session, r.msg.sequence)).or_default();
-            (f.capture, f.capture_publish, f.pose_receive, f.pose_publish) = (
-                c.capture_ns,
-                c.capture_publish_ns,
-                c.pose_receive_ns,
-                c.pose_publish_ns,
-            );
+            f.take(&r.msg.chain);
             f.skeleton_seen = r.receive_ns;
         }
         while let Some(r) = decisions.try_recv()? {
-            let c = r.msg.chain;
             let f = frames.entry((r.msg.session, r.msg.sequence)).or_default();
-            (f.capture, f.capture_publish, f.pose_receive, f.pose_publish) = (
-                c.capture_ns,
-                c.capture_publish_ns,
-                c.pose_receive_ns,
-                c.pose_publish_ns,
-            );
-            (f.gesture_receive, f.gesture_publish) = (c.gesture_receive_ns, c.gesture_publish_ns);
+            f.take(&r.msg.chain);
         }
         for (stage, rx) in stats.iter_mut() {
             while let Some(r) = rx.try_recv()? {

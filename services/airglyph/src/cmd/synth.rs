@@ -3,10 +3,7 @@
 
 use airglyph_core::camera::Preset;
 use airglyph_core::Intrinsics;
-use airglyph_synth::{
-    Background, BodySpec, DrawSpec, MotionSpec, Placement, ProceduralBody, SceneConfig,
-    ScriptedPose,
-};
+use airglyph_synth::{Background, BodySpec, MotionSpec, Placement, ProceduralBody, SceneConfig};
 use anyhow::{bail, Context};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
@@ -91,38 +88,6 @@ fn intrinsics(camera: &str, resolution: &str) -> anyhow::Result<Intrinsics> {
     Ok(k)
 }
 
-fn motion(spec: &str, samples: Option<PathBuf>) -> anyhow::Result<MotionSpec> {
-    if spec == "poses" {
-        return Ok(MotionSpec::Poses);
-    }
-    if let Some(name) = spec.strip_prefix("pose:") {
-        let pose = ScriptedPose::from_name(name).with_context(|| {
-            let names: Vec<_> = ScriptedPose::ALL.iter().map(|p| p.name()).collect();
-            format!("--motion {spec:?}: known poses are {}", names.join(", "))
-        })?;
-        return Ok(MotionSpec::Pose(pose));
-    }
-    if let Some(symbols) = spec.strip_prefix("draw:") {
-        if symbols.is_empty() {
-            bail!("--motion draw: needs symbols, e.g. draw:0123ABC");
-        }
-        return Ok(MotionSpec::Draw(DrawSpec {
-            symbols: symbols.to_string(),
-            samples,
-            repeat: false,
-        }));
-    }
-    let path = PathBuf::from(spec);
-    if path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("bvh"))
-        || path.is_file()
-    {
-        return Ok(MotionSpec::Bvh(path));
-    }
-    bail!("--motion {spec:?}: expected poses, pose:NAME, draw:SYMBOLS or a .bvh file")
-}
-
 pub fn run(args: Args) -> anyhow::Result<()> {
     let body = match args.body.as_str() {
         "procedural" => BodySpec::Procedural(ProceduralBody {
@@ -141,7 +106,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let cfg = SceneConfig {
         body,
-        motion: motion(&args.motion, args.samples.clone())?,
+        motion: MotionSpec::parse(&args.motion, args.samples.clone(), false)?,
         intrinsics: intrinsics(&args.camera, &args.resolution)?,
         fps: args.fps,
         sensor_noise: args.noise,
