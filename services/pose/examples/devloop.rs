@@ -26,6 +26,8 @@ fn main() {
                 .find(|x| format!("{x:?}").eq_ignore_ascii_case(p))
                 .expect("pose name");
             cfg.motion = MotionSpec::Pose(p);
+        } else if a.starts_with("draw:") {
+            cfg.motion = MotionSpec::parse(a, None, false).expect("draw spec");
         } else if a == "mh" {
             cfg.body = airglyph_synth::BodySpec::MakeHuman { assets: None };
         } else if a == "noise" {
@@ -50,6 +52,9 @@ fn main() {
     let k = synth.intrinsics();
     let n = synth.len().map_or(frames, |l| l.min(frames));
     let mut pcfg = PoseConfig::default();
+    if args.iter().any(|a| a == "nocal") {
+        pcfg.calibrate_body = false;
+    }
     if args.iter().any(|a| a == "full") {
         pcfg.work_width = 0;
     }
@@ -156,6 +161,7 @@ fn main() {
         cpu / ncpu.max(1) as f64 * 1e3,
         ncpu as f64 / cpu.max(1e-9)
     );
+    eprintln!("body ratios (arms, legs): {:?}", est.body_ratios());
     let t = est.step_times();
     eprintln!("last frame steps: {t:?}");
 }

@@ -107,6 +107,15 @@ pub struct PoseConfig {
     pub temporal_weight: f32,
     /// Confidence multiplier per frame for a limb that keeps its last fit.
     pub occluded_decay: f32,
+
+    // --- body-size calibration ---
+    /// Learn the person's arm and leg lengths from the geodesic lengths of their limbs
+    /// ([`crate::calibrate`]) instead of keeping the bone lengths above.
+    pub calibrate_body: bool,
+    /// What that measurement gives on the body the bone lengths above were measured on
+    /// (arms, legs): the geodesic path over the surface, fingers and toes is longer
+    /// than the bones. Measured on the MakeHuman body standing, drawing and walking.
+    pub geodesic_reach_ratio: [f32; 2],
 }
 
 impl Default for PoseConfig {
@@ -172,6 +181,8 @@ impl Default for PoseConfig {
             unassigned_cost: 1.2,
             temporal_weight: 0.3,
             occluded_decay: 0.7,
+            calibrate_body: true,
+            geodesic_reach_ratio: [1.32, 1.21],
         }
     }
 }

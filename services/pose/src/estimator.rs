@@ -1,5 +1,6 @@
 //! The whole estimator: segmentation → torso → graph → geodesic maxima → limbs.
 
+use crate::calibrate::BodyCalibration;
 use crate::config::{Limb, PoseConfig};
 use crate::dijkstra::{Dijkstra, Graph, INF};
 use crate::graph::{GeoGraph, NONE};
@@ -90,6 +91,9 @@ pub struct PoseEstimator {
     prev_floor: Option<Plane>,
     prev_centroid: Option<Point3<f32>>,
     limbs: [Option<LimbState>; 5],
+    /// The person's limb lengths, learned as they move; kept when the person is lost
+    /// for a moment.
+    calib: BodyCalibration,
     times: StepTimes,
     debug: Debug,
 }
@@ -118,6 +122,7 @@ impl PoseEstimator {
             prev_floor: None,
             prev_centroid: None,
             limbs: [None; 5],
+            calib: BodyCalibration::default(),
             times: StepTimes::default(),
             debug: Debug::default(),
         }
@@ -131,8 +136,21 @@ impl PoseEstimator {
         &self.k
     }
 
-    /// Forgets everything learned from earlier frames.
+    /// Forgets everything learned from earlier frames, the person's size included.
     pub fn reset(&mut self) {
+        self.lose_track();
+        self.calib.reset();
+    }
+
+    /// The ratios of the person's arm and leg lengths to the configured body's, as
+    /// learned so far (1 until enough has been seen).
+    pub fn body_ratios(&self) -> (f32, f32) {
+        (self.calib.arm_ratio(), self.calib.leg_ratio())
+    }
+
+    /// Forgets the tracking state (torso pose, limb fits), not the person's size: a
+    /// person lost for a frame is most likely the same one when found again.
+    fn lose_track(&mut self) {
         self.prev_torso = None;
         self.prev_offset = None;
         self.prev_floor = None;
@@ -170,7 +188,7 @@ impl PoseEstimator {
                 skeleton: s,
             },
             _ => {
-                self.reset();
+                self.lose_track();
                 lost
             }
         }
@@ -233,7 +251,11 @@ impl PoseEstimator {
         if k.validate().is_err() {
             return None;
         }
-        let cfg_owned = self.cfg.clone();
+        let cfg_owned = if self.cfg.calibrate_body {
+            self.calib.apply(&self.cfg)
+        } else {
+            self.cfg.clone()
+        };
         let cfg = &cfg_owned;
         self.debug = Debug {
             work_size: (depth.width(), depth.height()),
@@ -351,6 +373,7 @@ impl PoseEstimator {
         let mut inv = torso.inverse();
         let mut cost: Vec<[f32; 5]> = Vec::with_capacity(maxima.len());
         let mut cuts: Vec<[usize; 5]> = Vec::with_capacity(maxima.len());
+        let mut lengths: Vec<[f32; 5]> = Vec::with_capacity(maxima.len());
         let mut paths: Vec<Vec<u32>> = Vec::with_capacity(maxima.len());
         for &m in &maxima {
             self.path.clear();
@@ -364,6 +387,7 @@ impl PoseEstimator {
             let dm = self.dist0[m as usize] as f32 * 1e-3;
             let mut row = [f32::INFINITY; 5];
             let mut cut = [0usize; 5];
+            let mut len = [0f32; 5];
             for l in Limb::ALL {
                 let r = roots[l.index()];
                 // Cut the path where it passes nearest the limb root: the geodesic cost
@@ -404,9 +428,11 @@ impl PoseEstimator {
                 c += (gap - 0.05).max(0.0);
                 row[l.index()] = c;
                 cut[l.index()] = best.1;
+                len[l.index()] = best.0;
             }
             cost.push(row);
             cuts.push(cut);
+            lengths.push(len);
             paths.push(self.path.clone());
         }
         let assignment = assign(&cost, cfg.unassigned_cost);
@@ -416,6 +442,11 @@ impl PoseEstimator {
             .map(|&m| self.dist0[m as usize] as f32 * 1e-3)
             .collect();
         self.debug.assignment = assignment;
+        for l in Limb::ALL {
+            if let Some(mi) = assignment[l.index()] {
+                self.calib.measure(&self.cfg, l, lengths[mi][l.index()]);
+            }
+        }
 
         // The torso model slides along its own axis (a cylinder's surface does not pin
         // it); the top of the head does: hold it at `head_top_height` above the torso

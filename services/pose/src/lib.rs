@@ -74,6 +74,7 @@
 //! [`metrics`] holds the evaluation against ground truth (Eq. 16.20–16.22, share within
 //! 10 cm, mAP at 10 cm), [`overlay`] draws skeletons on depth images.
 
+pub mod calibrate;
 pub mod config;
 pub mod dijkstra;
 pub mod dt;

@@ -1,0 +1,148 @@
+//! Body-size calibration: the person's arm and leg lengths, learned from the geodesic
+//! lengths of their limbs while they move.
+//!
+//! The bone lengths of [`PoseConfig::default`] are one body's. A longer-armed person's
+//! hand then lies beyond the fitted chain's reach, and a geodesic maximum on a knee can
+//! look more like a foot than the foot does. The geodesic length of a limb, from its
+//! root to its extremity, hardly changes as the limb bends, so each frame in which a
+//! limb is assigned a maximum measures the limb. Occlusion and bridges over occluding
+//! foreground only ever shorten such a path, and a wrong assignment to a nearer maximum
+//! too, so the estimate is a high percentile of recent measurements, not their mean.
+
+use crate::config::{Limb, PoseConfig};
+use std::collections::VecDeque;
+
+/// How many measurements each length remembers (about four seconds at 30 fps of
+/// both limbs of a pair).
+const WINDOW: usize = 240;
+/// Measurements needed before the length departs from the default.
+const MIN_SAMPLES: usize = 20;
+/// The percentile taken: measurements shortened by occlusion or bridges fall below it.
+const PERCENTILE: f32 = 0.8;
+/// Bounds on the ratio to the default body: children to tall adults, and no runaway
+/// when the measurements are poor.
+const MIN_RATIO: f32 = 0.75;
+const MAX_RATIO: f32 = 1.4;
+
+/// The ratio of one limb pair's length to the default body's.
+#[derive(Debug, Clone, Default)]
+struct PairRatio {
+    samples: VecDeque<f32>,
+}
+
+impl PairRatio {
+    fn add(&mut self, ratio: f32) {
+        if !ratio.is_finite() || !(0.3..3.0).contains(&ratio) {
+            return;
+        }
+        if self.samples.len() == WINDOW {
+            self.samples.pop_front();
+        }
+        self.samples.push_back(ratio);
+    }
+
+    fn ratio(&self) -> f32 {
+        if self.samples.len() < MIN_SAMPLES {
+            return 1.0;
+        }
+        let mut v: Vec<f32> = self.samples.iter().copied().collect();
+        let k = ((v.len() - 1) as f32 * PERCENTILE).round() as usize;
+        let (_, x, _) = v.select_nth_unstable_by(k, f32::total_cmp);
+        x.clamp(MIN_RATIO, MAX_RATIO)
+    }
+}
+
+/// The learned arm and leg lengths of the person in view, as ratios to the default
+/// body's.
+#[derive(Debug, Clone, Default)]
+pub struct BodyCalibration {
+    arms: PairRatio,
+    legs: PairRatio,
+}
+
+impl BodyCalibration {
+    /// Records one frame's geodesic length (metres, from the limb root to the assigned
+    /// maximum) of a limb; `base` is the configuration the ratios refer to.
+    pub fn measure(&mut self, base: &PoseConfig, limb: Limb, geodesic_length: f32) {
+        let (l1, l2) = base.bones(limb);
+        let reach = l1 + l2 + base.extremity_extra(limb);
+        let [arm_ref, leg_ref] = base.geodesic_reach_ratio;
+        match limb {
+            Limb::LeftArm | Limb::RightArm => self.arms.add(geodesic_length / reach / arm_ref),
+            Limb::LeftLeg | Limb::RightLeg => self.legs.add(geodesic_length / reach / leg_ref),
+            Limb::Head => {}
+        }
+    }
+
+    /// The ratio of the person's arms (and legs) to the default body's; 1 until enough
+    /// has been seen.
+    pub fn arm_ratio(&self) -> f32 {
+        self.arms.ratio()
+    }
+
+    pub fn leg_ratio(&self) -> f32 {
+        self.legs.ratio()
+    }
+
+    /// `base` with the bone lengths scaled to this person.
+    pub fn apply(&self, base: &PoseConfig) -> PoseConfig {
+        let (a, l) = (self.arm_ratio(), self.leg_ratio());
+        PoseConfig {
+            upper_arm: base.upper_arm * a,
+            forearm: base.forearm * a,
+            thigh: base.thigh * l,
+            shin: base.shin * l,
+            ..base.clone()
+        }
+    }
+
+    /// Forgets the person (another may step in).
+    pub fn reset(&mut self) {
+        *self = Self::default();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_until_enough_samples_then_the_high_percentile() {
+        let base = PoseConfig::default();
+        let mut c = BodyCalibration::default();
+        let (l1, l2) = base.bones(Limb::LeftArm);
+        // What the configured body itself would measure.
+        let reach =
+            (l1 + l2 + base.extremity_extra(Limb::LeftArm)) * base.geodesic_reach_ratio[0];
+        for _ in 0..MIN_SAMPLES - 1 {
+            c.measure(&base, Limb::LeftArm, reach * 1.2);
+        }
+        assert_eq!(c.arm_ratio(), 1.0);
+        c.measure(&base, Limb::RightArm, reach * 1.2);
+        assert!((c.arm_ratio() - 1.2).abs() < 1e-4);
+        // Shortened paths (occlusion, bridges) below the percentile do not pull it down.
+        for _ in 0..MIN_SAMPLES / 2 {
+            c.measure(&base, Limb::LeftArm, reach * 0.5);
+        }
+        assert!((c.arm_ratio() - 1.2).abs() < 1e-4);
+        assert_eq!(c.leg_ratio(), 1.0, "the legs are measured apart");
+        let scaled = c.apply(&base);
+        assert!((scaled.upper_arm - base.upper_arm * 1.2).abs() < 1e-5);
+        assert_eq!(scaled.thigh, base.thigh);
+    }
+
+    #[test]
+    fn bounded_and_deaf_to_nonsense() {
+        let base = PoseConfig::default();
+        let mut c = BodyCalibration::default();
+        for _ in 0..100 {
+            c.measure(&base, Limb::LeftLeg, 10.0);
+            c.measure(&base, Limb::LeftLeg, f32::NAN);
+        }
+        assert_eq!(c.leg_ratio(), 1.0);
+        for _ in 0..100 {
+            c.measure(&base, Limb::LeftLeg, 0.5 * 0.95);
+        }
+        assert_eq!(c.leg_ratio(), MIN_RATIO);
+    }
+}
