@@ -30,6 +30,8 @@ fn main() {
             cfg.motion = MotionSpec::parse(a, None, false).expect("draw spec");
         } else if a == "mh" {
             cfg.body = airglyph_synth::BodySpec::MakeHuman { assets: None };
+        } else if a == "follow" {
+            cfg.placement.follow = true;
         } else if a == "noise" {
             cfg.sensor_noise = true;
         } else if a == "floor" {

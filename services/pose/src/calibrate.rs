@@ -112,8 +112,7 @@ mod tests {
         let mut c = BodyCalibration::default();
         let (l1, l2) = base.bones(Limb::LeftArm);
         // What the configured body itself would measure.
-        let reach =
-            (l1 + l2 + base.extremity_extra(Limb::LeftArm)) * base.geodesic_reach_ratio[0];
+        let reach = (l1 + l2 + base.extremity_extra(Limb::LeftArm)) * base.geodesic_reach_ratio[0];
         for _ in 0..MIN_SAMPLES - 1 {
             c.measure(&base, Limb::LeftArm, reach * 1.2);
         }

@@ -128,6 +128,11 @@ pub struct Placement {
     pub lateral_m: f32,
     /// From the person to the wall behind (with [`Background::FloorAndWall`]), metres.
     pub wall_behind_m: f32,
+    /// The camera follows the person across the floor: a clip's horizontal root travel
+    /// is removed (its turns, bends and jumps are kept), as on a treadmill. Motion
+    /// capture clips walk and jump metres away; without this the person leaves the
+    /// image or comes too close for the sensor.
+    pub follow: bool,
 }
 
 impl Default for Placement {
@@ -139,6 +144,7 @@ impl Default for Placement {
             yaw_deg: 0.0,
             lateral_m: 0.0,
             wall_behind_m: 1.5,
+            follow: false,
         }
     }
 }
@@ -293,7 +299,12 @@ impl Synthesizer {
 
     /// The pose (canonical skeleton, body frame) of frame `index`.
     pub fn pose(&self, index: usize) -> Pose {
-        self.motion.pose(index)
+        let mut p = self.motion.pose(index);
+        if self.cfg.placement.follow {
+            p.root.x = 0.0;
+            p.root.z = 0.0;
+        }
+        p
     }
 
     /// Per pixel of the last rendered frame, the canonical [`Bone`] whose surface it shows
@@ -319,7 +330,7 @@ impl Synthesizer {
                 k.height
             )));
         }
-        let pose = self.motion.pose(index);
+        let pose = self.pose(index);
         self.body.bone_transforms(&pose, &mut self.xf);
         for a in &mut self.xf {
             *a = a.then(&self.camera);

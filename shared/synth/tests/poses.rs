@@ -1,8 +1,11 @@
-//! Scripted poses stay within joint limits, and the arm IK reaches what it can.
+//! Scripted poses stay within joint limits, the arm IK reaches what it can, and a
+//! following camera keeps the person in place.
 
 use airglyph_core::Joint;
 use airglyph_synth::poses::{arm_ik, neutral, Side};
-use airglyph_synth::{Body, Bone, ProceduralBody, ScriptedPose};
+use airglyph_synth::{
+    Body, Bone, Placement, ProceduralBody, SceneConfig, ScriptedPose, Synthesizer,
+};
 use nalgebra::{Point3, Vector3};
 
 fn dir(p: &airglyph_synth::Pose, b: Bone) -> Vector3<f32> {
@@ -76,4 +79,28 @@ fn arm_ik_reaches_targets_within_reach() {
         &Vector3::new(-1.0, -1.0, -0.3),
     );
     assert!(dir(&p, Bone::RightForearm).angle(&Vector3::z()) < 0.02);
+}
+
+#[test]
+fn a_following_camera_removes_the_travel_across_the_floor_and_keeps_the_rest() {
+    // The scripted poses sway the hips a little across the floor and up and down.
+    let scene = |follow| {
+        Synthesizer::new(SceneConfig {
+            placement: Placement {
+                follow,
+                ..Placement::default()
+            },
+            ..SceneConfig::default()
+        })
+        .unwrap()
+    };
+    let (free, followed) = (scene(false), scene(true));
+    let mut travelled = 0.0f32;
+    for i in 0..90 {
+        let (a, b) = (free.pose(i), followed.pose(i));
+        travelled = travelled.max(a.root.x.abs() + a.root.z.abs());
+        assert_eq!((b.root.x, b.root.z), (0.0, 0.0), "frame {i}");
+        assert_eq!(a.root.y, b.root.y, "frame {i}: height kept");
+    }
+    assert!(travelled > 1e-3, "the free person sways: {travelled}");
 }

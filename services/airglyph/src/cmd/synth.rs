@@ -55,6 +55,10 @@ pub struct Args {
     /// The person's turn to their left, degrees.
     #[arg(long, default_value_t = 0.0)]
     pub yaw: f32,
+    /// The camera follows the person across the floor (a motion clip's horizontal
+    /// travel removed, its turns and jumps kept), so a clip that walks away stays in view.
+    #[arg(long)]
+    pub follow: bool,
     /// Folder holding the MakeHuman assets (mpfb2/); default .cache/assets.
     #[arg(long)]
     pub assets: Option<PathBuf>,
@@ -114,6 +118,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         placement: Placement {
             distance_m: args.distance,
             yaw_deg: args.yaw,
+            follow: args.follow,
             ..Placement::default()
         },
         seed: args.seed,
