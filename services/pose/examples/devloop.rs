@@ -54,6 +54,11 @@ fn main() {
     let k = synth.intrinsics();
     let n = synth.len().map_or(frames, |l| l.min(frames));
     let mut pcfg = PoseConfig::default();
+    for a in &args {
+        if let Some(v) = a.strip_prefix("edge_px:") {
+            pcfg.edge_px = v.parse().unwrap();
+        }
+    }
     if args.iter().any(|a| a == "nocal") {
         pcfg.calibrate_body = false;
     }
