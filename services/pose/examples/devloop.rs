@@ -55,6 +55,9 @@ fn main() {
     let n = synth.len().map_or(frames, |l| l.min(frames));
     let mut pcfg = PoseConfig::default();
     for a in &args {
+        if let Some(v) = a.strip_prefix("dominated:") {
+            pcfg.dominated_cost = v.parse().unwrap();
+        }
         if let Some(v) = a.strip_prefix("edge_px:") {
             pcfg.edge_px = v.parse().unwrap();
         }
@@ -135,6 +138,16 @@ fn main() {
                     est.debug().bridges,
                 );
                 eprintln!("  maxima dist {:?}", est.debug().maxima_dist);
+                let ww = est.debug().work_size.0.max(1);
+                let f = k.width / ww;
+                eprintln!(
+                    "  maxima at {:?}",
+                    est.debug()
+                        .maxima
+                        .iter()
+                        .map(|m| ((m % ww) * f, (m / ww) * f))
+                        .collect::<Vec<_>>()
+                );
                 eprintln!(
                     "  targets {:?}",
                     est.debug()
@@ -143,7 +156,13 @@ fn main() {
                         .map(|t| t.len())
                         .collect::<Vec<_>>()
                 );
-                for j in [Joint::LeftHip, Joint::LeftKnee, Joint::LeftFoot] {
+                let show = match std::env::var("SHOW").as_deref() {
+                    Ok("right_arm") => [Joint::RightShoulder, Joint::RightElbow, Joint::RightHand],
+                    Ok("left_arm") => [Joint::LeftShoulder, Joint::LeftElbow, Joint::LeftHand],
+                    Ok("head") => [Joint::Neck, Joint::Head, Joint::Torso],
+                    _ => [Joint::LeftHip, Joint::LeftKnee, Joint::LeftFoot],
+                };
+                for j in show {
                     eprintln!(
                         "  {j:?} est {:?} truth {:?}",
                         r.skeleton[j].coords.as_slice(),

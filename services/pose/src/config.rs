@@ -104,6 +104,9 @@ pub struct PoseConfig {
     /// Cost of leaving a limb without a maximum in the assignment (metres of geodesic
     /// cost), and the weight of the distance to the limb's last extremity.
     pub unassigned_cost: f32,
+    /// Extra cost, for the arms and legs, of a maximum that lies beside the geodesic
+    /// path of a farther one (a bent elbow or knee beside the path to the hand or foot).
+    pub dominated_cost: f32,
     pub temporal_weight: f32,
     /// Confidence multiplier per frame for a limb that keeps its last fit.
     pub occluded_decay: f32,
@@ -179,6 +182,7 @@ impl Default for PoseConfig {
             surface_offset_leg: 0.065,
             surface_offset_head: 0.07,
             unassigned_cost: 1.2,
+            dominated_cost: 0.3,
             temporal_weight: 0.3,
             occluded_decay: 0.7,
             calibrate_body: true,

@@ -435,6 +435,27 @@ impl PoseEstimator {
             lengths.push(len);
             paths.push(self.path.clone());
         }
+        // A bent elbow or knee is a geodesic maximum of its own, beside the path to the
+        // hand or foot beyond it. Such a maximum is no limb's end while the farther
+        // one is there: it costs extra for every limb but the head.
+        if cfg.dominated_cost > 0.0 {
+            for (bi, &mb) in maxima.iter().enumerate() {
+                let pb = self.graph.pos[mb as usize];
+                let db = self.dist0[mb as usize];
+                let dominated = maxima.iter().enumerate().any(|(ai, &ma)| {
+                    ai != bi
+                        && self.dist0[ma as usize] > db + 150
+                        && paths[ai]
+                            .iter()
+                            .any(|&p| (self.graph.pos[p as usize] - pb).norm() < 0.08)
+                });
+                if dominated {
+                    for c in &mut cost[bi][1..] {
+                        *c += cfg.dominated_cost;
+                    }
+                }
+            }
+        }
         let assignment = assign(&cost, cfg.unassigned_cost);
         self.debug.cost = cost.clone();
         self.debug.maxima_dist = maxima

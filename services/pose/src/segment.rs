@@ -64,6 +64,7 @@ pub struct Segmenter {
     labels: Vec<u32>,
     stack: Vec<u32>,
     samples: Vec<Point3<f32>>,
+    contacts: Vec<(u32, u32)>,
 }
 
 struct Blob {
@@ -237,15 +238,100 @@ impl Segmenter {
         }
         if let Some((_, bi)) = best {
             let b = &blobs[bi];
+            let limbs = self.body_parts(points, w, h, &blobs, bi, cfg);
+            let mut pixels = b.pixels;
+            let mut bbox = b.bbox;
+            for &li in &limbs {
+                pixels += blobs[li].pixels;
+                let lb = blobs[li].bbox;
+                bbox = (
+                    bbox.0.min(lb.0),
+                    bbox.1.min(lb.1),
+                    bbox.2.max(lb.2),
+                    bbox.3.max(lb.3),
+                );
+            }
             for (m, &l) in mask.iter_mut().zip(&self.labels) {
-                *m = l == b.label;
+                *m = l == b.label || limbs.iter().any(|&li| blobs[li].label == l);
             }
             seg.found = true;
-            seg.pixels = b.pixels;
+            seg.pixels = pixels;
             seg.centroid = b.moments.mean();
-            seg.bbox = b.bbox;
+            seg.bbox = bbox;
         }
         seg
+    }
+
+    /// The other blobs of the person's body. An arm raised before the chest hides the
+    /// shoulder it hangs from, and a forearm across the waist hides where the chest
+    /// meets the hips: in the image such parts meet the rest only across depth jumps
+    /// and form blobs of their own. Starting from the person's blob, a blob that borders
+    /// the parts found so far is taken when it lies within arm's reach of the body and
+    /// neither far in front of it nor behind it (walls and other people do not qualify).
+    fn body_parts(
+        &mut self,
+        points: &[Point3<f32>],
+        w: usize,
+        h: usize,
+        blobs: &[Blob],
+        person: usize,
+        cfg: &PoseConfig,
+    ) -> Vec<usize> {
+        // Pairs of bordering blobs, with how many pixels touch.
+        self.contacts.clear();
+        for v in 0..h {
+            for u in 0..w {
+                let i = v * w + u;
+                let la = self.labels[i];
+                if la == u32::MAX || points[i].z <= 0.0 {
+                    continue;
+                }
+                for j in [(u + 1 < w).then(|| i + 1), (v + 1 < h).then(|| i + w)]
+                    .into_iter()
+                    .flatten()
+                {
+                    let lb = self.labels[j];
+                    if lb != u32::MAX && lb != la {
+                        self.contacts.push((la.min(lb), la.max(lb)));
+                    }
+                }
+            }
+        }
+        self.contacts.sort_unstable();
+        let p = &blobs[person];
+        let centre = p.moments.mean();
+        let mut area = p.area;
+        let mut taken = vec![person];
+        let mut frontier = vec![person];
+        while let Some(cur) = frontier.pop() {
+            let cur = cur as u32;
+            for run in self.contacts.chunk_by(|a, b| a == b) {
+                let (la, lb) = run[0];
+                // One touching pixel is noise; a limb's edge runs along the body.
+                if run.len() < 3 || (la != cur && lb != cur) {
+                    continue;
+                }
+                // Labels are blob indices.
+                let other = if la == cur { lb } else { la } as usize;
+                if taken.contains(&other) {
+                    continue;
+                }
+                let b = &blobs[other];
+                let near = |x: Vector3<f32>| (x - centre.coords).norm() < 1.4;
+                let within_reach = (b.moments.mean() - centre).norm() < 1.0
+                    && near(b.min)
+                    && near(b.max)
+                    && b.min.z > p.min.z - 0.9
+                    && b.max.z < p.max.z + 0.25;
+                if within_reach && area + b.area <= cfg.max_person_area {
+                    area += b.area;
+                    taken.push(other);
+                    frontier.push(other);
+                }
+            }
+        }
+        taken.remove(0);
+        taken
     }
 
     /// RANSAC for a floor-like plane (normal within 37° of the image's up) among the

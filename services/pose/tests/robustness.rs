@@ -172,3 +172,49 @@ fn two_people_one_is_found() {
     let e = (r.skeleton[Joint::Torso] - ta.skeleton[Joint::Torso]).norm();
     assert!(e < 0.2, "torso off by {e} m");
 }
+
+/// Air-drawing before the chest: the raised forearm hides the shoulder it hangs from,
+/// so in the image the arm meets the body only across depth jumps. It must stay part of
+/// the person, and the hand must be found at its end (not at the bent elbow).
+#[test]
+fn a_forearm_raised_before_the_chest_stays_part_of_the_person() {
+    let k = qvga();
+    let mut synth = Synthesizer::new(SceneConfig {
+        intrinsics: k,
+        motion: MotionSpec::parse("draw:0", None, false).expect("draw spec"),
+        ..SceneConfig::default()
+    })
+    .expect("scene");
+    let mut est = PoseEstimator::new(k, PoseConfig::default());
+    let mut errors = Vec::new();
+    let mut hand_in_mask = 0;
+    let frames = 38..74; // the symbol's strokes (gestures.csv of this scene)
+    for i in 0..frames.end {
+        let (img, truth) = synth.render(i);
+        let r = est.estimate(img.view());
+        check(&r);
+        if !frames.contains(&i) {
+            continue;
+        }
+        assert!(r.person_found, "frame {i}");
+        let hand = truth.skeleton[Joint::RightHand];
+        let (u, v) = k.project(&hand).expect("the hand is in view");
+        if est.mask()[v as usize * k.width as usize + u as usize] {
+            hand_in_mask += 1;
+        }
+        errors.push((r.skeleton[Joint::RightHand] - hand).norm());
+    }
+    assert_eq!(
+        hand_in_mask,
+        frames.len(),
+        "the drawing hand left the person's mask"
+    );
+    errors.sort_by(f32::total_cmp);
+    let median = errors[errors.len() / 2];
+    let far = errors.iter().filter(|&&e| e > 0.2).count();
+    assert!(median < 0.12, "drawing hand off by {median} m (median)");
+    assert!(
+        far <= 2,
+        "drawing hand off by over 20 cm in {far} frames: {errors:?}"
+    );
+}
