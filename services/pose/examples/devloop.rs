@@ -55,6 +55,9 @@ fn main() {
     let n = synth.len().map_or(frames, |l| l.min(frames));
     let mut pcfg = PoseConfig::default();
     for a in &args {
+        if let Some(v) = a.strip_prefix("band:") {
+            pcfg.torso_front_band = v.parse().unwrap();
+        }
         if let Some(v) = a.strip_prefix("dominated:") {
             pcfg.dominated_cost = v.parse().unwrap();
         }
@@ -117,6 +120,29 @@ fn main() {
                         if let Some(q) = k.project(p) {
                             overlay::dot(&mut im, q, 0, overlay::YELLOW);
                         }
+                    }
+                }
+                let palette = [
+                    [255u8, 0, 255],
+                    [0, 255, 255],
+                    [255, 255, 0],
+                    [255, 128, 0],
+                    [0, 255, 0],
+                    [255, 255, 255],
+                    [128, 128, 255],
+                    [255, 0, 0],
+                ];
+                let only: Option<usize> =
+                    std::env::var("PATH_OF").ok().and_then(|v| v.parse().ok());
+                for (pi, path) in est.debug().paths.iter().enumerate() {
+                    if only.is_some_and(|o| o != pi) {
+                        continue;
+                    }
+                    let ww = est.debug().work_size.0.max(1);
+                    let f = (k.width / ww) as f32;
+                    for &px in path.iter() {
+                        let (u, v) = ((px % ww) as f32 * f, (px / ww) as f32 * f);
+                        overlay::dot(&mut im, (u, v), 1, palette[pi % palette.len()]);
                     }
                 }
                 for &m in &est.debug().maxima {

@@ -37,6 +37,9 @@ pub struct PoseConfig {
     /// Torso region: pixels whose distance-transform value is at least this share of the
     /// maximum (seed Eq. 16.2, with the inequality the right way round).
     pub torso_dt_share: f32,
+    /// Torso-region points nearer the camera than the region's median depth by more
+    /// than this (a hand or forearm before the chest) are left out of its PCA.
+    pub torso_front_band: f32,
     /// Mutual closest points farther apart than this are not correspondences (seed: 0.1 m).
     pub icp_max_dist: f32,
     pub icp_iterations: usize,
@@ -137,6 +140,7 @@ impl Default for PoseConfig {
             max_person_width: 2.4,
 
             torso_dt_share: 0.5,
+            torso_front_band: 0.12,
             icp_max_dist: 0.1,
             icp_iterations: 12,
             icp_reinit_residual: 0.035,

@@ -54,6 +54,8 @@ pub struct Debug {
     pub maxima_dist: Vec<f32>,
     /// The registered torso frame (torso frame → camera frame).
     pub torso_pose: Option<TorsoPose>,
+    /// Pixels of each maximum's geodesic path back to the torso centre.
+    pub paths: Vec<Vec<u32>>,
     /// Size of the image the steps worked on (after reduction), and its intrinsics.
     pub work_size: (u32, u32),
 }
@@ -457,6 +459,14 @@ impl PoseEstimator {
             }
         }
         let assignment = assign(&cost, cfg.unassigned_cost);
+        self.debug.paths = paths
+            .iter()
+            .map(|p| {
+                p.iter()
+                    .map(|&a| self.graph.pixel_of_node[a as usize])
+                    .collect()
+            })
+            .collect();
         self.debug.cost = cost.clone();
         self.debug.maxima_dist = maxima
             .iter()

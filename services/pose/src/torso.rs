@@ -82,6 +82,7 @@ pub struct TorsoEstimator {
     dst: Vec<Point3<f32>>,
     stack: Vec<u32>,
     region: Vec<bool>,
+    region_z: Vec<f32>,
     sub_mask: Vec<bool>,
     sub_dist: Vec<f32>,
 }
@@ -101,6 +102,7 @@ impl TorsoEstimator {
             dst: Vec::new(),
             stack: Vec::new(),
             region: Vec::new(),
+            region_z: Vec::new(),
             sub_mask: Vec::new(),
             sub_dist: Vec::new(),
         }
@@ -164,10 +166,10 @@ impl TorsoEstimator {
         self.stack.clear();
         self.stack.push(core as u32);
         self.region[core] = true;
-        let mut m = Moments::default();
+        self.region_z.clear();
         while let Some(i) = self.stack.pop() {
             let i = i as usize;
-            m.add(&points[i]);
+            self.region_z.push(points[i].z);
             let (u, v) = (i % width, i / width);
             let mut visit = |j: usize| {
                 if !self.region[j] && self.dist[j] >= thr && points[j].z > 0.0 {
@@ -186,6 +188,19 @@ impl TorsoEstimator {
             }
             if v + 1 < height {
                 visit(i + width);
+            }
+        }
+        // A hand or forearm held before the chest lies inside the torso's silhouette
+        // but well in front of its surface: leave such points out of the PCA.
+        if self.region_z.is_empty() {
+            return None;
+        }
+        let k = self.region_z.len() / 2;
+        let (_, &mut median_z, _) = self.region_z.select_nth_unstable_by(k, f32::total_cmp);
+        let mut m = Moments::default();
+        for (i, &inside) in self.region.iter().enumerate() {
+            if inside && points[i].z > median_z - cfg.torso_front_band {
+                m.add(&points[i]);
             }
         }
         let pca = m.pca()?;
