@@ -55,6 +55,13 @@ fn main() {
     let n = synth.len().map_or(frames, |l| l.min(frames));
     let mut pcfg = PoseConfig::default();
     for a in &args {
+        if let Some(v) = a.strip_prefix("georef:") {
+            let r: Vec<f32> = v.split(',').map(|x| x.parse().unwrap()).collect();
+            pcfg.geodesic_reach_ratio = [r[0], r[1]];
+        }
+        if let Some(v) = a.strip_prefix("hand:") {
+            pcfg.hand_behind_tip = v.parse().unwrap();
+        }
         if let Some(v) = a.strip_prefix("band:") {
             pcfg.torso_front_band = v.parse().unwrap();
         }

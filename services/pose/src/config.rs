@@ -104,6 +104,9 @@ pub struct PoseConfig {
     pub surface_offset_arm: f32,
     pub surface_offset_leg: f32,
     pub surface_offset_head: f32,
+    /// The hand joint (palm centre) this far behind the arm's extremity (fingertips),
+    /// towards the elbow, instead of at the fitted chain's end; 0 = the chain's end.
+    pub hand_behind_tip: f32,
     /// Cost of leaving a limb without a maximum in the assignment (metres of geodesic
     /// cost), and the weight of the distance to the limb's last extremity.
     pub unassigned_cost: f32,
@@ -185,6 +188,7 @@ impl Default for PoseConfig {
             surface_offset_arm: 0.03,
             surface_offset_leg: 0.065,
             surface_offset_head: 0.07,
+            hand_behind_tip: 0.11,
             unassigned_cost: 1.2,
             dominated_cost: 0.3,
             temporal_weight: 0.3,

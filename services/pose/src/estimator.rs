@@ -595,7 +595,16 @@ impl PoseEstimator {
                             best = Some((fitc, e));
                         }
                     }
-                    let (fitc, e) = best.unwrap_or((c0, 0.0));
+                    let (mut fitc, e) = best.unwrap_or((c0, 0.0));
+                    // The hand follows the fingertips seen, a palm's length behind them
+                    // towards the elbow, rather than where the forearm's assumed length
+                    // puts it: a forearm a few centimetres off would otherwise shrink
+                    // every stroke the hand draws towards the elbow.
+                    if cfg.hand_behind_tip > 0.0 && matches!(l, Limb::LeftArm | Limb::RightArm) {
+                        if let Some(u) = (ext_b - fitc.mid).try_normalize(1e-6) {
+                            fitc.end = ext_b - u * cfg.hand_behind_tip;
+                        }
+                    }
                     let rms = e.sqrt();
                     let conf = ((1.0 - rms / 0.06).clamp(0.1, 1.0))
                         * (targets.len() as f32 / 30.0).clamp(0.2, 1.0);
