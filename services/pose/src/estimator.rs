@@ -318,7 +318,7 @@ impl PoseEstimator {
         let mut centre = kp[6];
         let root = self
             .graph
-            .nearest_node(&k, &Point3::from(torso.t), 12)
+            .nearest_node(&k, &Point3::from(torso.t), 24)
             .or_else(|| {
                 let a = self.graph.node_of_pixel[fit.core_pixel];
                 (a != NONE && self.graph.comp[a as usize] != NONE).then_some(a)

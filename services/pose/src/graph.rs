@@ -361,8 +361,10 @@ impl GeoGraph {
                     }
                 }
             }
-            // Once something is found, one more ring cannot hold a much nearer pixel.
-            if best.is_some() && r >= 2 {
+            // Once something near is found, one more ring cannot hold a much nearer
+            // pixel. Something far is no answer yet: a forearm held before the chest
+            // hides the torso around the torso centre's projection.
+            if best.is_some_and(|(d, _)| d < 0.15 * 0.15) && r >= 2 {
                 break;
             }
         }
