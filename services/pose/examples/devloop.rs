@@ -59,6 +59,9 @@ fn main() {
             let r: Vec<f32> = v.split(',').map(|x| x.parse().unwrap()).collect();
             pcfg.geodesic_reach_ratio = [r[0], r[1]];
         }
+        if let Some(v) = a.strip_prefix("headaxis:") {
+            pcfg.head_off_axis_weight = v.parse().unwrap();
+        }
         if let Some(v) = a.strip_prefix("hand:") {
             pcfg.hand_behind_tip = v.parse().unwrap();
         }

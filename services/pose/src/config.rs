@@ -113,6 +113,8 @@ pub struct PoseConfig {
     /// Extra cost, for the arms and legs, of a maximum that lies beside the geodesic
     /// path of a farther one (a bent elbow or knee beside the path to the hand or foot).
     pub dominated_cost: f32,
+    /// Cost per metre a head candidate lies sideways off the torso's axis (beyond 8 cm).
+    pub head_off_axis_weight: f32,
     pub temporal_weight: f32,
     /// Confidence multiplier per frame for a limb that keeps its last fit.
     pub occluded_decay: f32,
@@ -191,6 +193,7 @@ impl Default for PoseConfig {
             hand_behind_tip: 0.11,
             unassigned_cost: 1.2,
             dominated_cost: 0.3,
+            head_off_axis_weight: 5.0,
             temporal_weight: 0.3,
             occluded_decay: 0.7,
             calibrate_body: true,

@@ -419,7 +419,11 @@ impl PoseEstimator {
                 c += match l {
                     Limb::LeftArm | Limb::LeftLeg => (-local.x).max(0.0),
                     Limb::RightArm | Limb::RightLeg => local.x.max(0.0),
-                    Limb::Head => (-local.y).max(0.0),
+                    // The top of the head is on the torso's axis, not out on a shoulder.
+                    Limb::Head => {
+                        (-local.y).max(0.0)
+                            + cfg.head_off_axis_weight * (local.x.abs() - 0.08).max(0.0)
+                    }
                 };
                 // Feet stay below the hips.
                 if matches!(l, Limb::LeftLeg | Limb::RightLeg) {
