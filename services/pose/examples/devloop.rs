@@ -62,6 +62,11 @@ fn main() {
         if let Some(v) = a.strip_prefix("headaxis:") {
             pcfg.head_off_axis_weight = v.parse().unwrap();
         }
+        if let Some(v) = a.strip_prefix("hidden:") {
+            let r: Vec<f32> = v.split(',').map(|x| x.parse().unwrap()).collect();
+            pcfg.hidden_root_gap = r[0];
+            pcfg.hidden_root_cost = r[1];
+        }
         if let Some(v) = a.strip_prefix("hand:") {
             pcfg.hand_behind_tip = v.parse().unwrap();
         }

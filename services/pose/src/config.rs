@@ -115,6 +115,11 @@ pub struct PoseConfig {
     pub dominated_cost: f32,
     /// Cost per metre a head candidate lies sideways off the torso's axis (beyond 8 cm).
     pub head_off_axis_weight: f32,
+    /// An arm's geodesic path that passes its shoulder no nearer than this is taken to
+    /// reach the torso some hidden way (a hand against the hip); such a candidate costs
+    /// `hidden_root_cost` plus how far it lies beyond the arm's reach. 0 = off.
+    pub hidden_root_gap: f32,
+    pub hidden_root_cost: f32,
     pub temporal_weight: f32,
     /// Confidence multiplier per frame for a limb that keeps its last fit.
     pub occluded_decay: f32,
@@ -194,6 +199,8 @@ impl Default for PoseConfig {
             unassigned_cost: 1.2,
             dominated_cost: 0.3,
             head_off_axis_weight: 5.0,
+            hidden_root_gap: 0.12,
+            hidden_root_cost: 0.3,
             temporal_weight: 0.3,
             occluded_decay: 0.7,
             calibrate_body: true,

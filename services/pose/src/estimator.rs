@@ -402,14 +402,34 @@ impl PoseEstimator {
                     }
                 }
                 let p_cut = self.path[near.1];
-                let best = (
+                let mut best = (
                     dm - self.dist0[p_cut as usize] as f32 * 1e-3 + near.0,
                     near.1,
                 );
                 // The geodesic length of a limb hardly depends on how it is bent.
                 let (l1, l2) = cfg.bones(l);
                 let reach = l1 + l2 + cfg.extremity_extra(l);
-                let mut c = (best.0 - reach).abs();
+                // A hand resting against the hip or held before the chest may reach the
+                // torso by a path that never passes its shoulder: the arm's own link is
+                // hidden. Its geodesic length then says nothing; it must only be within
+                // the arm's reach, and its targets are the forearm's and hand's.
+                let hidden = matches!(l, Limb::LeftArm | Limb::RightArm)
+                    && cfg.hidden_root_gap > 0.0
+                    && near.0 > cfg.hidden_root_gap;
+                let mut c = if hidden {
+                    let distal = ((l2 + cfg.extremity_extra(l)) * 1000.0) as u32;
+                    let d_m = self.dist0[m as usize];
+                    let end = self
+                        .path
+                        .iter()
+                        .position(|&p| d_m.saturating_sub(self.dist0[p as usize]) >= distal)
+                        .unwrap_or(self.path.len() - 1);
+                    best = (f32::NAN, end);
+                    let euclid = (self.graph.pos[m as usize] - r).norm();
+                    (euclid - reach).max(0.0) + cfg.hidden_root_cost
+                } else {
+                    (best.0 - reach).abs() + (near.0 - 0.05).max(0.0)
+                };
                 if let Some(prev) = self.limbs[l.index()].and_then(|s| s.extremity) {
                     let pm = self.graph.pos[m as usize];
                     c += cfg.temporal_weight * (inv.apply(&pm) - prev).norm();
@@ -429,9 +449,6 @@ impl PoseEstimator {
                 if matches!(l, Limb::LeftLeg | Limb::RightLeg) {
                     c += (local.y - cfg.torso_keypoints[4][1] + 0.2).max(0.0);
                 }
-                // The limb's geodesic path passes by its root.
-                let gap = (self.graph.pos[self.path[best.1] as usize] - r).norm();
-                c += (gap - 0.05).max(0.0);
                 row[l.index()] = c;
                 cut[l.index()] = best.1;
                 len[l.index()] = best.0;
