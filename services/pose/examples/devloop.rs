@@ -55,6 +55,12 @@ fn main() {
     let n = synth.len().map_or(frames, |l| l.min(frames));
     let mut pcfg = PoseConfig::default();
     for a in &args {
+        // set:FIELD=VALUE sets any PoseConfig field (VALUE as JSON).
+        if let Some((k, v)) = a.strip_prefix("set:").and_then(|kv| kv.split_once('=')) {
+            let mut j = serde_json::to_value(&pcfg).unwrap();
+            j[k] = serde_json::from_str(v).expect("a JSON value");
+            pcfg = serde_json::from_value(j).expect("a PoseConfig field");
+        }
         if let Some(v) = a.strip_prefix("georef:") {
             let r: Vec<f32> = v.split(',').map(|x| x.parse().unwrap()).collect();
             pcfg.geodesic_reach_ratio = [r[0], r[1]];
