@@ -124,6 +124,14 @@ pub struct PoseConfig {
     /// Confidence multiplier per frame for a limb that keeps its last fit.
     pub occluded_decay: f32,
 
+    // --- smoothing over time ---
+    /// One Euro filter of every joint coordinate: cut-off at rest (Hz; 0 = off) and its
+    /// rise with speed (per m/s).
+    pub smoothing_min_cutoff: f64,
+    pub smoothing_beta: f64,
+    /// Frame rate [`crate::PoseEstimator::estimate`] assumes between calls.
+    pub nominal_fps: f64,
+
     // --- body-size calibration ---
     /// Learn the person's arm and leg lengths from the geodesic lengths of their limbs
     /// ([`crate::calibrate`]) instead of keeping the bone lengths above.
@@ -203,6 +211,9 @@ impl Default for PoseConfig {
             hidden_root_cost: 0.3,
             temporal_weight: 0.3,
             occluded_decay: 0.7,
+            smoothing_min_cutoff: 3.0,
+            smoothing_beta: 5.0,
+            nominal_fps: 30.0,
             calibrate_body: true,
             geodesic_reach_ratio: [1.32, 1.21],
         }

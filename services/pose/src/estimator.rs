@@ -7,6 +7,7 @@ use crate::graph::{GeoGraph, NONE};
 use crate::limbs::{assign, fit_chain, Chain};
 use crate::segment::{Plane, Segmenter};
 use crate::torso::{keypoints, TorsoEstimator, TorsoPose};
+use airglyph_core::filter::OneEuro;
 use airglyph_core::{DepthView, Intrinsics, Joint, Skeleton};
 use nalgebra::{Point3, Vector3};
 use std::time::Instant;
@@ -96,6 +97,9 @@ pub struct PoseEstimator {
     /// The person's limb lengths, learned as they move; kept when the person is lost
     /// for a moment.
     calib: BodyCalibration,
+    /// One filter per joint coordinate, and the time of the last frame (seconds).
+    smooth: Vec<[OneEuro; 3]>,
+    clock: Option<f64>,
     times: StepTimes,
     debug: Debug,
 }
@@ -125,6 +129,8 @@ impl PoseEstimator {
             prev_centroid: None,
             limbs: [None; 5],
             calib: BodyCalibration::default(),
+            smooth: Vec::new(),
+            clock: None,
             times: StepTimes::default(),
             debug: Debug::default(),
         }
@@ -154,6 +160,7 @@ impl PoseEstimator {
     /// person lost for a frame is most likely the same one when found again.
     fn lose_track(&mut self) {
         self.prev_torso = None;
+        self.smooth.clear();
         self.prev_offset = None;
         self.prev_floor = None;
         self.prev_centroid = None;
@@ -175,8 +182,19 @@ impl PoseEstimator {
         &self.mask
     }
 
-    /// The skeleton of one depth frame. Never panics and never returns NaN.
+    /// The skeleton of one depth frame, taken to follow the last one by a frame period
+    /// of [`PoseConfig::nominal_fps`]. Never panics and never returns NaN.
     pub fn estimate(&mut self, depth: DepthView) -> PoseResult {
+        let t = self
+            .clock
+            .map_or(0.0, |c| c + 1.0 / self.cfg.nominal_fps.max(1.0));
+        self.estimate_at(depth, t)
+    }
+
+    /// The skeleton of one depth frame captured at `time_s` seconds (any origin; not
+    /// decreasing), which paces the joints' smoothing. Never panics, never NaN.
+    pub fn estimate_at(&mut self, depth: DepthView, time_s: f64) -> PoseResult {
+        self.clock = Some(time_s);
         let lost = PoseResult {
             person_found: false,
             skeleton: Skeleton {
@@ -187,7 +205,7 @@ impl PoseEstimator {
         match self.estimate_inner(depth) {
             Some(s) if s.is_finite() => PoseResult {
                 person_found: true,
-                skeleton: s,
+                skeleton: self.smoothed(s, time_s),
             },
             _ => {
                 self.lose_track();
@@ -243,12 +261,12 @@ impl PoseEstimator {
         } else {
             (depth, k_full)
         };
-        let r = self.estimate_at(depth, k);
+        let r = self.estimate_with(depth, k);
         self.small = small;
         r
     }
 
-    fn estimate_at(&mut self, depth: DepthView, k: Intrinsics) -> Option<Skeleton> {
+    fn estimate_with(&mut self, depth: DepthView, k: Intrinsics) -> Option<Skeleton> {
         let (w, h) = (depth.width() as usize, depth.height() as usize);
         if k.validate().is_err() {
             return None;
@@ -679,6 +697,25 @@ impl PoseEstimator {
         let t5 = Instant::now();
         self.times.limbs = (t5 - t4).as_secs_f64();
         Some(skel)
+    }
+
+    /// The joints filtered over time: still joints stop jittering with the sensor's
+    /// noise, moving ones keep up.
+    fn smoothed(&mut self, mut s: Skeleton, t: f64) -> Skeleton {
+        let (fc, beta) = (self.cfg.smoothing_min_cutoff, self.cfg.smoothing_beta);
+        if fc <= 0.0 {
+            return s;
+        }
+        if self.smooth.len() != Joint::COUNT {
+            let f = OneEuro::new(fc, beta, 1.0);
+            self.smooth = vec![[f.clone(), f.clone(), f]; Joint::COUNT];
+        }
+        for (p, f) in s.joints.iter_mut().zip(&mut self.smooth) {
+            for (c, fi) in f.iter_mut().enumerate() {
+                p[c] = fi.filter(p[c] as f64, t) as f32;
+            }
+        }
+        s
     }
 
     /// The torso turned about its axis to face where the toes point, when the two

@@ -24,7 +24,9 @@
 //!   with no person the skeleton is all zeros with confidence 0. The estimator keeps
 //!   state between frames (torso registration, last limb fits): one estimator per
 //!   camera stream; [`PoseEstimator::reset`] after a gap. Frames whose size differs
-//!   from the intrinsics are handled with the intrinsics scaled to them.
+//!   from the intrinsics are handled with the intrinsics scaled to them. It takes the
+//!   frames to be [`PoseConfig::nominal_fps`] apart; with capture times, use
+//! * [`PoseEstimator::estimate_at`]`(&mut self, depth, time_s: f64) -> PoseResult`.
 //! * [`PoseEstimator::step_times`] gives the time of each step of the last frame.
 //!
 //! # Method, in the order of the steps
@@ -69,7 +71,19 @@
 //!   (the seen surface lies in front of the bone), and targets beyond the chain's end
 //!   (fingers, toes) weigh 0.1.
 //! * Key points and bone lengths in [`PoseConfig::default`] were measured on the
-//!   MakeHuman body of airglyph-synth standing still; another body needs its own.
+//!   MakeHuman body of airglyph-synth standing still. Arm and leg lengths are then
+//!   learned for the person in view from their limbs' geodesic lengths ([`calibrate`]).
+//! * Segmentation keeps the person's own parts that meet the body only across depth
+//!   jumps (an arm raised before the chest hides its shoulder); points of a limb before
+//!   the chest stay out of the torso's PCA; the geodesic root is a torso node even when
+//!   a forearm covers the torso centre's projection.
+//! * A maximum beside a farther one's path (a bent elbow or knee) is no limb's end; a
+//!   head candidate out on a shoulder costs more; an arm whose path misses its shoulder
+//!   (a hand against the hip) is judged by reach, not geodesic length.
+//! * The hand is placed a palm behind the fingertips seen, towards the elbow, not at
+//!   the chain's end, so an arm length a little off does not shrink the strokes drawn.
+//! * Joints are smoothed over time by the One Euro filter (airglyph-core): still joints
+//!   stop jittering with the sensor's noise, moving ones keep up.
 //!
 //! [`metrics`] holds the evaluation against ground truth (Eq. 16.20–16.22, share within
 //! 10 cm, mAP at 10 cm), [`overlay`] draws skeletons on depth images.

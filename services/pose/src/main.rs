@@ -38,7 +38,13 @@ struct CameraEstimator {
 }
 
 impl CameraEstimator {
-    fn estimate(&mut self, k: Intrinsics, depth: DepthView<'_>) -> airglyph_pose::PoseResult {
+    /// The skeleton of a frame captured at `capture_ns` (paces the joints' smoothing).
+    fn estimate(
+        &mut self,
+        k: Intrinsics,
+        depth: DepthView<'_>,
+        capture_ns: u64,
+    ) -> airglyph_pose::PoseResult {
         if self.estimator.as_ref().is_none_or(|e| *e.intrinsics() != k) {
             tracing::info!(
                 width = k.width,
@@ -47,7 +53,10 @@ impl CameraEstimator {
             );
             self.estimator = Some(PoseEstimator::new(k, PoseConfig::default()));
         }
-        self.estimator.as_mut().expect("made above").estimate(depth)
+        self.estimator
+            .as_mut()
+            .expect("made above")
+            .estimate_at(depth, capture_ns as f64 * 1e-9)
     }
 }
 
@@ -91,7 +100,7 @@ fn run(args: Args) -> anyhow::Result<()> {
             h.set_intrinsics(&k);
             let receive_ns = monotonic_ns();
             h.publish_ns = receive_ns;
-            let r = stage.estimate(k, DepthView::new(k.width, k.height, &px)?);
+            let r = stage.estimate(k, DepthView::new(k.width, k.height, &px)?, capture_ns);
             let mut msg = skeleton_msg(&h, receive_ns, &r);
             msg.chain.pose_publish_ns = monotonic_ns();
             publisher.send(msg)?;
@@ -114,7 +123,7 @@ fn run(args: Args) -> anyhow::Result<()> {
         let Some(frame) = frame else { continue };
         let h = *frame.header();
         telemetry.input(frame.receive_ns - h.publish_ns, frame.dropped);
-        let r = stage.estimate(h.intrinsics(), frame.view());
+        let r = stage.estimate(h.intrinsics(), frame.view(), h.capture_ns);
         let mut msg = skeleton_msg(&h, frame.receive_ns, &r);
         // Hand the frame's shared memory back before we publish.
         drop(frame);

@@ -218,3 +218,40 @@ fn a_forearm_raised_before_the_chest_stays_part_of_the_person() {
         "drawing hand off by over 20 cm in {far} frames: {errors:?}"
     );
 }
+
+/// A person standing still before a noisy sensor: the smoothed joints jitter much less
+/// from frame to frame than the raw estimates.
+#[test]
+fn a_still_person_does_not_jitter_with_the_sensor_noise() {
+    let k = qvga();
+    let cfg = SceneConfig {
+        sensor_noise: true,
+        ..scene(ScriptedPose::Neutral)
+    };
+    let mut synth = Synthesizer::new(cfg).expect("scene");
+    let frames: Vec<_> = (0..40).map(|i| synth.render(i).0).collect();
+    let jitter = |pcfg: PoseConfig| {
+        let mut est = PoseEstimator::new(k, pcfg);
+        let mut prev: Option<airglyph_core::Skeleton> = None;
+        let mut sum = 0.0f32;
+        for (i, img) in frames.iter().enumerate() {
+            let r = est.estimate(img.view());
+            check(&r);
+            assert!(r.person_found);
+            if let (Some(p), true) = (prev, i >= 10) {
+                sum += Joint::ALL
+                    .iter()
+                    .map(|&j| (r.skeleton[j] - p[j]).norm())
+                    .sum::<f32>();
+            }
+            prev = Some(r.skeleton);
+        }
+        sum
+    };
+    let raw = jitter(PoseConfig {
+        smoothing_min_cutoff: 0.0,
+        ..PoseConfig::default()
+    });
+    let smooth = jitter(PoseConfig::default());
+    assert!(smooth < 0.6 * raw, "smoothed {smooth} vs raw {raw}");
+}
