@@ -45,6 +45,9 @@ pub struct PoseConfig {
     pub icp_iterations: usize,
     /// Registration whose RMS residual exceeds this is redone from the PCA initialisation.
     pub icp_reinit_residual: f32,
+    /// How far along its axis the registered torso may lie from the torso region's
+    /// centre when the next frame's registration starts from it (0 = unbounded).
+    pub max_torso_offset: f32,
     /// Turns (degrees, about the torso axis) of the PCA frame tried when registering
     /// afresh; the lowest residual wins (the first unless another is 10 % better).
     pub reinit_yaws: Vec<f32>,
@@ -162,6 +165,7 @@ impl Default for PoseConfig {
             icp_max_dist: 0.1,
             icp_iterations: 12,
             icp_reinit_residual: 0.035,
+            max_torso_offset: 0.09,
             reinit_yaws: vec![0.0],
             feet_facing: true,
             torso_half_width: 0.16,

@@ -540,7 +540,15 @@ impl PoseEstimator {
             inv = torso.inverse();
         }
 
-        self.prev_offset = Some(reg_pose.r.inverse() * (reg_pose.t - fit.pca.t));
+        // The registered torso may have slid along its axis, which closest points do
+        // not pin; the next frame starts no farther from the torso region's centre
+        // than a torso can be, or the slide would be carried on for good.
+        let mut offset = reg_pose.r.inverse() * (reg_pose.t - fit.pca.t);
+        let lim = cfg.max_torso_offset;
+        if lim > 0.0 {
+            offset.y = offset.y.clamp(-lim, lim);
+        }
+        self.prev_offset = Some(offset);
 
         // 6. Target points and chain fitting per limb.
         let mut skel = Skeleton::new([Point3::origin(); Joint::COUNT]);
