@@ -3,6 +3,7 @@
 //! gesture does not depend on where the person stands or how tall they are; smoothed by
 //! the One Euro filter (Casiez, Roussel, Vogel, CHI 2012).
 
+pub use airglyph_core::filter::OneEuro;
 use airglyph_core::{Joint, Skeleton};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
@@ -21,57 +22,6 @@ impl Hand {
             Hand::Left => "left",
             Hand::Right => "right",
         }
-    }
-}
-
-/// One Euro filter for one coordinate.
-#[derive(Debug, Clone)]
-pub struct OneEuro {
-    pub min_cutoff: f64,
-    pub beta: f64,
-    pub d_cutoff: f64,
-    x: Option<f64>,
-    dx: f64,
-    t: f64,
-}
-
-fn alpha(cutoff: f64, dt: f64) -> f64 {
-    let tau = 1.0 / (2.0 * std::f64::consts::PI * cutoff);
-    1.0 / (1.0 + tau / dt)
-}
-
-impl OneEuro {
-    pub fn new(min_cutoff: f64, beta: f64, d_cutoff: f64) -> Self {
-        Self {
-            min_cutoff,
-            beta,
-            d_cutoff,
-            x: None,
-            dx: 0.0,
-            t: 0.0,
-        }
-    }
-
-    /// Filters `x` observed at time `t` seconds.
-    pub fn filter(&mut self, x: f64, t: f64) -> f64 {
-        let Some(prev) = self.x else {
-            self.x = Some(x);
-            self.t = t;
-            return x;
-        };
-        let dt = (t - self.t).max(1e-4);
-        self.t = t;
-        let dx = (x - prev) / dt;
-        self.dx += alpha(self.d_cutoff, dt) * (dx - self.dx);
-        let cutoff = self.min_cutoff + self.beta * self.dx.abs();
-        let v = prev + alpha(cutoff, dt) * (x - prev);
-        self.x = Some(v);
-        v
-    }
-
-    pub fn reset(&mut self) {
-        self.x = None;
-        self.dx = 0.0;
     }
 }
 
