@@ -277,13 +277,31 @@ impl Segmenter {
         person: usize,
         cfg: &PoseConfig,
     ) -> Vec<usize> {
-        // Pairs of bordering blobs, with how many pixels touch.
+        // Which blobs could be part of this body at all: within arm's reach of it,
+        // neither far in front of it nor behind it (walls and other people are not).
+        let p = &blobs[person];
+        let centre = p.moments.mean();
+        let near = |x: Vector3<f32>| (x - centre.coords).norm() < 1.4;
+        let eligible: Vec<bool> = blobs
+            .iter()
+            .enumerate()
+            .map(|(bi, b)| {
+                bi == person
+                    || ((b.moments.mean() - centre).norm() < 1.0
+                        && near(b.min)
+                        && near(b.max)
+                        && b.min.z > p.min.z - 0.9
+                        && b.max.z < p.max.z + 0.25
+                        && b.area <= cfg.max_person_area)
+            })
+            .collect();
+        // Pairs of such blobs that border each other, one entry a touching pixel.
         self.contacts.clear();
         for v in 0..h {
             for u in 0..w {
                 let i = v * w + u;
                 let la = self.labels[i];
-                if la == u32::MAX || points[i].z <= 0.0 {
+                if la == u32::MAX || points[i].z <= 0.0 || !eligible[la as usize] {
                     continue;
                 }
                 for j in [(u + 1 < w).then(|| i + 1), (v + 1 < h).then(|| i + w)]
@@ -291,15 +309,13 @@ impl Segmenter {
                     .flatten()
                 {
                     let lb = self.labels[j];
-                    if lb != u32::MAX && lb != la {
+                    if lb != u32::MAX && lb != la && eligible[lb as usize] {
                         self.contacts.push((la.min(lb), la.max(lb)));
                     }
                 }
             }
         }
         self.contacts.sort_unstable();
-        let p = &blobs[person];
-        let centre = p.moments.mean();
         let mut area = p.area;
         let mut taken = vec![person];
         let mut frontier = vec![person];
@@ -316,15 +332,8 @@ impl Segmenter {
                 if taken.contains(&other) {
                     continue;
                 }
-                let b = &blobs[other];
-                let near = |x: Vector3<f32>| (x - centre.coords).norm() < 1.4;
-                let within_reach = (b.moments.mean() - centre).norm() < 1.0
-                    && near(b.min)
-                    && near(b.max)
-                    && b.min.z > p.min.z - 0.9
-                    && b.max.z < p.max.z + 0.25;
-                if within_reach && area + b.area <= cfg.max_person_area {
-                    area += b.area;
+                if area + blobs[other].area <= cfg.max_person_area {
+                    area += blobs[other].area;
                     taken.push(other);
                     frontier.push(other);
                 }
