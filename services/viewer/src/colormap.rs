@@ -75,7 +75,7 @@ pub fn colourize(depth: &DepthView<'_>, out: &mut [u8]) {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     #[test]
@@ -95,6 +95,11 @@ mod tests {
         // Out of range clamps instead of wrapping round.
         assert_eq!(colour(500, range), near);
         assert_eq!(colour(9000, range), far);
+    }
+
+    /// Every colour the depth image can take, for checks that overlays stand out.
+    pub(crate) fn all_colours() -> Vec<Rgb<u8>> {
+        lut().to_vec()
     }
 
     #[test]

@@ -7,12 +7,14 @@ use crate::draw::{disc, line, rect, text, text_height, text_width};
 use airglyph_core::{DepthView, Intrinsics, Joint, Skeleton};
 use image::{Rgb, RgbImage};
 
+// Colours the depth map never takes (it spans turbo's blues, greens, yellows and reds),
+// so the overlay stands out on any depth, even after JPEG compression.
 pub const BONE: Rgb<u8> = Rgb([255, 255, 255]);
 /// A joint the pose stage is sure of (confidence ≥ [`SURE`]).
-pub const JOINT: Rgb<u8> = Rgb([0, 230, 118]);
-pub const JOINT_UNSURE: Rgb<u8> = Rgb([255, 145, 0]);
-pub const TRAIL: Rgb<u8> = Rgb([255, 214, 0]);
-pub const BEZIER: Rgb<u8> = Rgb([255, 0, 200]);
+pub const JOINT: Rgb<u8> = Rgb([255, 0, 255]);
+pub const JOINT_UNSURE: Rgb<u8> = Rgb([128, 128, 128]);
+pub const TRAIL: Rgb<u8> = Rgb([255, 255, 120]);
+pub const BEZIER: Rgb<u8> = Rgb([160, 0, 255]);
 pub const TEXT: Rgb<u8> = Rgb([255, 255, 255]);
 const PANEL: Rgb<u8> = Rgb([0, 0, 0]);
 
@@ -62,6 +64,8 @@ pub fn render(depth: DepthView<'_>, k: &Intrinsics, o: &Overlay) -> RgbImage {
         line(&mut img, pair[0], pair[1], sf, BEZIER, 0.8);
     }
     for p in &o.bezier {
+        // A white rim keeps the points visible over the trail and over dark depth.
+        disc(&mut img, p[0], p[1], 3.0 * sf + 1.0, BONE, 1.0);
         disc(&mut img, p[0], p[1], 3.0 * sf, BEZIER, 1.0);
     }
     gestures(&mut img, &o.gestures, s);
@@ -230,6 +234,20 @@ mod tests {
         assert_eq!(img.get_pixel(600, 200), bare.get_pixel(600, 200));
         assert_eq!(count(&bare, JOINT), 0);
         assert!(count(&img, JOINT) > 15 * 20, "every joint is a disc");
+    }
+
+    #[test]
+    fn overlay_colours_stand_out_from_every_depth_colour() {
+        // Far enough that a JPEG of the picture keeps them apart too (the system test
+        // finds the joints in a browser's screenshot by colour).
+        for c in [JOINT, JOINT_UNSURE, TRAIL, BEZIER, BONE, TEXT] {
+            let nearest = crate::colormap::tests::all_colours()
+                .into_iter()
+                .map(|d| (0..3).map(|k| c[k].abs_diff(d[k]) as u32).max().unwrap())
+                .min()
+                .unwrap();
+            assert!(nearest >= 60, "{c:?} is within {nearest} of a depth colour");
+        }
     }
 
     #[test]

@@ -30,6 +30,7 @@ pub struct ServeConfig {
     pub quality: u8,
 }
 
+#[derive(Clone)]
 struct Encoded {
     /// [`Scene::frames_in`] when it was drawn.
     id: u64,
@@ -85,7 +86,7 @@ impl Shared {
 
     /// The next picture newer than `after` (a [`Scene::frames_in`] value), waiting up to
     /// [`LONG_POLL`] for one; `None` when none came.
-    fn next_jpeg(&self, after: u64) -> Result<Option<(u64, Arc<Vec<u8>>)>, String> {
+    fn next_jpeg(&self, after: u64) -> Result<Option<Encoded>, String> {
         let deadline = Instant::now() + LONG_POLL;
         let mut scene = relock(&self.scene);
         while scene.frames_in() <= after {
@@ -112,18 +113,16 @@ impl Shared {
             (scene.frames_in(), scene.picture(monotonic_ns()))
         };
         if let Some(last) = enc.last.as_ref().filter(|l| l.id == id) {
-            return Ok(Some((id, last.jpeg.clone())));
+            return Ok(Some(last.clone()));
         }
         let Some(p) = picture else { return Ok(None) };
         let img = render(p.frame.view(), &p.intrinsics, &p.overlay);
         let jpeg = Arc::new(encode_jpeg(&img, self.config.quality).map_err(|e| e.to_string())?);
         enc.next_at = started + Duration::from_secs_f64(1.0 / self.config.max_fps);
         enc.pictures += 1;
-        enc.last = Some(Encoded {
-            id,
-            jpeg: jpeg.clone(),
-        });
-        Ok(Some((id, jpeg)))
+        let encoded = Encoded { id, jpeg };
+        enc.last = Some(encoded.clone());
+        Ok(Some(encoded))
     }
 
     fn snapshot_png(&self) -> Result<Option<Vec<u8>>, String> {
@@ -269,8 +268,8 @@ fn route(shared: &Shared, method: &Method, url: &str) -> Reply {
                 Some(Err(_)) => return text(400, "after must be a picture number"),
             };
             match shared.next_jpeg(after) {
-                Ok(Some((id, jpeg))) => reply(200, "image/jpeg", jpeg.to_vec())
-                    .with_header(header("X-Picture", &id.to_string())),
+                Ok(Some(e)) => reply(200, "image/jpeg", e.jpeg.to_vec())
+                    .with_header(header("X-Picture", &e.id.to_string())),
                 Ok(None) => text(204, ""),
                 Err(e) => text(500, &format!("cannot encode the picture: {e}")),
             }
@@ -333,9 +332,13 @@ mod tests {
     #[test]
     fn the_next_picture_waits_for_a_newer_frame_and_is_a_jpeg() {
         let shared = shared_with_frames(3);
-        let (id, jpeg) = shared.next_jpeg(0).unwrap().unwrap();
-        assert_eq!(id, 3);
-        assert_eq!(&jpeg[..2], &[0xFF, 0xD8], "a JPEG's start-of-image marker");
+        let e = shared.next_jpeg(0).unwrap().unwrap();
+        assert_eq!(e.id, 3);
+        assert_eq!(
+            &e.jpeg[..2],
+            &[0xFF, 0xD8],
+            "a JPEG's start-of-image marker"
+        );
         let t = Instant::now();
         assert!(shared.next_jpeg(3).unwrap().is_none(), "nothing newer");
         assert!(t.elapsed() >= LONG_POLL);
