@@ -130,43 +130,64 @@ fn trail(img: &mut RgbImage, points: &[[f32; 2]], sf: f32) {
     }
 }
 
-/// The newest gesture large in the top-left corner with its score, older ones below.
+/// The newest gesture large in the top-left corner with its score and age beside it,
+/// the three before it small below: compact, so it hides little of the person.
 fn gestures(img: &mut RgbImage, gestures: &[GestureLine], s: u32) {
     let pad = 4 * s as i64;
-    let big = 5 * s;
-    let mut lines: Vec<(String, u32)> = Vec::new();
-    match gestures.split_first() {
-        None => lines.push(("no gesture yet".into(), s)),
-        Some((newest, older)) => {
-            lines.push((newest.label.clone(), big));
-            lines.push((
-                format!("score {:.2}  {}", newest.score, age(newest.age_s)),
-                s,
-            ));
-            for g in older.iter().take(4) {
-                lines.push((format!("{}  {:.2}  {}", g.label, g.score, age(g.age_s)), s));
-            }
-        }
-    }
-    let width = lines
+    let Some((newest, older)) = gestures.split_first() else {
+        let t = "no gesture yet";
+        rect(
+            img,
+            0,
+            0,
+            text_width(t, s) + 2 * pad,
+            text_height(s) + 2 * pad,
+            PANEL,
+            0.55,
+        );
+        text(img, pad, pad, t, s, TEXT);
+        return;
+    };
+    let big = 4 * s;
+    let beside_x = pad + text_width(&newest.label, big) + pad;
+    let beside = [format!("score {:.2}", newest.score), age(newest.age_s)];
+    let below: Vec<String> = older
         .iter()
-        .map(|(t, sc)| text_width(t, *sc))
+        .take(3)
+        .map(|g| format!("{} {:.2} {}", g.label, g.score, age(g.age_s)))
+        .collect();
+    let line = text_height(s) + pad / 2;
+    let width = below
+        .iter()
+        .map(|t| pad + text_width(t, s))
+        .chain(beside.iter().map(|t| beside_x + text_width(t, s)))
         .max()
-        .unwrap_or(0);
-    let height: i64 = lines.iter().map(|(_, sc)| text_height(*sc) + pad).sum();
-    rect(img, 0, 0, width + 2 * pad, height + pad, PANEL, 0.55);
-    let mut y = pad;
-    for (t, sc) in &lines {
-        text(img, pad, y, t, *sc, TEXT);
-        y += text_height(*sc) + pad;
+        .unwrap_or(0)
+        + pad;
+    let top = pad + text_height(big).max(2 * line) + pad / 2;
+    rect(
+        img,
+        0,
+        0,
+        width,
+        top + below.len() as i64 * line + pad / 2,
+        PANEL,
+        0.55,
+    );
+    text(img, pad, pad, &newest.label, big, TEXT);
+    for (i, t) in beside.iter().enumerate() {
+        text(img, beside_x, pad + i as i64 * line, t, s, TEXT);
+    }
+    for (i, t) in below.iter().enumerate() {
+        text(img, pad, top + i as i64 * line, t, s, TEXT);
     }
 }
 
 fn age(s: f32) -> String {
     if s < 60.0 {
-        format!("{s:.0} s ago")
+        format!("{s:.0}s ago")
     } else {
-        format!("{:.0} min ago", s / 60.0)
+        format!("{:.0}min ago", s / 60.0)
     }
 }
 
@@ -278,7 +299,7 @@ mod tests {
         let oldest = img.get_pixel(302, 302);
         assert!(oldest[1] < newest[1] - 50, "the oldest fades: {oldest:?}");
         assert_eq!(*img.get_pixel(400, 320), *img.get_pixel(600, 200));
-        // The label "7" at five times 8×8 in the top-left panel, its caption at the bottom.
+        // The label "7" at four times 8×8 in the top-left panel, its caption at the bottom.
         let panel_text = (0..60u32)
             .flat_map(|y| (0..60u32).map(move |x| (x, y)))
             .filter(|&(x, y)| *img.get_pixel(x, y) == TEXT)
