@@ -248,6 +248,8 @@ impl Scene {
                 sel.frame.header.session == self.session.unwrap_or(0)
                     && Some(h.hand) == last_hand
                     && h.capture_ns <= end
+                    // A pose stage that stopped must not leave its last trail on new frames.
+                    && h.capture_ns + TRAIL_NS >= end
                     && h.sequence <= sel.frame.header.sequence
             })
             .filter_map(|h| k.project(&h.at).map(|(u, v)| [u, v]))
@@ -508,6 +510,16 @@ mod tests {
         m.session = SESSION + 1;
         scene.push_skeleton(m);
         assert_eq!(scene.picture(0).unwrap().overlay.trail.len(), 1);
+        // Frames long after the last skeleton (pose stopped) carry no trail, once the
+        // skeleton's own frame has left the ring.
+        for seq in 200..200 + FRAME_RING as u64 {
+            let mut late = header(seq);
+            late.session = SESSION + 1;
+            scene.push_depth(late, &pixels(seq), 0);
+        }
+        let p = scene.picture(0).unwrap();
+        assert_eq!(p.frame.header.sequence, 200 + FRAME_RING as u64 - 1);
+        assert!(p.overlay.trail.is_empty() && p.overlay.skeleton.is_none());
     }
 
     #[test]

@@ -125,11 +125,21 @@ impl Shared {
         Ok(Some(encoded))
     }
 
+    /// A lossless picture, paced with the JPEGs: asking for PNGs in a loop must not
+    /// take more of the machine than watching does.
     fn snapshot_png(&self) -> Result<Option<Vec<u8>>, String> {
+        let mut enc = relock(&self.encoder);
+        let now = Instant::now();
+        if enc.next_at > now {
+            std::thread::sleep(enc.next_at - now);
+        }
+        let started = Instant::now();
         let picture = relock(&self.scene).picture(monotonic_ns());
         let Some(p) = picture else { return Ok(None) };
         let img = render(p.frame.view(), &p.intrinsics, &p.overlay);
-        encode_png(&img).map(Some).map_err(|e| e.to_string())
+        let png = encode_png(&img).map_err(|e| e.to_string())?;
+        enc.next_at = started + Duration::from_secs_f64(1.0 / self.config.max_fps);
+        Ok(Some(png))
     }
 
     fn state(&self) -> serde_json::Value {
