@@ -175,7 +175,9 @@ fn a_slow_gesture_stage_never_slows_capture() {
         gesture_dropped > 0,
         "the slow stage drops skeletons and counts them: {stats}"
     );
-    assert!(gesture_in + gesture_dropped <= pose_out + 8, "{stats}");
+    // Each stage reports once a second, not at the same moment: the gesture stage's
+    // report may count up to a second (30 frames) of skeletons past pose's last one.
+    assert!(gesture_in + gesture_dropped <= pose_out + 30 + 8, "{stats}");
     shut_down(&p, supervisor);
 }
 

@@ -18,7 +18,7 @@ enum Command {
     // One variant a subcommand; its arguments and `run` live in `cmd/<name>.rs`.
     /// A synthetic person draws symbols; the full pipeline names them (no camera needed).
     Demo(cmd::demo::Args),
-    /// Start the pipeline and print each gesture it recognizes.
+    /// Start the pipeline and print each gesture it recognizes (--view: and show it in a browser).
     Run(cmd::run::Args),
     /// Find the gestures drawn in a recording, offline (pose, then the spotter).
     Spot(cmd::spot::Args),
@@ -28,6 +28,8 @@ enum Command {
     Devices(cmd::devices::Args),
     /// Show each stage's frame rate, drops and latency, live.
     Top(cmd::top::Args),
+    /// Write the viewer's picture of the running pipeline (depth, skeleton, trail, gestures) to a PNG.
+    Snapshot(cmd::snapshot::Args),
     /// Measure each stage's latency frame by frame; write CSV, JSON and histograms.
     Profile(cmd::profile::Args),
     /// Render a synthetic person into a recording with exact ground-truth joints.
@@ -56,6 +58,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Command::Record(a) => cmd::record::run(a),
         Command::Devices(a) => cmd::devices::run(a),
         Command::Top(a) => cmd::top::run(a),
+        Command::Snapshot(a) => cmd::snapshot::run(a),
         Command::Profile(a) => cmd::profile::run(a),
         Command::Synth(a) => cmd::synth::run(a),
         Command::Train(a) => cmd::train::run(a),

@@ -23,6 +23,12 @@ pub struct Args {
     /// The gesture model (default: the shipped 36-symbol model).
     #[arg(long)]
     model: Option<std::path::PathBuf>,
+    /// Also start the viewer: watch the person, skeleton and gestures in a browser.
+    #[arg(long)]
+    view: bool,
+    /// With --view: the viewer's address (default 127.0.0.1:8080).
+    #[arg(long, value_name = "ADDR", requires = "view")]
+    listen: Option<std::net::SocketAddr>,
 }
 
 /// The drawn symbol a spotted gesture belongs to: the one its frames overlap most.
@@ -102,6 +108,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             frames: None,
             stage_args,
             max_restarts: 5,
+            view: args.view,
+            listen: args.listen,
         },
         &mut on_event,
     )?;

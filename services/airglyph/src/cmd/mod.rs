@@ -9,6 +9,7 @@ pub mod pose;
 pub mod profile;
 pub mod record;
 pub mod run;
+pub mod snapshot;
 pub mod spot;
 pub mod synth;
 pub mod top;

@@ -15,6 +15,9 @@ use std::time::{Duration, Instant};
 /// again within 2 s of its start is in a crash loop: each such restart waits twice as long
 /// (up to 5 s), and after --max-restarts of them within a minute the pipeline stops and
 /// says which stage and why.
+/// With --view the viewer stage runs too (a web page of what the camera sees, on
+/// http://127.0.0.1:8080/ unless --listen says otherwise); it is supervised the same
+/// way, except that a viewer in a crash loop is given up alone and the pipeline runs on.
 /// SIGINT/SIGTERM stop every stage cleanly.
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
@@ -43,6 +46,14 @@ pub struct Args {
     /// after which the pipeline gives up.
     #[arg(long, default_value_t = 5)]
     pub max_restarts: usize,
+    /// Also start the viewer: the live depth image, skeleton, hand trail, gestures and
+    /// latencies as a web page.
+    #[arg(long)]
+    pub view: bool,
+    /// With --view: the viewer's address, e.g. 0.0.0.0:8080 to watch from another
+    /// computer (default 127.0.0.1:8080, this machine only).
+    #[arg(long, value_name = "ADDR", requires = "view")]
+    pub listen: Option<std::net::SocketAddr>,
 }
 
 /// The first restart waits this long; each further one twice as long, up to `MAX_BACKOFF`.
@@ -53,6 +64,9 @@ const HEALTHY_AFTER: Duration = Duration::from_secs(2);
 const CRASH_WINDOW: Duration = Duration::from_secs(60);
 /// How long a stage gets to stop after SIGTERM before SIGKILL.
 const STOP_GRACE: Duration = Duration::from_secs(3);
+/// How long capture waits for the viewer to subscribe, so the page shows the stream from
+/// its first frame; a viewer that is not up by then is not waited for.
+const VIEWER_WAIT: Duration = Duration::from_secs(3);
 
 /// Finds a stage's executable: beside `airglyph`, else on PATH.
 pub fn stage_binary(stage: Stage) -> PathBuf {
@@ -73,8 +87,10 @@ struct Supervised {
     backoff: Duration,
     restart_at: Option<Instant>,
     crashes: VecDeque<Instant>,
-    /// Exited by itself with success (a finite source ran out): not restarted.
+    /// Exited by itself with success (a finite source ran out), or given up: not restarted.
     finished: bool,
+    /// Whether the pipeline stops when this stage is in a crash loop (the viewer is not).
+    essential: bool,
 }
 
 impl Supervised {
@@ -144,10 +160,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     run_with(args, |event| crate::cmd::print_gesture(event, json))
 }
 
-/// Starts downstream stages first and capture last, once pose and gesture listen, so
-/// the first frames are not sent to nobody.
+/// Starts downstream stages first and capture last, once pose and gesture listen (and
+/// the viewer, for up to [`VIEWER_WAIT`]), so the first frames are not sent to nobody.
 fn start_in_order(stages: &mut [Supervised], pipeline: &Pipeline) -> anyhow::Result<()> {
-    let has = |stages: &[Supervised], st: Stage| stages.iter().any(|s| s.stage == st);
+    let has = |st: Stage| stages.iter().any(|s| s.stage == st) as usize;
+    // The viewer subscribes to both services too, its depth subscription last.
+    let (pose, gesture, viewer) = (has(Stage::Pose), has(Stage::Gesture), has(Stage::Viewer));
     let (depth0, skeleton0) = (
         pipeline.depth_subscribers()?,
         pipeline.skeleton_subscribers()?,
@@ -155,13 +173,17 @@ fn start_in_order(stages: &mut [Supervised], pipeline: &Pipeline) -> anyhow::Res
     for s in stages.iter_mut().filter(|s| s.stage != Stage::Capture) {
         s.spawn()?;
     }
+    let started = Instant::now();
     let ready = |p: &Pipeline| -> anyhow::Result<bool> {
-        Ok(
-            (!has(stages, Stage::Pose) || p.depth_subscribers()? > depth0)
-                && (!has(stages, Stage::Gesture) || p.skeleton_subscribers()? > skeleton0),
-        )
+        let viewer = if started.elapsed() < VIEWER_WAIT {
+            viewer
+        } else {
+            0
+        };
+        Ok(p.depth_subscribers()? >= depth0 + pose + viewer
+            && p.skeleton_subscribers()? >= skeleton0 + gesture + viewer)
     };
-    let deadline = Instant::now() + Duration::from_secs(15);
+    let deadline = started + Duration::from_secs(15);
     while !ready(pipeline)? && !shutdown::requested() {
         if Instant::now() > deadline {
             tracing::warn!("pose or gesture not listening after 15 s; starting capture anyway");
@@ -175,46 +197,67 @@ fn start_in_order(stages: &mut [Supervised], pipeline: &Pipeline) -> anyhow::Res
     Ok(())
 }
 
+/// The command-line arguments `airglyph run` gives one stage.
+fn stage_args(stage: Stage, args: &Args) -> anyhow::Result<Vec<String>> {
+    let mut out = Vec::new();
+    match stage {
+        Stage::Capture => {
+            out.extend(["--source".to_owned(), args.source.to_string()]);
+            if args.fast {
+                out.push("--fast".into());
+            }
+            if args.looping {
+                out.push("--loop".into());
+            }
+            if let Some(n) = args.frames {
+                out.extend(["--frames".to_owned(), n.to_string()]);
+            }
+        }
+        Stage::Viewer => {
+            if let Some(addr) = args.listen {
+                out.extend(["--listen".to_owned(), addr.to_string()]);
+            }
+        }
+        Stage::Pose | Stage::Gesture => {}
+    }
+    for extra in &args.stage_args {
+        let (target, rest) = extra
+            .split_once('=')
+            .with_context(|| format!("--stage-args {extra:?} must be STAGE=ARGS"))?;
+        if target == stage.name() {
+            out.extend(rest.split_whitespace().map(str::to_owned));
+        }
+    }
+    Ok(out)
+}
+
 /// [`run`], handing each gesture event to `on_event` instead of printing it.
 pub fn run_with(args: Args, mut on_event: impl FnMut(&GestureEventMsg)) -> anyhow::Result<()> {
     shutdown::install();
-    let mut stages = Vec::new();
+    let mut names: Vec<Stage> = Vec::new();
     for name in &args.stages {
         let stage = Stage::from_name(name)
             .filter(|s| Stage::PIPELINE.contains(s))
             .with_context(|| {
-                format!("unknown stage {name:?}: expected capture, pose or gesture")
+                format!("unknown stage {name:?}: expected capture, pose or gesture (the viewer comes with --view)")
             })?;
-        let mut stage_args = Vec::new();
-        if stage == Stage::Capture {
-            stage_args.extend(["--source".to_owned(), args.source.to_string()]);
-            if args.fast {
-                stage_args.push("--fast".into());
-            }
-            if args.looping {
-                stage_args.push("--loop".into());
-            }
-            if let Some(n) = args.frames {
-                stage_args.extend(["--frames".to_owned(), n.to_string()]);
-            }
-        }
-        for extra in &args.stage_args {
-            let (target, rest) = extra
-                .split_once('=')
-                .with_context(|| format!("--stage-args {extra:?} must be STAGE=ARGS"))?;
-            if target == stage.name() {
-                stage_args.extend(rest.split_whitespace().map(str::to_owned));
-            }
-        }
+        names.push(stage);
+    }
+    if args.view {
+        names.push(Stage::Viewer);
+    }
+    let mut stages = Vec::new();
+    for stage in names {
         stages.push(Supervised {
             stage,
-            args: stage_args,
+            args: stage_args(stage, &args)?,
             child: None,
             started: Instant::now(),
             backoff: MIN_BACKOFF,
             restart_at: None,
             crashes: VecDeque::new(),
             finished: false,
+            essential: stage != Stage::Viewer,
         });
     }
     if stages.is_empty() {
@@ -284,6 +327,17 @@ fn supervise(
                     .is_some_and(|t| now.duration_since(*t) > CRASH_WINDOW)
                 {
                     s.crashes.pop_front();
+                }
+                if s.crashes.len() > args.max_restarts && !s.essential {
+                    tracing::error!(
+                        stage = s.stage.name(),
+                        crashes = s.crashes.len(),
+                        last = %describe(status),
+                        "stage keeps dying; giving it up (the pipeline runs on) — run `{}` alone to see why",
+                        s.stage.binary()
+                    );
+                    s.finished = true;
+                    continue;
                 }
                 if s.crashes.len() > args.max_restarts {
                     bail!(

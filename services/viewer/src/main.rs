@@ -1,0 +1,82 @@
+//! `airglyph-viewer`: the viewer stage process. Subscribes to the pipeline like any stage
+//! and serves a web page of what the camera sees: the depth image, the skeleton, the
+//! hand's trail with its Bezier points, the last gestures and each stage's latency.
+
+use airglyph_ipc::{shutdown, Pipeline};
+use airglyph_viewer::{Feed, ServeConfig, Server, Shared};
+use anyhow::{bail, Context};
+use clap::Parser;
+use std::net::SocketAddr;
+use std::sync::Arc;
+use std::time::Duration;
+
+/// The viewer stage: a web page of the live pipeline.
+///
+/// Serves on 127.0.0.1 (this machine only) unless --listen says otherwise, e.g.
+/// `--listen 0.0.0.0:8080` to watch from another computer. It only reads: nothing the
+/// other stages need comes from it, and a slow browser gets fewer pictures rather than
+/// slowing anything. The pipeline it joins is set by AIRGLYPH_IPC_ROOT /
+/// AIRGLYPH_IPC_PREFIX (or the config file named by AIRGLYPH_CONFIG). Started by
+/// `airglyph run --view`, or alone beside a running pipeline.
+#[derive(Parser)]
+#[command(name = "airglyph-viewer", version)]
+struct Args {
+    /// Address and port to serve the page on (port 0: any free port, logged).
+    #[arg(long, default_value = "127.0.0.1:8080")]
+    listen: SocketAddr,
+    /// Most pictures a second sent to browsers, all together; frames between are skipped.
+    #[arg(long, default_value_t = 15.0)]
+    max_fps: f64,
+    /// JPEG quality of the pictures (1–100).
+    #[arg(long, default_value_t = 80)]
+    quality: u8,
+    /// Scheduling niceness of the viewer (0–19): under load the pipeline's stages come
+    /// first and the viewer takes what is left.
+    #[arg(long, default_value_t = 10)]
+    nice: i32,
+}
+
+fn main() -> std::process::ExitCode {
+    airglyph_ipc::process::main("airglyph-viewer", || run(Args::parse()))
+}
+
+fn run(args: Args) -> anyhow::Result<()> {
+    if !(args.max_fps.is_finite() && args.max_fps > 0.0 && args.max_fps <= 120.0) {
+        bail!("--max-fps {} must be in (0, 120]", args.max_fps);
+    }
+    if !(1..=100).contains(&args.quality) {
+        bail!("--quality {} must be in 1–100", args.quality);
+    }
+    if !(0..=19).contains(&args.nice) {
+        bail!("--nice {} must be in 0–19", args.nice);
+    }
+    // Before any thread starts: Linux applies niceness per thread, and new threads
+    // inherit their creator's.
+    // SAFETY: setpriority(2) on this process; no memory is touched.
+    if unsafe { libc::setpriority(libc::PRIO_PROCESS, 0, args.nice) } != 0 {
+        tracing::warn!(nice = args.nice, error = %std::io::Error::last_os_error(), "cannot lower the viewer's priority");
+    }
+    let pipeline = Pipeline::join("viewer")?;
+    let shared = Arc::new(Shared::new(ServeConfig {
+        max_fps: args.max_fps,
+        quality: args.quality,
+    }));
+    let server = Server::start(args.listen, shared.clone())
+        .context("is another viewer running there? pick another address with --listen")?;
+    let mut feed = Feed::new(&pipeline)?;
+    tracing::info!("viewer on http://{}/", server.addr());
+    let result = (|| {
+        while !shutdown::requested() {
+            if feed
+                .poll(shared.scene(), Duration::from_millis(100))?
+                .frames
+                > 0
+            {
+                shared.notify();
+            }
+        }
+        Ok(())
+    })();
+    server.stop();
+    result
+}
