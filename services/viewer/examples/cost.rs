@@ -6,8 +6,9 @@
 //! cargo build --release -p airglyph -p airglyph-capture -p airglyph-pose -p airglyph-gesture -p airglyph-viewer
 //! cargo run --release -p airglyph-viewer --example cost -- --runs 5 --seconds 20
 //! ```
-//! Run it on an otherwise idle machine: other work moves the figures more than the
-//! viewer does.
+//! `--fast` lets capture run as fast as it can, so the pipeline is CPU-bound and any
+//! cycle the viewer or the browser takes shows in its frame rate. Run it on an otherwise
+//! idle machine: other work moves the figures more than the viewer does.
 
 use anyhow::{bail, Context};
 use clap::Parser;
@@ -34,6 +35,10 @@ struct Args {
     /// The browser.
     #[arg(long, default_value = "chromium")]
     chromium: String,
+    /// Capture as fast as it can instead of at 30 fps: the pipeline is then CPU-bound,
+    /// and every cycle the viewer and the browser take shows in its frame rate.
+    #[arg(long)]
+    fast: bool,
 }
 
 /// One run's figures.
@@ -123,6 +128,9 @@ fn one_run(args: &Args, bin: &Path, view: bool, n: usize) -> anyhow::Result<Run>
     let addr = TcpListener::bind("127.0.0.1:0")?.local_addr()?;
     let mut run = Command::new(bin.join("airglyph"));
     run.args(["run", "--source", &args.source]);
+    if args.fast {
+        run.arg("--fast");
+    }
     if view {
         run.args(["--view", "--listen", &addr.to_string()]);
     }
