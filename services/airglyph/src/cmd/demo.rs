@@ -8,8 +8,10 @@ use airglyph_ipc::GestureEventMsg;
 use airglyph_synth::{GestureTruth, Synthesizer};
 use anyhow::Context;
 
-/// Watch airglyph work without a camera: a synthetic person draws symbols in the air,
-/// with ordinary movement between them, in front of a virtual depth camera at 30 fps.
+/// A synthetic person draws symbols; the full pipeline names them (no camera needed).
+///
+/// The synthetic person draws symbols in the air, with ordinary movement between them,
+/// in front of a virtual depth camera at 30 fps.
 /// Capture, pose and gesture run as separate processes, exactly as with a real camera.
 /// Each recognized symbol is printed beside the one drawn, then a summary.
 #[derive(clap::Args, Debug)]
@@ -23,6 +25,10 @@ pub struct Args {
     /// The gesture model (default: the shipped 36-symbol model).
     #[arg(long)]
     model: Option<std::path::PathBuf>,
+    /// Skip pose estimation: the gesture stage gets the synthetic person's exact
+    /// skeleton from the capture stage (to tell pose errors from gesture errors).
+    #[arg(long)]
+    truth: bool,
 }
 
 /// The drawn symbol a spotted gesture belongs to: the one its frames overlap most.
@@ -102,6 +108,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             frames: None,
             stage_args,
             max_restarts: 5,
+            truth: args.truth,
         },
         &mut on_event,
     )?;
