@@ -15,10 +15,10 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    // One variant a subcommand; its arguments and `run` live in `cmd/<name>.rs`.
-    /// A synthetic person draws symbols; the full pipeline names them (no camera needed).
+    // One variant a subcommand; its arguments and `run` live in `cmd/<name>.rs`. A
+    // variant's doc comment replaces its Args' (which `--help` then loses): the long
+    // ones stay on the Args.
     Demo(cmd::demo::Args),
-    /// Start the pipeline and print each gesture it recognizes (--view: and show it in a browser).
     Run(cmd::run::Args),
     /// Find the gestures drawn in a recording, offline (pose, then the spotter).
     Spot(cmd::spot::Args),
@@ -34,11 +34,11 @@ enum Command {
     Profile(cmd::profile::Args),
     /// Render a synthetic person into a recording with exact ground-truth joints.
     Synth(cmd::synth::Args),
+    Collect(cmd::collect::Args),
     /// Train a gesture model from trajectory JSONL files.
     Train(cmd::train::Args),
     /// Accuracy, per-class recall and confusion matrices of a gesture model.
     EvalGestures(cmd::eval_gestures::Args),
-    /// Spotting reliability on continuous streams of gestures and random movement.
     EvalSpotting(cmd::eval_spotting::Args),
     /// Estimate the skeleton of every frame of a recording.
     Pose(cmd::pose::Args),
@@ -61,6 +61,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Command::Snapshot(a) => cmd::snapshot::run(a),
         Command::Profile(a) => cmd::profile::run(a),
         Command::Synth(a) => cmd::synth::run(a),
+        Command::Collect(a) => cmd::collect::run(a),
         Command::Train(a) => cmd::train::run(a),
         Command::EvalGestures(a) => cmd::eval_gestures::run(a),
         Command::EvalSpotting(a) => cmd::eval_spotting::run(a),

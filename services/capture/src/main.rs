@@ -4,7 +4,7 @@ use airglyph_capture::{Pacing, SourceError, SourceOptions, SourceSpec};
 use airglyph_ipc::clock::monotonic_ns;
 use airglyph_ipc::port::PublishError;
 use airglyph_ipc::stats::Telemetry;
-use airglyph_ipc::{shutdown, Pipeline, Stage};
+use airglyph_ipc::{shutdown, LatencyChain, Pipeline, SkeletonMsg, Stage};
 use anyhow::Context;
 use clap::Parser;
 
@@ -28,6 +28,11 @@ struct Args {
     /// Stop after this many frames.
     #[arg(long)]
     frames: Option<u64>,
+    /// Also publish the ground-truth skeleton of each frame on `airglyph/skeleton`, in
+    /// place of the pose stage (synthetic sources, and recordings with joints.csv): the
+    /// gesture stage then sees exact joints. Do not run the pose stage beside it.
+    #[arg(long)]
+    truth_skeletons: bool,
 }
 
 fn main() -> std::process::ExitCode {
@@ -49,6 +54,11 @@ fn run(args: Args) -> anyhow::Result<()> {
     let pixels = k.width as usize * k.height as usize;
     let pipeline = Pipeline::join("capture")?;
     let mut publisher = pipeline.depth_publisher(pixels)?;
+    let truth = if args.truth_skeletons {
+        Some(pipeline.skeleton_publisher()?)
+    } else {
+        None
+    };
     let mut telemetry = Telemetry::new(&pipeline, Stage::Capture)?;
     tracing::info!(source = %source.describe(), width = k.width, height = k.height, fps = source.fps(), "capturing");
 
@@ -74,6 +84,21 @@ fn run(args: Args) -> anyhow::Result<()> {
                 let took = sent.publish_ns - sent.capture_ns;
                 telemetry.input(0, 0);
                 telemetry.output(took, took);
+                if let Some(skeletons) = &truth {
+                    let now = monotonic_ns();
+                    let mut msg = SkeletonMsg {
+                        sequence: sent.sequence,
+                        session: sent.session,
+                        chain: LatencyChain {
+                            pose_receive_ns: now,
+                            pose_publish_ns: now,
+                            ..LatencyChain::of_frame(&sent)
+                        },
+                        ..SkeletonMsg::default()
+                    };
+                    msg.set_skeleton(source.last_truth().as_ref());
+                    skeletons.send(msg)?;
+                }
             }
             Ok(None) => {
                 tracing::info!(frames = publisher.sequence(), skipped, "end of source");

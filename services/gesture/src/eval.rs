@@ -127,6 +127,124 @@ impl Confusion {
     }
 }
 
+/// A labelled frame interval on a stream timeline.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Span {
+    pub label: String,
+    pub start: u64,
+    pub end: u64,
+}
+
+/// Draws a stretch of a hand stream as a PNG: x, y and speed against the frame, with
+/// the drawn gestures (green bands, labelled above) and the spotted ones (bars at the
+/// bottom: blue when the label matches the band they overlap, red otherwise).
+/// `points` are body-frame hand points, one a frame, starting at frame `first`.
+pub fn plot_timeline(
+    path: &Path,
+    title: &str,
+    points: &[[f32; 2]],
+    first: u64,
+    fps: f32,
+    drawn: &[Span],
+    spotted: &[Span],
+) -> Result<(), String> {
+    let err = |e: &dyn std::fmt::Display| format!("{}: {e}", path.display());
+    let n = points.len().max(2);
+    let x0 = first as f64;
+    let x1 = (first + n as u64 - 1) as f64;
+    let width = (n as u32 * 3).clamp(800, 6000);
+    let root = BitMapBackend::new(path, (width, 620)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| err(&e))?;
+    let root = root
+        .titled(title, ("sans-serif", 18))
+        .map_err(|e| err(&e))?;
+    let panels = root.split_evenly((3, 1));
+    let speed: Vec<f64> = (0..points.len())
+        .map(|i| {
+            let (a, b) = (points[i.saturating_sub(1)], points[i]);
+            (((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt() * fps) as f64
+        })
+        .collect();
+    let series: [(&str, Vec<f64>); 3] = [
+        ("x (sw)", points.iter().map(|p| p[0] as f64).collect()),
+        ("y (sw)", points.iter().map(|p| p[1] as f64).collect()),
+        ("speed (sw/s)", speed),
+    ];
+    for (k, (panel, (name, v))) in panels.iter().zip(series.iter()).enumerate() {
+        let lo = v.iter().cloned().fold(f64::MAX, f64::min).min(0.0);
+        let hi = v.iter().cloned().fold(f64::MIN, f64::max).max(lo + 0.1);
+        let pad = 0.25 * (hi - lo);
+        let (lo, hi) = (lo - pad, hi + 0.1 * (hi - lo));
+        let mut chart = ChartBuilder::on(panel)
+            .margin(6)
+            .x_label_area_size(if k == 2 { 30 } else { 0 })
+            .y_label_area_size(60)
+            .build_cartesian_2d(x0..x1, lo..hi)
+            .map_err(|e| err(&e))?;
+        chart
+            .configure_mesh()
+            .y_desc(*name)
+            .x_labels(20)
+            .light_line_style(WHITE)
+            .draw()
+            .map_err(|e| err(&e))?;
+        let inside = |s: &Span| (s.end as f64) >= x0 && (s.start as f64) <= x1;
+        chart
+            .draw_series(drawn.iter().filter(|s| inside(s)).map(|s| {
+                Rectangle::new(
+                    [(s.start as f64, lo), (s.end as f64, hi)],
+                    RGBColor(200, 240, 200).filled(),
+                )
+            }))
+            .map_err(|e| err(&e))?;
+        chart
+            .draw_series(LineSeries::new(
+                v.iter().enumerate().map(|(i, &y)| (x0 + i as f64, y)),
+                &BLACK,
+            ))
+            .map_err(|e| err(&e))?;
+        if k == 0 {
+            chart
+                .draw_series(drawn.iter().filter(|s| inside(s)).map(|s| {
+                    Text::new(
+                        s.label.clone(),
+                        (s.start as f64, hi - 0.02 * (hi - lo)),
+                        ("sans-serif", 16).into_font().color(&RGBColor(0, 120, 0)),
+                    )
+                }))
+                .map_err(|e| err(&e))?;
+        }
+        let bar = lo + 0.1 * (hi - lo);
+        let h = 0.08 * (hi - lo);
+        for s in spotted.iter().filter(|s| inside(s)) {
+            let ok = drawn
+                .iter()
+                .any(|d| d.label == s.label && d.start.max(s.start) < d.end.min(s.end));
+            let c = if ok { BLUE } else { RED };
+            chart
+                .draw_series([Rectangle::new(
+                    [
+                        (s.start as f64, bar - h / 2.0),
+                        (s.end as f64, bar + h / 2.0),
+                    ],
+                    c.mix(0.6).filled(),
+                )])
+                .map_err(|e| err(&e))?;
+            if k == 2 {
+                chart
+                    .draw_series([Text::new(
+                        s.label.clone(),
+                        (s.start as f64, bar + h),
+                        ("sans-serif", 16).into_font().color(&c),
+                    )])
+                    .map_err(|e| err(&e))?;
+            }
+        }
+    }
+    root.present().map_err(|e| err(&e))?;
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -147,6 +265,34 @@ mod tests {
         let path = dir.join("c.png");
         c.plot(&path, "test").unwrap();
         assert!(std::fs::metadata(&path).unwrap().len() > 100);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn timeline_plot_draws_a_stretch_of_stream() {
+        let points: Vec<[f32; 2]> = (0..300)
+            .map(|i| [(i as f32 * 0.1).sin(), (i as f32 * 0.07).cos()])
+            .collect();
+        let span = |l: &str, a, b| Span {
+            label: l.into(),
+            start: a,
+            end: b,
+        };
+        let dir = std::env::temp_dir().join(format!("ag-timeline-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("t.png");
+        plot_timeline(
+            &path,
+            "test",
+            &points,
+            100,
+            30.0,
+            &[span("7", 120, 180), span("1", 500, 520)],
+            &[span("7", 118, 182), span("Z", 300, 340)],
+        )
+        .unwrap();
+        let img = image::open(&path).unwrap();
+        assert_eq!((img.width(), img.height()), (900, 620));
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

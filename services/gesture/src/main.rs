@@ -1,11 +1,11 @@
 //! `airglyph-gesture`: the gesture stage process. Follows the drawing hand through the
 //! skeleton stream, spots and classifies gestures, publishes each as an event.
 
-use airglyph_gesture::{Hand, Model, Spotter, SpotterConfig};
+use airglyph_gesture::{Hand, Model, SpottedGesture, Spotter, SpotterConfig};
 use airglyph_ipc::clock::monotonic_ns;
 use airglyph_ipc::stats::Telemetry;
 use airglyph_ipc::wire::Hand as WireHand;
-use airglyph_ipc::{shutdown, DecisionMsg, GestureEventMsg, Pipeline, Stage};
+use airglyph_ipc::{shutdown, DecisionMsg, GestureEventMsg, LatencyChain, Pipeline, Stage};
 use anyhow::Context;
 use clap::Parser;
 use std::path::PathBuf;
@@ -31,6 +31,38 @@ fn main() -> std::process::ExitCode {
     airglyph_ipc::process::main("airglyph-gesture", || run(Args::parse()))
 }
 
+/// Sends one gesture event; `chain` is the latency chain of the frame that closed it.
+fn publish(
+    events: &airglyph_ipc::Publisher<GestureEventMsg>,
+    g: &SpottedGesture,
+    session: u64,
+    chain: LatencyChain,
+    publish_ns: u64,
+) -> anyhow::Result<()> {
+    let mut event = GestureEventMsg {
+        score: g.score as f32,
+        start_sequence: g.start_seq,
+        end_sequence: g.end_seq,
+        start_ns: g.start_ns,
+        end_ns: g.end_ns,
+        session,
+        hand: match g.hand {
+            Hand::Left => WireHand::Left as u8,
+            Hand::Right => WireHand::Right as u8,
+        },
+        chain,
+        ..GestureEventMsg::default()
+    };
+    event.chain.gesture_publish_ns = publish_ns;
+    // The model loader refuses labels longer than the wire carries.
+    event
+        .set_label(&g.label)
+        .with_context(|| format!("label {:?}", g.label))?;
+    events.send(event)?;
+    tracing::info!(label = %g.label, score = g.score, "gesture");
+    Ok(())
+}
+
 fn run(args: Args) -> anyhow::Result<()> {
     let path = args
         .model
@@ -50,12 +82,26 @@ fn run(args: Args) -> anyhow::Result<()> {
     let mut telemetry = Telemetry::new(&pipeline, Stage::Gesture)?;
     tracing::info!(model = %path.display(), "waiting for skeletons");
     let mut session = None;
+    // When the skeletons stop (the camera stopped, the person left), what the spotter
+    // still weighs is decided after this long.
+    const QUIET: Duration = Duration::from_millis(500);
+    let mut last_seen: Option<(std::time::Instant, LatencyChain, u64)> = None;
     while !shutdown::requested() {
         telemetry.tick();
         // Every skeleton, not only the newest: the trajectory needs them all.
         let received = skeletons.recv(Duration::from_millis(100))?;
         telemetry.set_rejected(skeletons.rejected());
-        let Some(r) = received else { continue };
+        let Some(r) = received else {
+            if let Some((at, chain, session)) = last_seen {
+                if at.elapsed() >= QUIET {
+                    last_seen = None;
+                    for g in spotter.finish() {
+                        publish(&events, &g, session, chain, monotonic_ns())?;
+                    }
+                }
+            }
+            continue;
+        };
         let msg = r.msg;
         if args.delay_ms > 0 {
             std::thread::sleep(Duration::from_millis(args.delay_ms));
@@ -65,6 +111,9 @@ fn run(args: Args) -> anyhow::Result<()> {
             // A restarted capture stage: the last trajectory is over.
             spotter.reset();
         }
+        let mut chain = msg.chain;
+        chain.gesture_receive_ns = r.receive_ns;
+        last_seen = Some((std::time::Instant::now(), chain, msg.session));
         let spotted = msg
             .skeleton()
             .and_then(|s| spotter.push(&s, msg.sequence, msg.chain.capture_ns));
@@ -72,36 +121,13 @@ fn run(args: Args) -> anyhow::Result<()> {
         let mut decision = DecisionMsg {
             sequence: msg.sequence,
             session: msg.session,
-            chain: msg.chain,
+            chain,
             gesture: spotted.is_some() as u8,
             ..DecisionMsg::default()
         };
-        decision.chain.gesture_receive_ns = r.receive_ns;
         decision.chain.gesture_publish_ns = decided_ns;
         if let Some(g) = spotted {
-            let mut event = GestureEventMsg {
-                score: g.score as f32,
-                start_sequence: g.start_seq,
-                end_sequence: g.end_seq,
-                start_ns: g.start_ns,
-                end_ns: g.end_ns,
-                session: msg.session,
-                hand: match g.hand {
-                    Hand::Left => WireHand::Left as u8,
-                    Hand::Right => WireHand::Right as u8,
-                },
-                ..GestureEventMsg::default()
-            };
-            if let Err(e) = event.set_label(&g.label) {
-                tracing::warn!(label = %g.label, "label does not fit the wire ({e}); sent cut");
-                let cut: String = g.label.chars().take(8).collect();
-                event.set_label(&cut)?;
-            }
-            event.chain = msg.chain;
-            event.chain.gesture_receive_ns = r.receive_ns;
-            event.chain.gesture_publish_ns = monotonic_ns();
-            events.send(event)?;
-            tracing::info!(label = %g.label, score = g.score, "gesture");
+            publish(&events, &g, msg.session, chain, monotonic_ns())?;
         }
         decisions.send(decision)?;
         telemetry.output(decided_ns - r.receive_ns, decided_ns - msg.chain.capture_ns);

@@ -17,7 +17,7 @@ pub struct Layer {
     pub b: Vec<f32>,
 }
 
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct Mlp {
     /// Input standardization: x' = (x − mean) / std.
     pub mean: Vec<f32>,

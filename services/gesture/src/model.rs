@@ -16,8 +16,11 @@ use std::sync::OnceLock;
 
 /// The `format` field of every model file.
 pub const MODEL_FORMAT: &str = "airglyph-gesture-model";
-/// The model file version this build reads and writes.
-pub const MODEL_VERSION: u32 = 1;
+/// The model file version this build reads and writes. Version 2: the spotting
+/// verifier judges segments with their context and names their label.
+pub const MODEL_VERSION: u32 = 2;
+/// Longest label, in UTF-8 bytes: a label must fit the gesture event on the wire.
+pub const MAX_LABEL_BYTES: usize = airglyph_ipc::wire::LABEL_CAPACITY;
 
 /// Why a model could not be loaded.
 #[derive(Debug, thiserror::Error)]
@@ -189,6 +192,12 @@ impl Model {
             if l.is_empty() {
                 return Err("the model has an empty label".into());
             }
+            if l.len() > MAX_LABEL_BYTES {
+                return Err(format!(
+                    "label {l:?} is {} bytes long; labels are at most {MAX_LABEL_BYTES} bytes (UTF-8), the size of a gesture event's label",
+                    l.len()
+                ));
+            }
             if !seen.insert(l.as_str()) {
                 return Err(format!("label {l:?} appears twice"));
             }
@@ -280,6 +289,10 @@ impl Model {
         if let Some(s) = &self.spotting {
             let names: Vec<&str> = s.models.iter().map(|m| m.label.as_str()).collect();
             check_classes(&names, "the spotting model")?;
+            if let Some(v) = &s.verifier {
+                let names: Vec<&str> = v.classes.iter().map(String::as_str).collect();
+                check_classes(&names, "the spotting verifier")?;
+            }
             s.validate()?;
         }
         Ok(())
@@ -287,6 +300,19 @@ impl Model {
 
     /// Classifies one trajectory (any units; normalized inside).
     pub fn classify(&self, t: &Trajectory) -> Classification {
+        let post = self.posterior(t);
+        let best = (0..post.len())
+            .max_by(|&a, &b| post[a].total_cmp(&post[b]))
+            .unwrap_or(0);
+        Classification {
+            class: best,
+            score: post.get(best).copied().unwrap_or(0.0),
+        }
+    }
+
+    /// The posterior-like confidence of every label (in the order of `labels`) for one
+    /// trajectory; sums to 1.
+    pub fn posterior(&self, t: &Trajectory) -> Vec<f64> {
         let (classes, post): (Vec<usize>, Vec<f64>) = match &self.classifier {
             Classifier::Hmm {
                 bezier_points,
@@ -341,13 +367,13 @@ impl Model {
                 (idx, acc)
             }
         };
-        let best = (0..post.len())
-            .max_by(|&a, &b| post[a].total_cmp(&post[b]))
-            .unwrap_or(0);
-        Classification {
-            class: classes.get(best).copied().unwrap_or(0),
-            score: post.get(best).copied().unwrap_or(0.0),
+        let mut out = vec![0.0; self.labels.len()];
+        for (c, p) in classes.into_iter().zip(post) {
+            if let Some(o) = out.get_mut(c) {
+                *o += p;
+            }
         }
+        out
     }
 }
 

@@ -45,7 +45,9 @@ impl Default for TrackerConfig {
     fn default() -> Self {
         Self {
             min_cutoff: 1.5,
-            beta: 0.5,
+            // Air-drawing reaches 4 shoulder widths a second: at 0.5 the filter lagged
+            // by a fifth of a symbol and rounded its corners (a "5" became an "S").
+            beta: 2.0,
             d_cutoff: 1.0,
             min_confidence: 0.2,
             hand: None,
@@ -56,11 +58,13 @@ impl Default for TrackerConfig {
 }
 
 /// A point of the hand trajectory in the body frame: x to the person's right, y down,
-/// in shoulder widths from the point between the shoulders.
+/// in shoulder widths from the point between the shoulders; and how far the hand is in
+/// front of the shoulders (towards where the person faces, shoulder widths, unfiltered).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HandPoint {
     pub x: f32,
     pub y: f32,
+    pub forward: f32,
     pub hand: Hand,
 }
 
@@ -161,10 +165,13 @@ impl HandTracker {
         let d = s[hj].coords - origin;
         let x = ex.dot(&d) / width;
         let y = ey.dot(&d) / width;
+        // Right × down is the way the person faces (the camera frame is right-handed).
+        let forward = ex.cross(&ey).dot(&d) / width;
         let t = time_ns as f64 * 1e-9;
         Some(HandPoint {
             x: self.fx.filter(x as f64, t) as f32,
             y: self.fy.filter(y as f64, t) as f32,
+            forward,
             hand: self.hand,
         })
     }
@@ -220,6 +227,8 @@ mod tests {
             (pa.x - 0.4).abs() < 1e-4 && (pa.y + 0.2).abs() < 1e-4,
             "{pa:?}"
         );
+        // skeleton_with_hand holds the hand 0.35 m in front of 0.36 m wide shoulders.
+        assert!((pa.forward - 0.35 / 0.36).abs() < 1e-3, "{pa:?}");
         assert!((pa.x - pb.x).abs() < 1e-4 && (pa.y - pb.y).abs() < 1e-4);
     }
 

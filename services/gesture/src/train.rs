@@ -7,7 +7,9 @@ use crate::data::{labels_of, Sample};
 use crate::features::{augment, feature_vector, FeatureConfig};
 use crate::hmm::{DiscreteHmm, HmmTrainConfig};
 use crate::mlp::{Mlp, MlpTrainConfig};
-use crate::model::{Classifier, LabelledHmm, Model, TrainingInfo, MODEL_FORMAT, MODEL_VERSION};
+use crate::model::{
+    Classifier, LabelledHmm, Model, TrainingInfo, MAX_LABEL_BYTES, MODEL_FORMAT, MODEL_VERSION,
+};
 use crate::spot::SpottingModel;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -98,6 +100,8 @@ pub enum TrainError {
     NoSamples,
     #[error("only one label ({0:?}); a classifier needs at least two")]
     OneLabel(String),
+    #[error("label {label:?} is {bytes} bytes long; labels are at most {MAX_LABEL_BYTES} bytes (UTF-8), the size of a gesture event's label")]
+    LabelTooLong { label: String, bytes: usize },
 }
 
 /// Progress of training: (units done, units total).
@@ -113,6 +117,12 @@ pub fn train(
         return Err(TrainError::NoSamples);
     }
     let labels = labels_of(samples);
+    if let Some(l) = labels.iter().find(|l| l.len() > MAX_LABEL_BYTES) {
+        return Err(TrainError::LabelTooLong {
+            label: l.clone(),
+            bytes: l.len(),
+        });
+    }
     if labels.len() < 2 {
         return Err(TrainError::OneLabel(labels[0].clone()));
     }
@@ -212,11 +222,8 @@ pub fn train(
             }
         }
     };
-    let spotting = cfg
-        .spotting
-        .then(|| SpottingModel::train(samples, &labels, cfg.spotting_step, cfg.spotting_states));
     let parameters = serde_json::to_value(cfg).unwrap_or(serde_json::Value::Null);
-    Ok(Model {
+    let mut model = Model {
         format: MODEL_FORMAT.to_string(),
         version: MODEL_VERSION,
         labels,
@@ -230,6 +237,15 @@ pub fn train(
             parameters,
         },
         classifier,
-        spotting,
-    })
+        spotting: None,
+    };
+    if cfg.spotting {
+        model.spotting = Some(SpottingModel::train(
+            samples,
+            &model,
+            cfg.spotting_step,
+            cfg.spotting_states,
+        ));
+    }
+    Ok(model)
 }

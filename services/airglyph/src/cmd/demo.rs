@@ -8,8 +8,10 @@ use airglyph_ipc::GestureEventMsg;
 use airglyph_synth::{GestureTruth, Synthesizer};
 use anyhow::Context;
 
-/// Watch airglyph work without a camera: a synthetic person draws symbols in the air,
-/// with ordinary movement between them, in front of a virtual depth camera at 30 fps.
+/// A synthetic person draws symbols; the full pipeline names them (no camera needed).
+///
+/// The synthetic person draws symbols in the air, with ordinary movement between them,
+/// in front of a virtual depth camera at 30 fps.
 /// Capture, pose and gesture run as separate processes, exactly as with a real camera.
 /// Each recognized symbol is printed beside the one drawn, then a summary.
 #[derive(clap::Args, Debug)]
@@ -29,6 +31,10 @@ pub struct Args {
     /// With --view: the viewer's address (default 127.0.0.1:8080).
     #[arg(long, value_name = "ADDR", requires = "view")]
     listen: Option<std::net::SocketAddr>,
+    /// Skip pose estimation: the gesture stage gets the synthetic person's exact
+    /// skeleton from the capture stage (to tell pose errors from gesture errors).
+    #[arg(long)]
+    truth: bool,
 }
 
 /// The drawn symbol a spotted gesture belongs to: the one its frames overlap most.
@@ -110,6 +116,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             max_restarts: 5,
             view: args.view,
             listen: args.listen,
+            truth: args.truth,
         },
         &mut on_event,
     )?;

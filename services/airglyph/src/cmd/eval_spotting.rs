@@ -1,11 +1,15 @@
-//! `airglyph eval-spotting`: continuous streams of the data's samples joined by random
-//! non-gesture hand movement, fed as skeletons through the spotter; counts correct,
-//! substituted, deleted and inserted gestures. Also runs pure random movement, where
-//! every spotted gesture is an insertion.
+//! `airglyph eval-spotting`: continuous streams of the data's samples joined by ordinary
+//! hand movement, fed as skeletons through the spotter; counts correct, substituted,
+//! deleted and inserted gestures. Also runs ordinary movement alone, where every
+//! spotted gesture is an insertion.
 
 use airglyph_gesture::data::{load_many, Sample};
-use airglyph_gesture::stream::{build_stream, random_movement, score, SpottingScore, StreamConfig};
-use airglyph_gesture::{Model, Spotter, SpotterConfig};
+use airglyph_gesture::eval::{plot_timeline, Span};
+use airglyph_gesture::spot::Candidate;
+use airglyph_gesture::stream::{
+    build_stream, random_movement, score, SpottingScore, StreamConfig, SyntheticStream,
+};
+use airglyph_gesture::{Model, SpottedGesture, Spotter, SpotterConfig};
 use anyhow::bail;
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
@@ -14,6 +18,23 @@ use rayon::prelude::*;
 use serde_json::json;
 use std::path::PathBuf;
 
+/// Spotting reliability on continuous streams of gestures and ordinary movement.
+///
+/// The data's samples are drawn one after another in continuous streams of ordinary
+/// hand movement, fed as skeletons through the spotter.
+///
+/// How a stream is made (body frame, shoulder widths, 30 fps): a symbol is drawn at
+/// 1.5 shoulder widths a second on average (×0.75–1.3 per symbol), its timing following
+/// the two-thirds power law (slower in curves, nearly stopping at sharp corners and
+/// where strokes join), 0.8–1.2 shoulder widths large, somewhere in front of the chest.
+/// Between two symbols the hand makes 1–3 ordinary movements: curved reaches (to the
+/// drawing area, the lowered rest position, the face, anywhere; bell-shaped speed,
+/// mostly ending at rest), small slow fidgets, rests with a slow drift. It reaches each
+/// symbol's first point and leaves its last one at a speed between 0 and --flow × the
+/// drawing's mean speed, along the symbol's own direction when it does not stop; with
+/// --pause-prob it also rests there 0.1–0.5 s. Tracking noise of ±0.004 shoulder widths
+/// is added. A spotted gesture matches a drawn one when their frames overlap by half
+/// of the shorter; reliability = correct / (gestures + insertions).
 #[derive(clap::Args)]
 pub struct Args {
     /// The gesture model (with spotting HMMs).
@@ -33,36 +54,152 @@ pub struct Args {
     /// Gestures per stream.
     #[arg(long, default_value_t = 20)]
     pub per_stream: usize,
-    /// Seconds of pure random movement to test for insertions.
+    /// Seconds of ordinary movement alone, to count insertions in.
     #[arg(long, default_value_t = 300.0)]
     pub random_seconds: f32,
-    /// Probability that the hand pauses briefly before and after each gesture.
+    /// Probability that the hand rests (0.1–0.5 s) before and after each gesture.
     #[arg(long, default_value_t = 0.3)]
     pub pause_prob: f64,
+    /// Largest speed at which the hand enters or leaves a gesture, as a fraction of the
+    /// drawing's mean speed (each boundary draws one from 0 to this).
+    #[arg(long, default_value_t = 0.5)]
+    pub flow: f32,
+    /// Mean hand speed while drawing, shoulder widths a second (each symbol ×0.75–1.3).
+    #[arg(long, default_value_t = 1.5)]
+    pub speed: f32,
     /// Print every drawn and spotted gesture (to stderr).
     #[arg(long)]
     pub verbose: bool,
-    /// Spotter settings as JSON (fields of SpotterConfig), e.g. '{"margin":3.0}'.
+    /// Spotter settings as JSON (fields of SpotterConfig), e.g. '{"min_score":0.6}'.
     #[arg(long)]
     pub spotter: Option<String>,
+    /// Draw a stretch of one stream (hand x, y, speed; drawn and spotted gestures) into
+    /// this PNG: stream --plot-stream, from --plot-from for --plot-seconds seconds.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    #[arg(long, default_value_t = 0)]
+    pub plot_stream: usize,
+    #[arg(long, default_value_t = 0.0)]
+    pub plot_from: f32,
+    #[arg(long, default_value_t = 30.0)]
+    pub plot_seconds: f32,
 }
 
 fn run_stream(
     model: &Model,
     scfg: &SpotterConfig,
-    points_stream: &airglyph_gesture::stream::SyntheticStream,
+    points_stream: &SyntheticStream,
     cfg: &StreamConfig,
-) -> anyhow::Result<Vec<airglyph_gesture::SpottedGesture>> {
+) -> anyhow::Result<Vec<SpottedGesture>> {
+    Ok(run_traced(model, scfg, points_stream, cfg, false)?.0)
+}
+
+/// The spotted gestures and, with `trace`, every candidate the spotter scored.
+fn run_traced(
+    model: &Model,
+    scfg: &SpotterConfig,
+    points_stream: &SyntheticStream,
+    cfg: &StreamConfig,
+    trace: bool,
+) -> anyhow::Result<(Vec<SpottedGesture>, Vec<Candidate>)> {
     let mut sp = Spotter::new(model.clone(), *scfg)?;
+    sp.set_trace(trace);
     let mut out = Vec::new();
+    let mut cands = Vec::new();
     let dt = (1e9 / cfg.fps as f64) as u64;
     for i in 0..points_stream.points.len() {
         let sk = points_stream.skeleton(i, cfg.distance);
         if let Some(g) = sp.push(&sk, i as u64, i as u64 * dt) {
             out.push(g);
         }
+        cands.extend(sp.take_trace());
     }
-    Ok(out)
+    out.extend(sp.finish());
+    cands.extend(sp.take_trace());
+    Ok((out, cands))
+}
+
+/// For each drawn gesture: what the classifier says of its true segment, and the
+/// scored candidate closest to it (why it was or was not published).
+fn explain(
+    stream: usize,
+    model: &Model,
+    s: &SyntheticStream,
+    cfg: &StreamConfig,
+    spotted: &[SpottedGesture],
+    cands: &[Candidate],
+) {
+    let filtered = filtered(s, cfg);
+    let mut lines = Vec::new();
+    for t in &s.truth {
+        let seg = &filtered[t.start as usize..=t.end as usize];
+        let oracle = model.classify(&airglyph_gesture::stream::trajectory(seg));
+        let truth_pg = model
+            .spotting
+            .as_ref()
+            .and_then(|m| m.verifier.as_ref())
+            .map_or(f64::NAN, |v| {
+                use airglyph_gesture::spot::{context, VerifierInput, CONTEXT_SECONDS};
+                let steps = (CONTEXT_SECONDS * cfg.fps as f64).round() as usize;
+                let input = VerifierInput {
+                    segment: seg.to_vec(),
+                    before: context(&filtered, t.start as usize, true, steps),
+                    after: context(&filtered, t.end as usize, false, steps),
+                    posterior: model
+                        .posterior(&airglyph_gesture::stream::trajectory(seg))
+                        .iter()
+                        .map(|&p| p as f32)
+                        .collect(),
+                    ratio: model
+                        .spotting
+                        .as_ref()
+                        .map_or(0.0, |sm| airglyph_gesture::spot::LeeKim::new(sm).ratio(seg)),
+                };
+                1.0 - v.probs(&input)[0]
+            });
+        let iou = |c: &Candidate| {
+            let lo = c.start_seq.max(t.start);
+            let hi = c.end_seq.min(t.end);
+            let inter = hi.saturating_sub(lo) as f64;
+            let uni = (c.end_seq.max(t.end) - c.start_seq.min(t.start)).max(1) as f64;
+            inter / uni
+        };
+        let near = cands.iter().max_by(|a, b| iou(a).total_cmp(&iou(b)));
+        let desc = near.map_or("no candidate".to_string(), |c| {
+            format!(
+                "closest candidate {}..{} (IoU {:.2} Δ {:+} {:+}) {} score {:.2} p_g {:.2} ratio {:.1} {}",
+                c.start_seq,
+                c.end_seq,
+                iou(c),
+                c.start_seq as i64 - t.start as i64,
+                c.end_seq as i64 - t.end as i64,
+                model.labels[c.class],
+                c.score,
+                c.p_gesture,
+                c.ratio,
+                if c.accepted { "accepted" } else { "rejected" }
+            )
+        });
+        lines.push((
+            t.start,
+            format!(
+                "drawn   {:>4} {:>6}..{:<6} alone: {} {:.2} p_g {:.2} | {desc} | stream {stream}",
+                t.label, t.start, t.end, model.labels[oracle.class], oracle.score, truth_pg
+            ),
+        ));
+    }
+    for g in spotted {
+        lines.push((
+            g.start_seq,
+            format!(
+                "spotted {:>4} {:>6}..{:<6} {:.2} | stream {stream}",
+                g.label, g.start_seq, g.end_seq, g.score
+            ),
+        ));
+    }
+    lines.sort_by_key(|l| l.0);
+    let text: Vec<String> = lines.into_iter().map(|l| l.1).collect();
+    eprintln!("{}", text.join("\n"));
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
@@ -90,17 +227,29 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if !(0.0..=1.0).contains(&args.pause_prob) {
         bail!("--pause-prob {} is not in [0, 1]", args.pause_prob);
     }
+    if !(0.0..=1.0).contains(&args.flow) {
+        bail!("--flow {} is not in [0, 1]", args.flow);
+    }
+    if !(0.2..=10.0).contains(&args.speed) {
+        bail!(
+            "--speed {} is not in [0.2, 10] shoulder widths a second",
+            args.speed
+        );
+    }
     let cfg = StreamConfig {
         pause_prob: args.pause_prob,
+        flow: args.flow,
+        speed: args.speed,
         ..StreamConfig::default()
     };
     let scfg = spotter_config(args.spotter.as_deref())?;
     let per = args.per_stream.max(1);
-    let chunks: Vec<(u64, Vec<&Sample>)> = known
+    let chunks: Vec<(usize, u64, Vec<&Sample>)> = known
         .chunks(per)
         .enumerate()
         .map(|(i, c)| {
             (
+                i,
                 args.seed.wrapping_mul(7919).wrapping_add(i as u64),
                 c.to_vec(),
             )
@@ -108,37 +257,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .collect();
     let scores: Vec<anyhow::Result<(SpottingScore, usize)>> = chunks
         .par_iter()
-        .map(|(seed, c)| {
+        .map(|(index, seed, c)| {
             let mut r = ChaCha8Rng::seed_from_u64(*seed);
             let s = build_stream(c, &cfg, &mut r);
-            let spotted = run_stream(&model, &scfg, &s, &cfg)?;
+            let (spotted, cands) = run_traced(&model, &scfg, &s, &cfg, args.verbose)?;
             if args.verbose {
-                let mut tr = airglyph_gesture::HandTracker::new(Default::default());
-                let dt = (1e9 / cfg.fps as f64) as u64;
-                let filtered: Vec<[f32; 2]> = (0..s.points.len())
-                    .map(|i| {
-                        let p = tr.update(&s.skeleton(i, cfg.distance), i as u64 * dt);
-                        p.map_or([0.0, 0.0], |p| [p.x, p.y])
-                    })
-                    .collect();
-                for t in &s.truth {
-                    let seg = &filtered[t.start as usize..=t.end as usize];
-                    let oracle = model.classify(&airglyph_gesture::stream::trajectory(seg));
-                    let v = model.spotting.as_ref().and_then(|m| m.verifier.as_ref());
-                    let pg = |a: i64, b: i64| {
-                        let a = (t.start as i64 + a).max(0) as usize;
-                        let b = ((t.end as i64 + b).max(0) as usize).min(filtered.len() - 1);
-                        v.map_or(0.0, |v| v.log_p_gesture(&filtered[a..=b.max(a + 1)]).exp())
-                    };
-                    eprintln!(
-                        "drawn   {:>4} {:>6}..{:<6} (classified alone: {}) pg {:.2} | s-10 {:.2} s+10 {:.2} e-10 {:.2} e+10 {:.2} s-20 {:.2} e+20 {:.2}",
-                        t.label, t.start, t.end, model.labels[oracle.class],
-                        pg(0, 0), pg(-10, 0), pg(10, 0), pg(0, -10), pg(0, 10), pg(-20, 0), pg(0, 20)
-                    );
-                }
-                for g in &spotted {
-                    eprintln!("spotted {:>4} {:>6}..{:<6} {:.2}", g.label, g.start_seq, g.end_seq, g.score);
-                }
+                explain(*index, &model, &s, &cfg, &spotted, &cands);
+            }
+            if let Some(path) = args.plot.as_ref().filter(|_| *index == args.plot_stream) {
+                plot(path, &s, &spotted, &cfg, args.plot_from, args.plot_seconds)?;
             }
             Ok((score(&s.truth, &spotted), s.points.len()))
         })
@@ -186,6 +313,60 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.random_seconds
         );
     }
+    Ok(())
+}
+
+/// The hand as the spotter sees it (after the tracker's filter).
+fn filtered(s: &SyntheticStream, cfg: &StreamConfig) -> Vec<[f32; 2]> {
+    let mut tr = airglyph_gesture::HandTracker::new(Default::default());
+    let dt = (1e9 / cfg.fps as f64) as u64;
+    (0..s.points.len())
+        .map(|i| {
+            let p = tr.update(&s.skeleton(i, cfg.distance), i as u64 * dt);
+            p.map_or([0.0, 0.0], |p| [p.x, p.y])
+        })
+        .collect()
+}
+
+fn plot(
+    path: &std::path::Path,
+    s: &SyntheticStream,
+    spotted: &[SpottedGesture],
+    cfg: &StreamConfig,
+    from: f32,
+    seconds: f32,
+) -> anyhow::Result<()> {
+    let pts = filtered(s, cfg);
+    let a = ((from * cfg.fps) as usize).min(pts.len().saturating_sub(2));
+    let b = (a + (seconds * cfg.fps) as usize).clamp(a + 2, pts.len());
+    let drawn: Vec<Span> = s
+        .truth
+        .iter()
+        .map(|t| Span {
+            label: t.label.clone(),
+            start: t.start,
+            end: t.end,
+        })
+        .collect();
+    let found: Vec<Span> = spotted
+        .iter()
+        .map(|g| Span {
+            label: g.label.clone(),
+            start: g.start_seq,
+            end: g.end_seq,
+        })
+        .collect();
+    plot_timeline(
+        path,
+        "eval-spotting: one stream",
+        &pts[a..b],
+        a as u64,
+        cfg.fps,
+        &drawn,
+        &found,
+    )
+    .map_err(anyhow::Error::msg)?;
+    eprintln!("wrote {}", path.display());
     Ok(())
 }
 

@@ -1,5 +1,6 @@
 //! One module a subcommand: its clap `Args` and a `run(args) -> anyhow::Result<()>`.
 
+pub mod collect;
 pub mod demo;
 pub mod devices;
 pub mod eval_gestures;

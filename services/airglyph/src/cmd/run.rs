@@ -9,9 +9,10 @@ use std::path::PathBuf;
 use std::process::{Child, Command, ExitStatus};
 use std::time::{Duration, Instant};
 
-/// Start the pipeline (capture → pose → gesture) and print each gesture it recognizes.
+/// Start the pipeline and print each gesture it recognizes.
 ///
-/// Each stage is a child process; one that dies is restarted after 100 ms. One that dies
+/// The stages (capture → pose → gesture) run as child processes; one that dies is
+/// restarted after 100 ms. One that dies
 /// again within 2 s of its start is in a crash loop: each such restart waits twice as long
 /// (up to 5 s), and after --max-restarts of them within a minute the pipeline stops and
 /// says which stage and why.
@@ -54,6 +55,11 @@ pub struct Args {
     /// computer (default 127.0.0.1:8080, this machine only).
     #[arg(long, value_name = "ADDR", requires = "view")]
     pub listen: Option<std::net::SocketAddr>,
+    /// Skip pose estimation: the capture stage publishes the ground-truth skeletons of
+    /// a synthetic source or of a recording with joints.csv (to tell pose errors from
+    /// gesture errors).
+    #[arg(long)]
+    pub truth: bool,
 }
 
 /// The first restart waits this long; each further one twice as long, up to `MAX_BACKOFF`.
@@ -212,6 +218,10 @@ fn stage_args(stage: Stage, args: &Args) -> anyhow::Result<Vec<String>> {
             if let Some(n) = args.frames {
                 out.extend(["--frames".to_owned(), n.to_string()]);
             }
+            if args.truth {
+                // Capture publishes the skeletons itself.
+                out.push("--truth-skeletons".into());
+            }
         }
         Stage::Viewer => {
             if let Some(addr) = args.listen {
@@ -231,8 +241,74 @@ fn stage_args(stage: Stage, args: &Args) -> anyhow::Result<Vec<String>> {
     Ok(out)
 }
 
+/// What the supervisor does with the pipeline's output while the stages run.
+pub trait Listener {
+    /// Waits up to `timeout` for one message and handles it.
+    fn poll(&mut self, timeout: Duration) -> anyhow::Result<Poll>;
+}
+
+/// What one [`Listener::poll`] did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Poll {
+    /// Nothing came.
+    Idle,
+    /// A message came and was handled.
+    Handled,
+    /// The listener has what it wanted: stop the pipeline.
+    Done,
+}
+
+/// Hands each gesture event to a closure.
+struct Gestures<F> {
+    rx: airglyph_ipc::Receiver<GestureEventMsg>,
+    on_event: F,
+}
+
+impl<F: FnMut(&GestureEventMsg)> Listener for Gestures<F> {
+    fn poll(&mut self, timeout: Duration) -> anyhow::Result<Poll> {
+        Ok(match self.rx.recv(timeout)? {
+            Some(event) => {
+                (self.on_event)(&event.msg);
+                Poll::Handled
+            }
+            None => Poll::Idle,
+        })
+    }
+}
+
+/// Listens to nothing (no gesture stage).
+struct Nothing;
+
+impl Listener for Nothing {
+    fn poll(&mut self, timeout: Duration) -> anyhow::Result<Poll> {
+        std::thread::sleep(timeout);
+        Ok(Poll::Idle)
+    }
+}
+
 /// [`run`], handing each gesture event to `on_event` instead of printing it.
-pub fn run_with(args: Args, mut on_event: impl FnMut(&GestureEventMsg)) -> anyhow::Result<()> {
+pub fn run_with(args: Args, on_event: impl FnMut(&GestureEventMsg)) -> anyhow::Result<()> {
+    let gesture_stage = args.stages.iter().any(|s| s == Stage::Gesture.name());
+    if gesture_stage {
+        run_listening(args, |p| {
+            Ok(Gestures {
+                rx: p.gesture_receiver()?,
+                on_event,
+            })
+        })?;
+    } else {
+        run_listening(args, |_| Ok(Nothing))?;
+    }
+    Ok(())
+}
+
+/// Starts and supervises the stages; `listener` (made once the pipeline is joined and
+/// before any stage starts, so it misses nothing) handles their output until SIGINT or
+/// SIGTERM, a finished source, a crash loop, or until it is done. Returns the listener.
+pub fn run_listening<L: Listener>(
+    args: Args,
+    listener: impl FnOnce(&Pipeline) -> anyhow::Result<L>,
+) -> anyhow::Result<L> {
     shutdown::install();
     let mut names: Vec<Stage> = Vec::new();
     for name in &args.stages {
@@ -241,6 +317,10 @@ pub fn run_with(args: Args, mut on_event: impl FnMut(&GestureEventMsg)) -> anyho
             .with_context(|| {
                 format!("unknown stage {name:?}: expected capture, pose or gesture (the viewer comes with --view)")
             })?;
+        if args.truth && stage == Stage::Pose {
+            // Capture publishes the skeletons itself.
+            continue;
+        }
         names.push(stage);
     }
     if args.view {
@@ -265,41 +345,25 @@ pub fn run_with(args: Args, mut on_event: impl FnMut(&GestureEventMsg)) -> anyho
     }
 
     let pipeline = Pipeline::join("supervisor")?;
-    let mut gestures = if stages.iter().any(|s| s.stage == Stage::Gesture) {
-        Some(pipeline.gesture_receiver()?)
-    } else {
-        None
-    };
+    let mut listener = listener(&pipeline)?;
     start_in_order(&mut stages, &pipeline)?;
-    let outcome = supervise(
-        &mut stages,
-        &pipeline,
-        gestures.as_mut(),
-        &args,
-        &mut on_event,
-    );
+    let outcome = supervise(&mut stages, &pipeline, &mut listener, &args);
     for s in stages.iter_mut() {
         s.stop();
     }
     pipeline.cleanup_dead_nodes();
-    outcome
+    outcome.map(|()| listener)
 }
 
 fn supervise(
     stages: &mut [Supervised],
     pipeline: &Pipeline,
-    mut gestures: Option<&mut airglyph_ipc::Receiver<GestureEventMsg>>,
+    listener: &mut impl Listener,
     args: &Args,
-    on_event: &mut impl FnMut(&GestureEventMsg),
 ) -> anyhow::Result<()> {
     while !shutdown::requested() {
-        match gestures.as_deref_mut() {
-            Some(rx) => {
-                if let Some(event) = rx.recv(Duration::from_millis(50))? {
-                    on_event(&event.msg);
-                }
-            }
-            None => std::thread::sleep(Duration::from_millis(50)),
+        if listener.poll(Duration::from_millis(50))? == Poll::Done {
+            return Ok(());
         }
         let now = Instant::now();
         for s in stages.iter_mut() {
@@ -372,11 +436,12 @@ fn supervise(
             .iter()
             .any(|s| s.stage == Stage::Capture && s.finished)
         {
-            std::thread::sleep(Duration::from_millis(500));
-            while let Some(rx) = gestures.as_deref_mut() {
-                match rx.try_recv()? {
-                    Some(event) => on_event(&event.msg),
-                    None => break,
+            // The gesture stage decides what is pending half a second after the last
+            // skeleton.
+            let until = Instant::now() + Duration::from_millis(1500);
+            while Instant::now() < until {
+                if listener.poll(Duration::from_millis(20))? == Poll::Done {
+                    break;
                 }
             }
             return Ok(());

@@ -2,7 +2,7 @@
 
 use crate::cmd::demo::drawn_for;
 use airglyph_core::recording::Recording;
-use airglyph_gesture::{Model, Spotter, SpotterConfig};
+use airglyph_gesture::{Model, Spotter};
 use airglyph_pose::{PoseConfig, PoseEstimator};
 use airglyph_synth::GestureTruth;
 use anyhow::Context;
@@ -25,6 +25,17 @@ pub struct Args {
     /// One JSON object a line.
     #[arg(long)]
     json: bool,
+    /// Spotter settings as JSON (fields of SpotterConfig), e.g. '{"hold_seconds":1.0}'.
+    #[arg(long)]
+    spotter: Option<String>,
+    /// Print every segment the spotter weighed (frames, label, classifier score,
+    /// verifier probability, Lee & Kim ratio, accepted) to stderr.
+    #[arg(long)]
+    trace: bool,
+    /// Also classify each drawn symbol's own frames (from gestures.csv) alone, to tell
+    /// spotting errors from classification errors.
+    #[arg(long)]
+    alone: bool,
 }
 
 fn read_gestures_csv(path: &Path) -> anyhow::Result<Vec<GestureTruth>> {
@@ -51,6 +62,21 @@ fn read_gestures_csv(path: &Path) -> anyhow::Result<Vec<GestureTruth>> {
     Ok(out)
 }
 
+fn trace(candidates: &[airglyph_gesture::spot::Candidate], model: &Model) {
+    for c in candidates {
+        eprintln!(
+            "segment {}–{}: {} score {:.2} p(gesture) {:.2} Lee&Kim {:+.2}{}",
+            c.start_seq,
+            c.end_seq,
+            model.labels[c.class],
+            c.score,
+            c.p_gesture,
+            c.ratio,
+            if c.accepted { " accepted" } else { "" }
+        );
+    }
+}
+
 pub fn run(args: Args) -> anyhow::Result<()> {
     let rec = Recording::open(&args.dir)?;
     if args.truth && !rec.has_joints() {
@@ -61,7 +87,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .clone()
         .unwrap_or_else(airglyph_gesture::model::default_model_path);
     let model = Model::load(&path)?;
-    let mut spotter = Spotter::new(model, SpotterConfig::default())?;
+    let scfg = crate::cmd::eval_spotting::spotter_config(args.spotter.as_deref())?;
+    let mut spotter = Spotter::new(model, scfg)?;
+    spotter.set_trace(args.trace);
     let k = rec.intrinsics();
     let mut estimator = PoseEstimator::new(k, PoseConfig::default());
     let mut px = vec![0u16; k.width as usize * k.height as usize];
@@ -73,6 +101,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let mut recognized = vec![None; truth.len()];
     let mut spotted = 0;
+    // The hand as the spotter sees it, by frame, for --alone.
+    let mut tracker = airglyph_gesture::HandTracker::new(scfg.tracker);
+    let mut hand: Vec<Option<[f32; 2]>> = Vec::new();
+    let mut found = Vec::new();
     for i in 0..rec.len() {
         let skeleton = if args.truth {
             rec.joints(i).copied()
@@ -81,10 +113,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             let r = estimator.estimate(airglyph_core::DepthView::new(k.width, k.height, &px)?);
             r.person_found.then_some(r.skeleton)
         };
-        let Some(s) = skeleton else { continue };
-        let Some(g) = spotter.push(&s, i as u64, rec.capture_ns(i)) else {
+        let Some(s) = skeleton else {
+            hand.push(None);
             continue;
         };
+        hand.push(tracker.update(&s, rec.capture_ns(i)).map(|p| [p.x, p.y]));
+        found.extend(spotter.push(&s, i as u64, rec.capture_ns(i)));
+        trace(&spotter.take_trace(), spotter.model());
+    }
+    found.extend(spotter.finish());
+    trace(&spotter.take_trace(), spotter.model());
+    for g in found {
         spotted += 1;
         let drawn = drawn_for(&truth, g.start_seq, g.end_seq);
         if let Some(d) = drawn {
@@ -106,6 +145,32 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 g.score,
                 drawn.map_or(String::new(), |d| format!("   drawn: {d}"))
             );
+        }
+    }
+    if args.alone {
+        for t in &truth {
+            let pts: Vec<[f32; 2]> = (t.start_frame..=t.end_frame)
+                .filter_map(|i| hand.get(i).copied().flatten())
+                .collect();
+            if pts.len() < 2 {
+                continue;
+            }
+            let c = spotter
+                .model()
+                .classify(&airglyph_gesture::Trajectory::from_points(pts));
+            let label = &spotter.model().labels[c.class];
+            if args.json {
+                println!(
+                    "{}",
+                    serde_json::json!({"drawn": t.label, "alone": label, "score": c.score,
+                        "start_frame": t.start_frame, "end_frame": t.end_frame})
+                );
+            } else {
+                println!(
+                    "drawn {} (frames {}–{}) alone: {label} (score {:.2})",
+                    t.label, t.start_frame, t.end_frame, c.score
+                );
+            }
         }
     }
     if !truth.is_empty() {

@@ -105,7 +105,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             bar.set_message("spotting");
             old.spotting = Some(airglyph_gesture::spot::SpottingModel::train(
                 &samples,
-                &labels,
+                &old,
                 cfg.spotting_step,
                 cfg.spotting_states,
             ));

@@ -1,0 +1,210 @@
+//! `airglyph collect`: records a person drawing one gesture again and again, for a
+//! vocabulary of one's own; every repetition becomes a line of trajectory JSONL.
+
+use crate::cmd::run::{run_listening, Args as RunArgs, Listener, Poll};
+use airglyph_capture::SourceSpec;
+use airglyph_gesture::collect::{RepetitionConfig, RepetitionSegmenter};
+use airglyph_gesture::model::MAX_LABEL_BYTES;
+use airglyph_ipc::{Receiver, SkeletonMsg};
+use anyhow::{bail, Context};
+use std::fs::File;
+use std::io::Write;
+use std::path::PathBuf;
+use std::time::Duration;
+
+/// Record a gesture of your own, drawn again and again, as trajectory JSONL.
+///
+/// Draw it --count times in front of the camera, letting the hand come to rest between
+/// repetitions (lowered, or held still in the air), and draw with the hand held out in
+/// front of you.
+///
+/// Capture and pose run as child processes, as with `airglyph run`. A repetition is
+/// the movement between two rests; of it, the part made with the hand held forward is
+/// kept (the travel from and back to a lowered hand is not), and movement that never
+/// reaches forward is ignored. Each repetition is appended to --out as one line of
+/// trajectory JSONL (body-frame points in shoulder widths, x right, y down, with the
+/// time in ms), written and flushed at once, so an interrupted session loses nothing.
+/// Progress goes to stderr. `airglyph train --data FILE …` takes the file.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The gesture's name: any text up to 32 bytes (UTF-8).
+    #[arg(long)]
+    label: String,
+    /// How many repetitions to record.
+    #[arg(long)]
+    count: usize,
+    /// The trajectory JSONL file to append to (created if missing).
+    #[arg(long)]
+    out: PathBuf,
+    /// Where frames come from: v4l2:/dev/videoN, openni2[:URI], recording:DIR, or
+    /// synthetic:draw:SYMBOLS. Default for a built-in symbol (0–9, A–Z): the synthetic
+    /// person drawing it --count times.
+    #[arg(long)]
+    source: Option<SourceSpec>,
+    /// Who draws (the `subject` field; keeps writers apart in cross-validation).
+    #[arg(long, default_value = "me")]
+    subject: String,
+    /// Skip pose estimation: record the ground-truth skeletons of a synthetic source
+    /// or of a recording with joints.csv.
+    #[arg(long)]
+    truth: bool,
+}
+
+/// Feeds skeletons to the segmenter and appends every repetition to the file.
+struct Collector {
+    rx: Receiver<SkeletonMsg>,
+    seg: RepetitionSegmenter,
+    file: File,
+    label: String,
+    subject: String,
+    source: String,
+    count: usize,
+    written: usize,
+}
+
+impl Collector {
+    fn write(&mut self, points: &[[f32; 3]]) -> anyhow::Result<()> {
+        let stroke: Vec<[f64; 3]> = points
+            .iter()
+            .map(|p| {
+                // Millimetre-level rounding keeps the lines short.
+                let r = |v: f32, k: f64| (v as f64 * k).round() / k;
+                [r(p[0], 1e4), r(p[1], 1e4), r(p[2], 10.0)]
+            })
+            .collect();
+        let line = serde_json::json!({
+            "label": self.label,
+            "subject": self.subject,
+            "source": self.source,
+            "strokes": [stroke],
+        });
+        writeln!(self.file, "{line}")?;
+        self.file.flush()?;
+        self.file.sync_data()?;
+        self.written += 1;
+        eprintln!(
+            "repetition {}/{} recorded ({} points, {:.1} s)",
+            self.written,
+            self.count,
+            points.len(),
+            points.last().map_or(0.0, |p| p[2] / 1000.0)
+        );
+        Ok(())
+    }
+}
+
+impl Listener for Collector {
+    fn poll(&mut self, timeout: Duration) -> anyhow::Result<Poll> {
+        let Some(r) = self.rx.recv(timeout)? else {
+            return Ok(Poll::Idle);
+        };
+        let msg = r.msg;
+        if let Some(rep) = msg
+            .skeleton()
+            .and_then(|s| self.seg.push(&s, msg.sequence, msg.chain.capture_ns))
+        {
+            self.write(&rep.points)?;
+        }
+        Ok(if self.written >= self.count {
+            Poll::Done
+        } else {
+            Poll::Handled
+        })
+    }
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    if args.label.is_empty() {
+        bail!("--label must not be empty");
+    }
+    if args.label.len() > MAX_LABEL_BYTES {
+        bail!(
+            "--label {:?} is {} bytes long; labels are at most {MAX_LABEL_BYTES} bytes (UTF-8), the size of a gesture event's label",
+            args.label,
+            args.label.len()
+        );
+    }
+    if args.count == 0 {
+        bail!("--count must be at least 1");
+    }
+    let source = match args.source.clone() {
+        Some(s) => s,
+        None => {
+            let c = args.label.chars().next().unwrap_or(' ');
+            if args.label.chars().count() != 1
+                || !airglyph_synth::glyphs::BUILT_IN.contains(c.to_ascii_uppercase())
+            {
+                bail!(
+                    "--label {:?} has no built-in synthetic drawing; give --source (e.g. v4l2:/dev/video0)",
+                    args.label
+                );
+            }
+            let script: String = std::iter::repeat_n(c, args.count).collect();
+            SourceSpec::Synthetic(Some(format!("draw:{script}")))
+        }
+    };
+    let file = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(&args.out)
+        .with_context(|| format!("{}: cannot open for appending", args.out.display()))?;
+    eprintln!(
+        "recording {} repetitions of {:?} from {source} into {}; rest the hand between repetitions",
+        args.count,
+        args.label,
+        args.out.display()
+    );
+    let run_args = RunArgs {
+        source: source.clone(),
+        json: false,
+        stages: vec!["capture".into(), "pose".into()],
+        fast: false,
+        looping: false,
+        frames: None,
+        stage_args: Vec::new(),
+        max_restarts: 5,
+        view: false,
+        listen: None,
+        truth: args.truth,
+    };
+    let mut c = run_listening(run_args, |pipeline| {
+        Ok(Collector {
+            rx: pipeline.skeleton_receiver()?,
+            seg: RepetitionSegmenter::new(RepetitionConfig::default()),
+            file,
+            label: args.label.clone(),
+            subject: args.subject.clone(),
+            source: "airglyph collect".into(),
+            count: args.count,
+            written: 0,
+        })
+    })?;
+    if c.written < c.count && airglyph_ipc::shutdown::requested() {
+        bail!(
+            "interrupted after {} of {} repetitions (those are in {})",
+            c.written,
+            c.count,
+            args.out.display()
+        );
+    }
+    // A finished source may stop in the middle of the last movement.
+    if c.written < c.count {
+        if let Some(rep) = c.seg.finish() {
+            c.write(&rep.points)?;
+        }
+    }
+    if c.written < args.count {
+        bail!(
+            "the source ended after {} of {} repetitions (appended to {})",
+            c.written,
+            args.count,
+            args.out.display()
+        );
+    }
+    eprintln!(
+        "{} repetitions appended to {}",
+        c.written,
+        args.out.display()
+    );
+    Ok(())
+}

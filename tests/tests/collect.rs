@@ -1,0 +1,164 @@
+//! `airglyph collect` with real processes: the synthetic person draws a symbol again and
+//! again, capture publishes its (ground-truth) skeletons, and every repetition becomes a
+//! line of trajectory JSONL that `airglyph train` takes; an interrupted session keeps
+//! what it recorded. And the gesture stage's clear messages on bad models.
+
+use airglyph_system_tests::{signal, Isolated};
+use std::io::{BufRead, BufReader};
+use std::path::Path;
+use std::process::Stdio;
+use std::time::{Duration, Instant};
+
+fn lines(path: &Path) -> Vec<serde_json::Value> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{l}: {e}")))
+        .collect()
+}
+
+/// One collected repetition: the label, and a path of [x, y, ms] points of about a
+/// symbol's size (shoulder widths) and duration (the synthetic person takes 1–1.5 s).
+fn check_repetition(v: &serde_json::Value, label: &str) {
+    assert_eq!(v["label"], label);
+    assert_eq!(v["subject"], "me");
+    let strokes = v["strokes"].as_array().unwrap();
+    assert_eq!(strokes.len(), 1, "{v}");
+    let pts: Vec<Vec<f64>> = strokes[0]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| {
+            p.as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64().unwrap())
+                .collect()
+        })
+        .collect();
+    assert!(pts.len() >= 20, "{} points", pts.len());
+    assert!(pts.iter().all(|p| p.len() == 3));
+    assert!(pts.windows(2).all(|w| w[1][2] > w[0][2]), "times increase");
+    let secs = pts[pts.len() - 1][2] / 1000.0;
+    assert!((0.8..2.0).contains(&secs), "{secs} s");
+    let span = |k: usize| {
+        let v: Vec<f64> = pts.iter().map(|p| p[k]).collect();
+        v.iter().cloned().fold(f64::MIN, f64::max) - v.iter().cloned().fold(f64::MAX, f64::min)
+    };
+    let size = span(0).max(span(1));
+    assert!((0.5..1.6).contains(&size), "size {size}");
+}
+
+#[test]
+fn collect_writes_each_repetition_and_train_takes_the_file() {
+    let p = Isolated::new();
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("mine.jsonl");
+    for label in ["7", "L"] {
+        let out = p
+            .command("airglyph")
+            .args(["collect", "--label", label, "--count", "2", "--truth"])
+            .arg("--out")
+            .arg(&data)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{err}");
+        assert!(err.contains("repetition 2/2 recorded"), "{err}");
+    }
+    let samples = lines(&data);
+    assert_eq!(samples.len(), 4);
+    for (v, label) in samples.iter().zip(["7", "7", "L", "L"]) {
+        check_repetition(v, label);
+    }
+    let model = tmp.path().join("mine.json");
+    let out = p
+        .command("airglyph")
+        .args(["train", "--ensemble", "1", "--epochs", "5"])
+        .arg("--data")
+        .arg(&data)
+        .arg("--out")
+        .arg(&model)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap();
+    assert_eq!(m["labels"], serde_json::json!(["7", "L"]));
+}
+
+#[test]
+fn an_interrupted_collect_keeps_every_repetition_it_announced() {
+    let p = Isolated::new();
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("mine.jsonl");
+    let mut child = p
+        .command("airglyph")
+        .args(["collect", "--label", "Z", "--count", "5", "--truth"])
+        .arg("--out")
+        .arg(&data)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let stderr = BufReader::new(child.stderr.take().unwrap());
+    let deadline = Instant::now() + Duration::from_secs(60);
+    for line in stderr.lines().map_while(Result::ok) {
+        if line.contains("repetition 1/5 recorded") {
+            break;
+        }
+        assert!(Instant::now() < deadline, "no repetition within 60 s");
+    }
+    signal(&child, libc::SIGINT);
+    let status = child.wait().unwrap();
+    // Stopped by the user before the count: not a success, but nothing is lost.
+    assert!(!status.success());
+    let samples = lines(&data);
+    assert!(
+        !samples.is_empty() && samples.len() < 5,
+        "{}",
+        samples.len()
+    );
+    for v in &samples {
+        check_repetition(v, "Z");
+    }
+}
+
+#[test]
+fn bad_labels_and_models_fail_with_a_clear_message() {
+    let p = Isolated::new();
+    let tmp = tempfile::tempdir().unwrap();
+    let long = "x".repeat(40);
+    let out = p
+        .command("airglyph")
+        .args(["collect", "--label", &long, "--count", "1", "--out"])
+        .arg(tmp.path().join("x.jsonl"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("at most 32 bytes"), "{err}");
+
+    // A model of another version: the stage says which file and what to do.
+    let model = tmp.path().join("old.json");
+    std::fs::write(
+        &model,
+        r#"{"format":"airglyph-gesture-model","version":1,"labels":["a","b"]}"#,
+    )
+    .unwrap();
+    let out = p
+        .command("airglyph-gesture")
+        .arg("--model")
+        .arg(&model)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("old.json") && err.contains("version 1 is not supported"),
+        "{err}"
+    );
+}
