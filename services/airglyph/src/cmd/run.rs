@@ -302,13 +302,34 @@ pub fn run_with(args: Args, on_event: impl FnMut(&GestureEventMsg)) -> anyhow::R
     Ok(())
 }
 
+/// A listener after the run, with the supervisor's place in the pipeline. The listener's
+/// ports keep the supervisor's node alive, so the pipeline must be left after them (the
+/// last node out removes iceoryx2's per-domain files): fields drop in this order.
+pub struct Listening<L> {
+    listener: L,
+    _pipeline: Pipeline,
+}
+
+impl<L> std::ops::Deref for Listening<L> {
+    type Target = L;
+    fn deref(&self) -> &L {
+        &self.listener
+    }
+}
+
+impl<L> std::ops::DerefMut for Listening<L> {
+    fn deref_mut(&mut self) -> &mut L {
+        &mut self.listener
+    }
+}
+
 /// Starts and supervises the stages; `listener` (made once the pipeline is joined and
 /// before any stage starts, so it misses nothing) handles their output until SIGINT or
 /// SIGTERM, a finished source, a crash loop, or until it is done. Returns the listener.
 pub fn run_listening<L: Listener>(
     args: Args,
     listener: impl FnOnce(&Pipeline) -> anyhow::Result<L>,
-) -> anyhow::Result<L> {
+) -> anyhow::Result<Listening<L>> {
     shutdown::install();
     let mut names: Vec<Stage> = Vec::new();
     for name in &args.stages {
@@ -352,7 +373,10 @@ pub fn run_listening<L: Listener>(
         s.stop();
     }
     pipeline.cleanup_dead_nodes();
-    outcome.map(|()| listener)
+    outcome.map(|()| Listening {
+        listener,
+        _pipeline: pipeline,
+    })
 }
 
 fn supervise(
