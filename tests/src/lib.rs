@@ -4,7 +4,7 @@ use airglyph_core::recording::{RecordingInfo, RecordingWriter};
 use airglyph_core::{DepthImage, Intrinsics};
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
-use std::process::{Child, ChildStdout, Command, Stdio};
+use std::process::{Child, ChildStdout, Command, Output, Stdio};
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
@@ -135,8 +135,42 @@ pub fn children_named(parent: u32, name: &str) -> Vec<u32> {
     out
 }
 
-/// Streams a child's JSON lines to a channel.
-fn lines(stdout: ChildStdout) -> mpsc::Receiver<serde_json::Value> {
+/// Runs a command to its end and asserts it succeeded, showing its stderr if not.
+pub fn succeed(cmd: &mut Command) -> Output {
+    let out = cmd.output().unwrap();
+    assert!(
+        out.status.success(),
+        "{:?}: {}\n{}",
+        cmd,
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// One full pipeline at a time within a test binary: on a 2-core machine parallel
+/// pipelines starve each other's capture stage and measure the machine instead.
+pub fn one_at_a_time() -> std::sync::MutexGuard<'static, ()> {
+    static ONE_PIPELINE: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    ONE_PIPELINE.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// `airglyph top --json` of this pipeline.
+pub fn top(p: &Isolated) -> serde_json::Value {
+    let out = succeed(p.command("airglyph").args(["top", "--json", "--wait", "3"]));
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+/// SIGTERM to a supervisor: it must stop cleanly and leave nothing in /dev/shm.
+pub fn shut_down(p: &Isolated, mut supervisor: Child) {
+    signal(&supervisor, libc::SIGTERM);
+    let status = supervisor.wait().unwrap();
+    assert!(status.success(), "the supervisor stops cleanly: {status}");
+    assert!(p.shm_files().is_empty(), "left behind: {:?}", p.shm_files());
+}
+
+/// Streams a child's JSON lines to a channel (lines that are not JSON are skipped).
+pub fn json_lines(stdout: ChildStdout) -> mpsc::Receiver<serde_json::Value> {
     let (tx, rx) = mpsc::channel();
     std::thread::spawn(move || {
         for line in BufReader::new(stdout).lines().map_while(Result::ok) {
@@ -157,7 +191,7 @@ pub fn start_probe(p: &Isolated, extra: &[&str]) -> (Child, mpsc::Receiver<serde
         .stdout(Stdio::piped())
         .spawn()
         .unwrap();
-    let rx = lines(child.stdout.take().unwrap());
+    let rx = json_lines(child.stdout.take().unwrap());
     let ready = rx
         .recv_timeout(Duration::from_secs(10))
         .expect("probe ready");

@@ -3,7 +3,7 @@
 //! line of trajectory JSONL that `airglyph train` takes; an interrupted session keeps
 //! what it recorded. And the gesture stage's clear messages on bad models.
 
-use airglyph_system_tests::{signal, Isolated};
+use airglyph_system_tests::{signal, succeed, Isolated};
 use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::Stdio;
@@ -72,19 +72,13 @@ fn collect_writes_each_repetition_and_train_takes_the_file() {
         check_repetition(v, label);
     }
     let model = tmp.path().join("mine.json");
-    let out = p
-        .command("airglyph")
-        .args(["train", "--ensemble", "1", "--epochs", "5"])
-        .arg("--data")
-        .arg(&data)
-        .arg("--out")
-        .arg(&model)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    succeed(
+        p.command("airglyph")
+            .args(["train", "--ensemble", "1", "--epochs", "5"])
+            .arg("--data")
+            .arg(&data)
+            .arg("--out")
+            .arg(&model),
     );
     let m: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap();

@@ -2,7 +2,7 @@
 //! a publisher of malformed frames. The pipeline must keep running and leave no shared
 //! memory behind.
 
-use airglyph_system_tests::{children_named, signal, Isolated};
+use airglyph_system_tests::{children_named, one_at_a_time, shut_down, top, Isolated};
 use std::process::{Child, Stdio};
 use std::time::{Duration, Instant};
 
@@ -17,14 +17,6 @@ impl Moments {
         let u = (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64;
         Duration::from_secs_f64(lo + (hi - lo) * u)
     }
-}
-
-/// One full pipeline at a time: on a 2-core machine, parallel pipelines would starve
-/// each other's capture stage and measure the machine, not the isolation.
-static ONE_PIPELINE: std::sync::Mutex<()> = std::sync::Mutex::new(());
-
-fn one_at_a_time() -> std::sync::MutexGuard<'static, ()> {
-    ONE_PIPELINE.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 fn start_pipeline(p: &Isolated, extra: &[&str]) -> Child {
@@ -57,28 +49,6 @@ fn wait_for_pid(supervisor: &Child, stage: &str, within: Duration) -> Option<(u3
         std::thread::sleep(Duration::from_millis(5));
     }
     None
-}
-
-/// `airglyph top --json` of this pipeline.
-fn top(p: &Isolated) -> serde_json::Value {
-    let out = p
-        .command("airglyph")
-        .args(["top", "--json", "--wait", "3"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).unwrap()
-}
-
-fn shut_down(p: &Isolated, mut supervisor: Child) {
-    signal(&supervisor, libc::SIGTERM);
-    let status = supervisor.wait().unwrap();
-    assert!(status.success(), "the supervisor stops cleanly: {status}");
-    assert!(p.shm_files().is_empty(), "left behind: {:?}", p.shm_files());
 }
 
 fn kill_repeatedly(stage: &str, seed: u64) {

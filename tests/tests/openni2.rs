@@ -5,7 +5,7 @@
 #![cfg(feature = "openni2")]
 
 use airglyph_core::recording::Recording;
-use airglyph_system_tests::{signal, start_probe, Isolated};
+use airglyph_system_tests::{signal, start_probe, succeed, Isolated};
 use std::process::Child;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
@@ -35,15 +35,9 @@ fn capture_streams_60_frames_of_the_openni2_dummy_device_to_another_process() {
     let tmp = tempfile::tempdir().unwrap();
     let got = tmp.path().join("got");
     let (probe, rx) = start_probe(&p, &["--out", got.to_str().unwrap(), "--idle", "3"]);
-    let capture = p
-        .command("airglyph-capture")
-        .args(["--source", "openni2:Dummy", "--frames", "60"])
-        .output()
-        .unwrap();
-    assert!(
-        capture.status.success(),
-        "{}",
-        String::from_utf8_lossy(&capture.stderr)
+    succeed(
+        p.command("airglyph-capture")
+            .args(["--source", "openni2:Dummy", "--frames", "60"]),
     );
     assert!(wait_exit(probe, 15).success());
     let meta: Vec<serde_json::Value> = rx.try_iter().collect();
@@ -107,19 +101,13 @@ fn an_oni_recorded_from_the_dummy_device_plays_back_through_capture_with_every_f
     );
     // Record 60 frames: our recording of the frames as read, and the .oni that OpenNI2's
     // recorder writes from the same stream meanwhile.
-    let rec = p
-        .command("airglyph")
-        .args(["record", "--source", "openni2:Dummy", "--frames", "60"])
-        .arg("--out")
-        .arg(&dir)
-        .arg("--oni")
-        .arg(&oni)
-        .output()
-        .unwrap();
-    assert!(
-        rec.status.success(),
-        "{}",
-        String::from_utf8_lossy(&rec.stderr)
+    succeed(
+        p.command("airglyph")
+            .args(["record", "--source", "openni2:Dummy", "--frames", "60"])
+            .arg("--out")
+            .arg(&dir)
+            .arg("--oni")
+            .arg(&oni),
     );
     let read = Recording::open(&dir).unwrap();
     assert_eq!(read.len(), 60);
@@ -211,15 +199,9 @@ fn an_oni_recorded_from_the_dummy_device_plays_back_through_capture_with_every_f
 #[test]
 fn devices_lists_both_backends_and_cameras_that_are_not_there_fail_clearly() {
     let p = Isolated::new();
-    let out = p
-        .command("airglyph")
-        .args(["devices", "--json", "--openni2-uri", "Dummy"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let out = succeed(
+        p.command("airglyph")
+            .args(["devices", "--json", "--openni2-uri", "Dummy"]),
     );
     let lines: Vec<serde_json::Value> = String::from_utf8_lossy(&out.stdout)
         .lines()

@@ -2,20 +2,15 @@
 //! symbols, headless Chromium on its page, `airglyph snapshot`, a frozen viewer that must
 //! not slow capture, and a viewer that cannot start while the pipeline runs on.
 
-use airglyph_system_tests::{children_named, signal, Isolated};
+use airglyph_system_tests::{
+    children_named, json_lines, one_at_a_time, shut_down, succeed, top, Isolated,
+};
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::process::{Command, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
-
-/// One full pipeline at a time: on a 2-core machine two would starve each other.
-static ONE_PIPELINE: std::sync::Mutex<()> = std::sync::Mutex::new(());
-
-fn one_at_a_time() -> std::sync::MutexGuard<'static, ()> {
-    ONE_PIPELINE.lock().unwrap_or_else(|e| e.into_inner())
-}
 
 /// The viewer's colours for a joint it is sure of (see airglyph-viewer's render.rs).
 const JOINT: [u8; 3] = [255, 0, 255];
@@ -64,22 +59,6 @@ fn state(addr: SocketAddr) -> Option<serde_json::Value> {
         Ok((200, body)) => serde_json::from_slice(&body).ok(),
         _ => None,
     }
-}
-
-/// The supervisor's stdout, one JSON object a line.
-fn json_lines(child: &mut Child) -> mpsc::Receiver<serde_json::Value> {
-    let out = child.stdout.take().unwrap();
-    let (tx, rx) = mpsc::channel();
-    std::thread::spawn(move || {
-        for line in BufReader::new(out).lines().map_while(Result::ok) {
-            if let Ok(v) = serde_json::from_str(&line) {
-                if tx.send(v).is_err() {
-                    break;
-                }
-            }
-        }
-    });
-    rx
 }
 
 /// Runs headless Chromium on `url` with `action` (e.g. --dump-dom) and returns its
@@ -145,24 +124,6 @@ fn count_near(img: &image::RgbImage, c: [u8; 3], tol: u8) -> usize {
         .count()
 }
 
-/// `airglyph top --json` of this pipeline.
-fn top(p: &Isolated) -> serde_json::Value {
-    let out = p
-        .command("airglyph")
-        .args(["top", "--json", "--wait", "3"])
-        .output()
-        .unwrap();
-    assert!(out.status.success());
-    serde_json::from_slice(&out.stdout).unwrap()
-}
-
-fn shut_down(p: &Isolated, mut supervisor: Child) {
-    signal(&supervisor, libc::SIGTERM);
-    let status = supervisor.wait().unwrap();
-    assert!(status.success(), "the supervisor stops cleanly: {status}");
-    assert!(p.shm_files().is_empty(), "left behind: {:?}", p.shm_files());
-}
-
 #[test]
 fn the_page_shows_the_skeleton_and_a_recognized_gesture() {
     let Some(chromium) = chromium() else {
@@ -179,7 +140,7 @@ fn the_page_shows_the_skeleton_and_a_recognized_gesture() {
         .stdout(Stdio::piped())
         .spawn()
         .unwrap();
-    let events = json_lines(&mut supervisor);
+    let events = json_lines(supervisor.stdout.take().unwrap());
 
     // What the gesture stage published, as another subscriber (the supervisor) saw it.
     let event = events
@@ -247,15 +208,9 @@ fn the_page_shows_the_skeleton_and_a_recognized_gesture() {
 
     // `airglyph snapshot`: the same renderer into a PNG, exact colours.
     let snap = shot.path().join("snapshot.png");
-    let out = p
-        .command("airglyph")
-        .args(["snapshot", "--out", snap.to_str().unwrap()])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let out = succeed(
+        p.command("airglyph")
+            .args(["snapshot", "--out", snap.to_str().unwrap()]),
     );
     assert!(String::from_utf8_lossy(&out.stdout).contains("with its skeleton"));
     let snap = image::open(&snap).unwrap().to_rgb8();

@@ -1,8 +1,8 @@
 //! Development loop: renders a synthetic scene, estimates every frame, prints the
 //! figures and writes overlays (green = truth, red = estimate).
 //!
-//! `cargo run --release -p airglyph-pose --example devloop -- [pose|bvh:FILE] [frames]
-//!  [noise] [floor] [qvga] [overlays:DIR] [every:N]`
+//! `cargo run --release -p airglyph-pose --example devloop -- [pose:NAME|bvh:FILE|draw:SYMBOLS]
+//!  [mh] [follow] [noise] [floor] [qvga] [frames] [overlays:DIR] [every:N] [set:FIELD=VALUE]`
 #![allow(clippy::needless_range_loop)]
 
 use airglyph_core::{Intrinsics, Joint};
@@ -55,42 +55,13 @@ fn main() {
     let n = synth.len().map_or(frames, |l| l.min(frames));
     let mut pcfg = PoseConfig::default();
     for a in &args {
-        // set:FIELD=VALUE sets any PoseConfig field (VALUE as JSON).
+        // set:FIELD=VALUE sets any PoseConfig field (VALUE as JSON), e.g.
+        // set:calibrate_body=false, set:work_width=0, set:geodesic_reach_ratio=[1.3,1.2].
         if let Some((k, v)) = a.strip_prefix("set:").and_then(|kv| kv.split_once('=')) {
             let mut j = serde_json::to_value(&pcfg).unwrap();
             j[k] = serde_json::from_str(v).expect("a JSON value");
             pcfg = serde_json::from_value(j).expect("a PoseConfig field");
         }
-        if let Some(v) = a.strip_prefix("georef:") {
-            let r: Vec<f32> = v.split(',').map(|x| x.parse().unwrap()).collect();
-            pcfg.geodesic_reach_ratio = [r[0], r[1]];
-        }
-        if let Some(v) = a.strip_prefix("headaxis:") {
-            pcfg.head_off_axis_weight = v.parse().unwrap();
-        }
-        if let Some(v) = a.strip_prefix("hidden:") {
-            let r: Vec<f32> = v.split(',').map(|x| x.parse().unwrap()).collect();
-            pcfg.hidden_root_gap = r[0];
-            pcfg.hidden_root_cost = r[1];
-        }
-        if let Some(v) = a.strip_prefix("hand:") {
-            pcfg.hand_behind_tip = v.parse().unwrap();
-        }
-        if let Some(v) = a.strip_prefix("band:") {
-            pcfg.torso_front_band = v.parse().unwrap();
-        }
-        if let Some(v) = a.strip_prefix("dominated:") {
-            pcfg.dominated_cost = v.parse().unwrap();
-        }
-        if let Some(v) = a.strip_prefix("edge_px:") {
-            pcfg.edge_px = v.parse().unwrap();
-        }
-    }
-    if args.iter().any(|a| a == "nocal") {
-        pcfg.calibrate_body = false;
-    }
-    if args.iter().any(|a| a == "full") {
-        pcfg.work_width = 0;
     }
     let mut est = PoseEstimator::new(k, pcfg);
     let mut ev = PoseEval::default();

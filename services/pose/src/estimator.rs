@@ -498,14 +498,6 @@ impl PoseEstimator {
             }
         }
         let assignment = assign(&cost, cfg.unassigned_cost);
-        self.debug.paths = paths
-            .iter()
-            .map(|p| {
-                p.iter()
-                    .map(|&a| self.graph.pixel_of_node[a as usize])
-                    .collect()
-            })
-            .collect();
         self.debug.cost = cost.clone();
         self.debug.maxima_dist = maxima
             .iter()
@@ -702,6 +694,13 @@ impl PoseEstimator {
             skel.set(je, c.end);
             skel.confidence[je.index()] = conf;
         }
+        // The paths are done with: hand their buffers to the overlay as pixels.
+        for path in &mut paths {
+            for a in path.iter_mut() {
+                *a = self.graph.pixel_of_node[*a as usize];
+            }
+        }
+        self.debug.paths = paths;
         let t5 = Instant::now();
         self.times.limbs = (t5 - t4).as_secs_f64();
         Some(skel)

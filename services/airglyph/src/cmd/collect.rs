@@ -155,17 +155,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         args.out.display()
     );
     let run_args = RunArgs {
-        source: source.clone(),
-        json: false,
         stages: vec!["capture".into(), "pose".into()],
-        fast: false,
-        looping: false,
-        frames: None,
-        stage_args: Vec::new(),
-        max_restarts: 5,
-        view: false,
-        listen: None,
         truth: args.truth,
+        ..RunArgs::with_source(source.clone())
     };
     let mut c = run_listening(run_args, |pipeline| {
         Ok(Collector {

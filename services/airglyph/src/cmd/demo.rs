@@ -106,17 +106,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     run_with(
         RunArgs {
-            source: SourceSpec::Synthetic(Some(script)),
             json: args.json,
-            stages: vec!["capture".into(), "pose".into(), "gesture".into()],
-            fast: false,
-            looping: false,
-            frames: None,
             stage_args,
-            max_restarts: 5,
             view: args.view,
             listen: args.listen,
             truth: args.truth,
+            ..RunArgs::with_source(SourceSpec::Synthetic(Some(script)))
         },
         &mut on_event,
     )?;

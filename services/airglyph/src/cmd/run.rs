@@ -62,6 +62,21 @@ pub struct Args {
     pub truth: bool,
 }
 
+impl Args {
+    /// `airglyph run --source SOURCE` with every other option at its command-line
+    /// default, for the commands that run the pipeline themselves (demo, collect).
+    pub fn with_source(source: SourceSpec) -> Self {
+        #[derive(clap::Parser)]
+        struct Run {
+            #[command(flatten)]
+            args: Args,
+        }
+        let mut args = <Run as clap::Parser>::parse_from(["run"]).args;
+        args.source = source;
+        args
+    }
+}
+
 /// The first restart waits this long; each further one twice as long, up to `MAX_BACKOFF`.
 const MIN_BACKOFF: Duration = Duration::from_millis(100);
 const MAX_BACKOFF: Duration = Duration::from_secs(5);
