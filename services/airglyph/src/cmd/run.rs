@@ -235,20 +235,21 @@ pub fn run_with(args: Args, on_event: impl FnMut(&GestureEventMsg)) -> anyhow::R
                 rx: p.gesture_receiver()?,
                 on_event,
             })
-        })?;
+        })
     } else {
-        run_listening(args, |_| Ok(Nothing))?;
+        run_listening(args, |_| Ok(Nothing))
     }
-    Ok(())
 }
 
 /// Starts and supervises the stages; `listener` (made once the pipeline is joined and
 /// before any stage starts, so it misses nothing) handles their output until SIGINT or
-/// SIGTERM, a finished source, a crash loop, or until it is done. Returns the listener.
+/// SIGTERM, a finished source, a crash loop, or until it is done. The listener goes
+/// before the pipeline does (its ports must leave first for the last process out to
+/// remove the pipeline's shared memory): keep what outlives it outside, borrowed.
 pub fn run_listening<L: Listener>(
     args: Args,
     listener: impl FnOnce(&Pipeline) -> anyhow::Result<L>,
-) -> anyhow::Result<L> {
+) -> anyhow::Result<()> {
     shutdown::install();
     let mut stages = Vec::new();
     for name in &args.stages {
@@ -307,8 +308,9 @@ pub fn run_listening<L: Listener>(
     for s in stages.iter_mut() {
         s.stop();
     }
+    drop(listener);
     pipeline.cleanup_dead_nodes();
-    outcome.map(|()| listener)
+    outcome
 }
 
 fn supervise(
