@@ -136,6 +136,41 @@ fn bad_labels_and_models_fail_with_a_clear_message() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("at most 32 bytes"), "{err}");
 
+    // Training data with an empty stroke, a NaN point, a label too long: each named by
+    // file and line.
+    for (line, want) in [
+        (r#"{"label":"a","strokes":[[]]}"#, "stroke 0 is empty"),
+        (
+            r#"{"label":"a","strokes":[[[0,0],[NaN,1]]]}"#,
+            "not a finite number",
+        ),
+        (
+            r#"{"label":"a-label-much-longer-than-thirty-two-bytes","strokes":[[[0,0],[1,1]]]}"#,
+            "at most 32 bytes",
+        ),
+    ] {
+        let data = tmp.path().join("bad.jsonl");
+        std::fs::write(
+            &data,
+            format!("{{\"label\":\"b\",\"strokes\":[[[0,0],[1,0]]]}}\n{line}\n"),
+        )
+        .unwrap();
+        let out = p
+            .command("airglyph")
+            .args(["train", "--epochs", "1", "--ensemble", "1", "--data"])
+            .arg(&data)
+            .arg("--out")
+            .arg(tmp.path().join("m.json"))
+            .output()
+            .unwrap();
+        assert!(!out.status.success());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(want), "{line}: {err}");
+        if !want.contains("32 bytes") {
+            assert!(err.contains("bad.jsonl:2"), "{line}: {err}");
+        }
+    }
+
     // A model of another version: the stage says which file and what to do.
     let model = tmp.path().join("old.json");
     std::fs::write(

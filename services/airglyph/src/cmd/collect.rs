@@ -50,9 +50,8 @@ pub struct Args {
     truth: bool,
 }
 
-/// Feeds skeletons to the segmenter and appends every repetition to the file.
-struct Collector {
-    rx: Receiver<SkeletonMsg>,
+/// Finds repetitions and appends each to the file.
+struct Writer {
     seg: RepetitionSegmenter,
     file: File,
     label: String,
@@ -62,7 +61,13 @@ struct Collector {
     written: usize,
 }
 
-impl Collector {
+/// Hands the pipeline's skeletons to the writer while the stages run.
+struct Collector<'a> {
+    rx: Receiver<SkeletonMsg>,
+    w: &'a mut Writer,
+}
+
+impl Writer {
     fn write(&mut self, points: &[[f32; 3]]) -> anyhow::Result<()> {
         let stroke: Vec<[f64; 3]> = points
             .iter()
@@ -93,19 +98,20 @@ impl Collector {
     }
 }
 
-impl Listener for Collector {
+impl Listener for Collector<'_> {
     fn poll(&mut self, timeout: Duration) -> anyhow::Result<Poll> {
         let Some(r) = self.rx.recv(timeout)? else {
             return Ok(Poll::Idle);
         };
         let msg = r.msg;
+        let w = &mut *self.w;
         if let Some(rep) = msg
             .skeleton()
-            .and_then(|s| self.seg.push(&s, msg.sequence, msg.chain.capture_ns))
+            .and_then(|s| w.seg.push(&s, msg.sequence, msg.chain.capture_ns))
         {
-            self.write(&rep.points)?;
+            w.write(&rep.points)?;
         }
-        Ok(if self.written >= self.count {
+        Ok(if w.written >= w.count {
             Poll::Done
         } else {
             Poll::Handled
@@ -159,16 +165,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         truth: args.truth,
         ..RunArgs::with_source(source.clone())
     };
-    let mut c = run_listening(run_args, |pipeline| {
+    let mut c = Writer {
+        seg: RepetitionSegmenter::new(RepetitionConfig::default()),
+        file,
+        label: args.label.clone(),
+        subject: args.subject.clone(),
+        source: "airglyph collect".into(),
+        count: args.count,
+        written: 0,
+    };
+    run_listening(run_args, |pipeline| {
         Ok(Collector {
             rx: pipeline.skeleton_receiver()?,
-            seg: RepetitionSegmenter::new(RepetitionConfig::default()),
-            file,
-            label: args.label.clone(),
-            subject: args.subject.clone(),
-            source: "airglyph collect".into(),
-            count: args.count,
-            written: 0,
+            w: &mut c,
         })
     })?;
     if c.written < c.count && airglyph_ipc::shutdown::requested() {
