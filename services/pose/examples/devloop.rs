@@ -63,6 +63,12 @@ fn main() {
             pcfg = serde_json::from_value(j).expect("a PoseConfig field");
         }
     }
+    for a in &args {
+        if let Some(f) = a.strip_prefix("shape:") {
+            let text = std::fs::read_to_string(f).expect("shape file");
+            pcfg.register.shape = serde_json::from_str(&text).expect("a Shape");
+        }
+    }
     let mut est = PoseEstimator::new(k, pcfg);
     let mut ev = PoseEval::default();
     if let Some(d) = &out {
@@ -73,6 +79,8 @@ fn main() {
     let mut cpu = 0.0f64;
     let mut ncpu = 0usize;
     let mut bias = [nalgebra::Vector3::<f32>::zeros(); Joint::COUNT];
+    let mut tdiff = [nalgebra::Vector3::<f32>::zeros(); Joint::COUNT];
+    let mut tn = [0f32; Joint::COUNT];
     for i in 0..n {
         let (img, truth) = synth.render(i);
         if std::env::var("PROBE").is_ok() {
@@ -90,6 +98,16 @@ fn main() {
         cpu += c1 - c0;
         ncpu += 1;
         let fe = ev.add(&r, &truth.skeleton);
+        if let Some((bp, tpl)) = &est.debug().body {
+            let posed = airglyph_pose::body::Posed::new(tpl, bp);
+            for j in Joint::ALL {
+                let (seg, local) = tpl.joints[j.index()];
+                let g = posed.rotation[seg.index()].inverse()
+                    * (truth.skeleton[j] - posed.joint[seg.index()]);
+                tdiff[j.index()] += g - local.coords;
+                tn[j.index()] += 1.0;
+            }
+        }
         if let (true, Some(tp)) = (r.person_found, est.debug().torso_pose) {
             let inv = tp.inverse();
             for j in 0..Joint::COUNT {
@@ -192,6 +210,16 @@ fn main() {
                 }
             }
         }
+    }
+    for j in Joint::ALL {
+        let d = tdiff[j.index()] / tn[j.index()].max(1.0) * 100.0;
+        eprintln!(
+            "truth - template, segment frame, {:15} ({:6.2} {:6.2} {:6.2}) cm",
+            j.name(),
+            d.x,
+            d.y,
+            d.z
+        );
     }
     let s = ev.summary();
     println!("{}", serde_json::to_string(&s).unwrap());

@@ -1,5 +1,6 @@
 //! Every tunable number of the estimator, with the seed's values where it gives them.
 
+pub use crate::register::RegisterConfig;
 use airglyph_core::Joint;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
@@ -143,6 +144,9 @@ pub struct PoseConfig {
     /// (arms, legs): the geodesic path over the surface, fingers and toes is longer
     /// than the bones. Measured on the MakeHuman body standing, drawing and walking.
     pub geodesic_reach_ratio: [f32; 2],
+
+    // --- articulated registration (beyond the seed) ---
+    pub register: RegisterConfig,
 }
 
 impl Default for PoseConfig {
@@ -220,6 +224,7 @@ impl Default for PoseConfig {
             nominal_fps: 30.0,
             calibrate_body: true,
             geodesic_reach_ratio: [1.32, 1.21],
+            register: RegisterConfig::default(),
         }
     }
 }

@@ -1,10 +1,12 @@
 //! The whole estimator: segmentation → torso → graph → geodesic maxima → limbs.
 
+use crate::body::{BodyPose, BodyTemplate, Posed};
 use crate::calibrate::BodyCalibration;
 use crate::config::{Limb, PoseConfig};
 use crate::dijkstra::{Dijkstra, Graph, INF};
 use crate::graph::{GeoGraph, NONE};
 use crate::limbs::{assign, fit_chain, Chain};
+use crate::register::{Fit, Frame, Registration};
 use crate::segment::{Plane, Segmenter};
 use crate::torso::{keypoints, TorsoEstimator, TorsoPose};
 use airglyph_core::filter::OneEuro;
@@ -30,6 +32,8 @@ pub struct StepTimes {
     pub graph: f64,
     pub geodesic: f64,
     pub limbs: f64,
+    /// The articulated registration ([`crate::register`]).
+    pub register: f64,
 }
 
 /// Intermediate results of the last frame, for overlays and diagnostics.
@@ -59,6 +63,10 @@ pub struct Debug {
     pub paths: Vec<Vec<u32>>,
     /// Size of the image the steps worked on (after reduction), and its intrinsics.
     pub work_size: (u32, u32),
+    /// The registered body and its template, when registration ran.
+    pub body: Option<(BodyPose, BodyTemplate)>,
+    /// The skeleton of the geodesic steps alone, before registration.
+    pub geodesic: Option<Skeleton>,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -94,6 +102,9 @@ pub struct PoseEstimator {
     prev_floor: Option<Plane>,
     prev_centroid: Option<Point3<f32>>,
     limbs: [Option<LimbState>; 5],
+    reg: Registration,
+    /// The last frame's registered body.
+    prev_body: Option<BodyPose>,
     /// The person's limb lengths, learned as they move; kept when the person is lost
     /// for a moment.
     calib: BodyCalibration,
@@ -128,6 +139,8 @@ impl PoseEstimator {
             prev_floor: None,
             prev_centroid: None,
             limbs: [None; 5],
+            reg: Registration::default(),
+            prev_body: None,
             calib: BodyCalibration::default(),
             smooth: Vec::new(),
             clock: None,
@@ -165,6 +178,7 @@ impl PoseEstimator {
         self.prev_floor = None;
         self.prev_centroid = None;
         self.limbs = [None; 5];
+        self.prev_body = None;
     }
 
     /// Time of each step in the last frame.
@@ -694,6 +708,48 @@ impl PoseEstimator {
             skel.set(je, c.end);
             skel.confidence[je.index()] = conf;
         }
+        let t5 = Instant::now();
+        self.times.limbs = (t5 - t4).as_secs_f64();
+
+        // 7. The whole body registered to the frame, from this estimate and from the
+        // last frame's registration, whichever explains the frame better.
+        if cfg.register.enabled {
+            let frame = Frame {
+                points: &self.points,
+                mask: &self.mask,
+                width: w,
+                height: h,
+                k: &k,
+            };
+            self.reg.prepare(&frame, cfg.register.points);
+            // The configuration is already scaled to the person's limbs.
+            let tpl = BodyTemplate::new(cfg);
+            let mut tips = [None; 5];
+            for l in Limb::ALL {
+                if let Some(mi) = assignment[l.index()] {
+                    tips[l.index()] = Some(self.graph.pos[maxima[mi] as usize]);
+                }
+            }
+            let starts = [self.prev_body, BodyPose::from_skeleton(&tpl, &skel)];
+            let mut best: Option<Fit> = None;
+            for start in starts.into_iter().flatten() {
+                let fit = self.reg.fit(&frame, &tpl, start, &tips, &cfg.register);
+                if best.is_none_or(|b| fit.energy < b.energy) {
+                    best = Some(fit);
+                }
+            }
+            self.debug.geodesic = Some(skel);
+            if let Some(b) = best {
+                let fitted = Posed::new(&tpl, &b.pose).skeleton(&tpl);
+                if fitted.is_finite() {
+                    skel.joints = fitted.joints;
+                    self.prev_body = Some(b.pose);
+                    self.debug.body = Some((b.pose, tpl));
+                }
+            }
+        }
+        self.times.register = t5.elapsed().as_secs_f64();
+
         // The paths are done with: hand their buffers to the overlay as pixels.
         for path in &mut paths {
             for a in path.iter_mut() {
@@ -701,8 +757,6 @@ impl PoseEstimator {
             }
         }
         self.debug.paths = paths;
-        let t5 = Instant::now();
-        self.times.limbs = (t5 - t4).as_secs_f64();
         Some(skel)
     }
 

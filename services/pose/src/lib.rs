@@ -88,6 +88,7 @@
 //! [`metrics`] holds the evaluation against ground truth (Eq. 16.20–16.22, share within
 //! 10 cm, mAP at 10 cm), [`overlay`] draws skeletons on depth images.
 
+pub mod body;
 pub mod calibrate;
 pub mod config;
 pub mod dijkstra;
@@ -98,6 +99,7 @@ pub mod graph;
 pub mod limbs;
 pub mod metrics;
 pub mod overlay;
+pub mod register;
 pub mod segment;
 pub mod torso;
 

@@ -1,0 +1,689 @@
+//! The articulated body the registration ([`crate::register`]) fits to the depth data:
+//! twelve rigid segments in a tree (pelvis → abdomen → chest → head and arms, pelvis →
+//! legs), each
+//! carrying tapered capsules that approximate its surface, and the 16 joints as points of
+//! the segments.
+//!
+//! Every segment's frame is, at rest, the pelvis frame (x = the person's left, y = up
+//! towards the neck, z = forward out of the belly) moved to the segment's joint; at rest
+//! the limbs hang straight down. A [`BodyPose`] gives each segment a rotation in the
+//! camera frame; joint positions follow by forward kinematics, so bone lengths and the
+//! torso's shape can never change from frame to frame.
+//!
+//! The template's numbers were measured on the MakeHuman body of airglyph-synth standing
+//! (`cargo run --release -p airglyph-pose --example body_shape -- mh pose:neutral`): the
+//! radius of each limb around its bone, the torso's cross-sections in the pelvis frame,
+//! the joints' places. Arm and leg lengths scale with the person's
+//! ([`crate::calibrate`]).
+
+use crate::config::PoseConfig;
+use airglyph_core::{Joint, Skeleton};
+use nalgebra::{Point3, Rotation3, Unit, Vector3};
+
+/// A rigid part of the body.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum Segment {
+    Pelvis,
+    /// The lower back, between the pelvis and the chest: the spine bends at both ends.
+    Abdomen,
+    Chest,
+    Head,
+    LeftUpperArm,
+    LeftForearm,
+    RightUpperArm,
+    RightForearm,
+    LeftThigh,
+    LeftShin,
+    RightThigh,
+    RightShin,
+}
+
+impl Segment {
+    pub const COUNT: usize = 12;
+    /// Every segment, each after its parent.
+    pub const ALL: [Segment; Segment::COUNT] = [
+        Segment::Pelvis,
+        Segment::Abdomen,
+        Segment::Chest,
+        Segment::Head,
+        Segment::LeftUpperArm,
+        Segment::LeftForearm,
+        Segment::RightUpperArm,
+        Segment::RightForearm,
+        Segment::LeftThigh,
+        Segment::LeftShin,
+        Segment::RightThigh,
+        Segment::RightShin,
+    ];
+
+    pub fn index(self) -> usize {
+        self as usize
+    }
+
+    pub fn parent(self) -> Option<Segment> {
+        use Segment::*;
+        match self {
+            Pelvis => None,
+            Abdomen | LeftThigh | RightThigh => Some(Pelvis),
+            Chest => Some(Abdomen),
+            Head | LeftUpperArm | RightUpperArm => Some(Chest),
+            LeftForearm => Some(LeftUpperArm),
+            RightForearm => Some(RightUpperArm),
+            LeftShin => Some(LeftThigh),
+            RightShin => Some(RightThigh),
+        }
+    }
+
+    /// The segment and its ancestors, the pelvis last: whose joints move it.
+    pub fn chain(self) -> impl Iterator<Item = Segment> {
+        std::iter::successors(Some(self), |s| s.parent())
+    }
+}
+
+/// A capsule whose radius changes linearly from `ra` at `a` to `rb` at `b` (segment frame).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Capsule {
+    pub segment: Segment,
+    pub a: Point3<f32>,
+    pub b: Point3<f32>,
+    pub ra: f32,
+    pub rb: f32,
+    /// The [`Shape::capsules`] entry it was made from, and whether mirrored.
+    pub spec: usize,
+    pub mirrored: bool,
+}
+
+/// The body's shape and proportions.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BodyTemplate {
+    /// Each segment's joint (its frame's origin) in its parent's frame; zero for the pelvis.
+    pub origin: [Vector3<f32>; Segment::COUNT],
+    pub capsules: Vec<Capsule>,
+    /// Each of the 16 joints: the segment carrying it and its place in that frame.
+    pub joints: [(Segment, Point3<f32>); Joint::COUNT],
+    /// The extremity of each limb of [`crate::Limb::ALL`] (top of the head, fingertips,
+    /// toes): where its geodesic maximum lies.
+    pub tips: [(Segment, Point3<f32>); 5],
+}
+
+/// A capsule of a [`Shape`]: endpoints in its segment's frame, where a limb segment's y
+/// is in units of its bone's length (so the capsule follows the person's limb lengths).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct CapsuleSpec {
+    pub segment: Segment,
+    pub a: [f32; 3],
+    pub ra: f32,
+    pub b: [f32; 3],
+    pub rb: f32,
+}
+
+/// A body's shape: the capsules and joints of its left side and midline (the right side
+/// mirrors the left), in segment frames. Limb points (upper arm, forearm, thigh, shin)
+/// have their y in bone lengths; everything else is in metres.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Shape {
+    /// The abdomen's joint (lower back), pelvis frame; the chest's, abdomen frame.
+    pub abdomen: [f32; 3],
+    pub chest: [f32; 3],
+    /// Chest frame: the neck (the head's joint), the torso joint, the left shoulder.
+    pub neck: [f32; 3],
+    pub torso: [f32; 3],
+    pub shoulder: [f32; 3],
+    /// Pelvis frame: the left hip.
+    pub hip: [f32; 3],
+    /// The head joint (centre of the skull), head frame.
+    pub head: [f32; 3],
+    /// The elbow in the upper arm's frame, the hand (palm centre) in the forearm's, the
+    /// knee in the thigh's, the ankle in the shin's.
+    pub elbow: [f32; 3],
+    pub hand: [f32; 3],
+    pub knee: [f32; 3],
+    pub ankle: [f32; 3],
+    /// Tips: the top of the head, the fingertips, the toes.
+    pub head_tip: [f32; 3],
+    pub finger_tip: [f32; 3],
+    pub toe_tip: [f32; 3],
+    /// Capsules of the pelvis, chest and head (mirrored when off the midline) and of
+    /// the left limbs (mirrored onto the right ones).
+    pub capsules: Vec<CapsuleSpec>,
+}
+
+impl Shape {
+    /// The MakeHuman body of airglyph-synth, as `examples/fit_template.rs` measures it
+    /// (scripted poses and a boxing clip, not the evaluation's clips).
+    pub fn makehuman() -> Self {
+        use Segment::*;
+        let cap = |segment, a, ra, b, rb| CapsuleSpec {
+            segment,
+            a,
+            ra,
+            b,
+            rb,
+        };
+        Self {
+            abdomen: [0.000, 0.070, -0.021],
+            chest: [0.000, 0.314, 0.006],
+            neck: [0.000, 0.156, 0.016],
+            torso: [0.000, 0.062, 0.006],
+            shoulder: [0.176, 0.072, 0.083],
+            hip: [0.110, 0.000, 0.000],
+            head: [0.000, 0.094, 0.101],
+            elbow: [0.000, -1.003, -0.000],
+            hand: [0.027, -0.982, 0.005],
+            knee: [-0.000, -1.003, -0.000],
+            ankle: [-0.000, -0.999, 0.000],
+            head_tip: [0.000, 0.240, 0.015],
+            finger_tip: [0.000, -1.400, 0.000],
+            toe_tip: [0.000, -1.120, 0.160],
+            capsules: vec![
+                cap(
+                    Pelvis,
+                    [0.051, -0.020, 0.008],
+                    0.111,
+                    [0.049, 0.100, 0.007],
+                    0.109,
+                ),
+                cap(
+                    Abdomen,
+                    [0.046, 0.050, 0.049],
+                    0.095,
+                    [0.029, 0.220, 0.075],
+                    0.095,
+                ),
+                cap(
+                    Chest,
+                    [0.097, -0.050, 0.083],
+                    0.106,
+                    [0.064, 0.080, 0.026],
+                    0.085,
+                ),
+                cap(
+                    Head,
+                    [0.000, -0.040, -0.005],
+                    0.093,
+                    [0.000, 0.040, 0.016],
+                    0.032,
+                ),
+                cap(
+                    Head,
+                    [0.000, 0.060, 0.071],
+                    0.071,
+                    [0.000, 0.150, 0.065],
+                    0.089,
+                ),
+                cap(
+                    LeftUpperArm,
+                    [0.000, 0.000, -0.003],
+                    0.052,
+                    [0.000, -1.000, 0.006],
+                    0.031,
+                ),
+                cap(
+                    LeftForearm,
+                    [0.000, 0.000, 0.004],
+                    0.031,
+                    [0.000, -1.300, -0.011],
+                    0.031,
+                ),
+                cap(
+                    LeftThigh,
+                    [0.000, 0.000, 0.015],
+                    0.093,
+                    [0.000, -1.000, 0.005],
+                    0.052,
+                ),
+                cap(
+                    LeftShin,
+                    [0.000, 0.000, -0.029],
+                    0.059,
+                    [0.000, -1.000, -0.000],
+                    0.030,
+                ),
+                cap(
+                    LeftShin,
+                    [0.000, -1.090, -0.007],
+                    0.037,
+                    [0.000, -1.120, 0.148],
+                    0.045,
+                ),
+            ],
+        }
+    }
+}
+
+impl Segment {
+    /// The same segment on the body's other side (itself on the midline).
+    pub fn mirrored(self) -> Segment {
+        use Segment::*;
+        match self {
+            LeftUpperArm => RightUpperArm,
+            RightUpperArm => LeftUpperArm,
+            LeftForearm => RightForearm,
+            RightForearm => LeftForearm,
+            LeftThigh => RightThigh,
+            RightThigh => LeftThigh,
+            LeftShin => RightShin,
+            RightShin => LeftShin,
+            s => s,
+        }
+    }
+
+    /// Whether the segment's frame carries mirrored copies of the left side's capsules.
+    fn on_midline(self) -> bool {
+        matches!(
+            self,
+            Segment::Pelvis | Segment::Abdomen | Segment::Chest | Segment::Head
+        )
+    }
+}
+
+fn v(p: [f32; 3]) -> Vector3<f32> {
+    Vector3::new(p[0], p[1], p[2])
+}
+
+fn mirror(p: [f32; 3]) -> [f32; 3] {
+    [-p[0], p[1], p[2]]
+}
+
+/// Bone lengths, metres: upper arm, forearm, thigh, shin.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Limbs {
+    pub upper_arm: f32,
+    pub forearm: f32,
+    pub thigh: f32,
+    pub shin: f32,
+}
+
+impl Limbs {
+    pub fn from_config(cfg: &PoseConfig) -> Self {
+        Self {
+            upper_arm: cfg.upper_arm,
+            forearm: cfg.forearm,
+            thigh: cfg.thigh,
+            shin: cfg.shin,
+        }
+    }
+
+    /// The length a limb segment's y is measured in (1 for the others).
+    pub fn unit(&self, s: Segment) -> f32 {
+        use Segment::*;
+        match s {
+            LeftUpperArm | RightUpperArm => self.upper_arm,
+            LeftForearm | RightForearm => self.forearm,
+            LeftThigh | RightThigh => self.thigh,
+            LeftShin | RightShin => self.shin,
+            Pelvis | Abdomen | Chest | Head => 1.0,
+        }
+    }
+}
+
+impl BodyTemplate {
+    /// The configured shape with the configured bone lengths (already scaled to the
+    /// person's by [`crate::calibrate`] when that is on).
+    pub fn new(cfg: &PoseConfig) -> Self {
+        Self::from_shape(&cfg.register.shape, &Limbs::from_config(cfg))
+    }
+
+    pub fn from_shape(shape: &Shape, limbs: &Limbs) -> Self {
+        use Segment::*;
+        // A point of a segment's frame, limb y scaled by the bone length.
+        let at = |s: Segment, p: [f32; 3]| Point3::new(p[0], p[1] * limbs.unit(s), p[2]);
+        let both = |left: Segment, p: [f32; 3]| {
+            [(left, at(left, p)), (left.mirrored(), at(left, mirror(p)))]
+        };
+        let mut origin = [Vector3::zeros(); Segment::COUNT];
+        origin[Abdomen.index()] = v(shape.abdomen);
+        origin[Chest.index()] = v(shape.chest);
+        origin[Head.index()] = v(shape.neck);
+        origin[LeftUpperArm.index()] = v(shape.shoulder);
+        origin[RightUpperArm.index()] = v(mirror(shape.shoulder));
+        for (s, p) in both(LeftUpperArm, shape.elbow) {
+            origin[if s == LeftUpperArm {
+                LeftForearm
+            } else {
+                RightForearm
+            }
+            .index()] = p.coords;
+        }
+        origin[LeftThigh.index()] = v(shape.hip);
+        origin[RightThigh.index()] = v(mirror(shape.hip));
+        for (s, p) in both(LeftThigh, shape.knee) {
+            origin[if s == LeftThigh { LeftShin } else { RightShin }.index()] = p.coords;
+        }
+
+        let mut capsules = Vec::with_capacity(2 * shape.capsules.len());
+        for (spec, c) in shape.capsules.iter().enumerate() {
+            let seg = c.segment;
+            capsules.push(Capsule {
+                segment: seg,
+                a: at(seg, c.a),
+                b: at(seg, c.b),
+                ra: c.ra,
+                rb: c.rb,
+                spec,
+                mirrored: false,
+            });
+            let off_midline = c.a[0] != 0.0 || c.b[0] != 0.0;
+            if !seg.on_midline() || off_midline {
+                capsules.push(Capsule {
+                    segment: seg.mirrored(),
+                    a: at(seg, mirror(c.a)),
+                    b: at(seg, mirror(c.b)),
+                    ra: c.ra,
+                    rb: c.rb,
+                    spec,
+                    mirrored: true,
+                });
+            }
+        }
+        let p3 = |p: [f32; 3]| Point3::new(p[0], p[1], p[2]);
+        let [lhand, rhand] = both(LeftForearm, shape.hand);
+        let [lankle, rankle] = both(LeftShin, shape.ankle);
+        let [lfinger, rfinger] = both(LeftForearm, shape.finger_tip);
+        let [ltoe, rtoe] = both(LeftShin, shape.toe_tip);
+        let o = Point3::origin();
+        let joints = [
+            (Head, p3(shape.head)),
+            (Chest, p3(shape.neck)),
+            (Chest, p3(shape.torso)),
+            (Pelvis, o),
+            (Chest, p3(shape.shoulder)),
+            (LeftForearm, o),
+            lhand,
+            (Chest, p3(mirror(shape.shoulder))),
+            (RightForearm, o),
+            rhand,
+            (Pelvis, p3(shape.hip)),
+            (LeftShin, o),
+            lankle,
+            (Pelvis, p3(mirror(shape.hip))),
+            (RightShin, o),
+            rankle,
+        ];
+        let t = Self {
+            origin,
+            capsules,
+            joints,
+            tips: [(Head, p3(shape.head_tip)), lfinger, rfinger, ltoe, rtoe],
+        };
+        debug_assert!(Joint::ALL
+            .iter()
+            .all(|j| t.joints[j.index()].0 == segment_of(*j)));
+        t
+    }
+}
+
+/// The segment that carries a joint.
+pub fn segment_of(j: Joint) -> Segment {
+    use Segment::*;
+    match j {
+        Joint::Head => Head,
+        Joint::Neck | Joint::Torso | Joint::LeftShoulder | Joint::RightShoulder => Chest,
+        Joint::Pelvis | Joint::LeftHip | Joint::RightHip => Pelvis,
+        Joint::LeftElbow | Joint::LeftHand => LeftForearm,
+        Joint::RightElbow | Joint::RightHand => RightForearm,
+        Joint::LeftKnee | Joint::LeftFoot => LeftShin,
+        Joint::RightKnee | Joint::RightFoot => RightShin,
+    }
+}
+
+/// The smallest rotation taking direction `a` to direction `b` (nalgebra's
+/// `rotation_between` gives NaN for nearly parallel vectors).
+pub fn shortest_turn(a: &Vector3<f32>, b: &Vector3<f32>) -> Rotation3<f32> {
+    let (Some(a), Some(b)) = (a.try_normalize(1e-9), b.try_normalize(1e-9)) else {
+        return Rotation3::identity();
+    };
+    let c = a.cross(&b);
+    let (sin, cos) = (c.norm(), a.dot(&b));
+    if sin < 1e-7 {
+        if cos > 0.0 {
+            return Rotation3::identity();
+        }
+        // Half a turn about any axis across `a`.
+        let across = if a.x.abs() < 0.9 {
+            Vector3::x()
+        } else {
+            Vector3::y()
+        };
+        let axis = Unit::new_normalize(a.cross(&across));
+        return Rotation3::from_axis_angle(&axis, std::f32::consts::PI);
+    }
+    Rotation3::from_axis_angle(&Unit::new_unchecked(c / sin), sin.atan2(cos))
+}
+
+/// Where the body is: the pelvis joint and every segment's rotation, camera frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BodyPose {
+    pub pelvis: Point3<f32>,
+    pub rotation: [Rotation3<f32>; Segment::COUNT],
+}
+
+/// A posed body: every segment's joint position, for reading points off it.
+#[derive(Debug, Clone, Copy)]
+pub struct Posed {
+    pub joint: [Point3<f32>; Segment::COUNT],
+    pub rotation: [Rotation3<f32>; Segment::COUNT],
+}
+
+impl Posed {
+    pub fn new(t: &BodyTemplate, pose: &BodyPose) -> Self {
+        let mut joint = [pose.pelvis; Segment::COUNT];
+        for s in Segment::ALL {
+            if let Some(p) = s.parent() {
+                joint[s.index()] =
+                    joint[p.index()] + pose.rotation[p.index()] * t.origin[s.index()];
+            }
+        }
+        Self {
+            joint,
+            rotation: pose.rotation,
+        }
+    }
+
+    /// A point of a segment's frame in the camera frame.
+    pub fn point(&self, s: Segment, local: &Point3<f32>) -> Point3<f32> {
+        self.joint[s.index()] + self.rotation[s.index()] * local.coords
+    }
+
+    pub fn skeleton(&self, t: &BodyTemplate) -> Skeleton {
+        let mut joints = [Point3::origin(); Joint::COUNT];
+        for (j, (s, local)) in joints.iter_mut().zip(&t.joints) {
+            *j = self.point(*s, local);
+        }
+        Skeleton::new(joints)
+    }
+}
+
+impl BodyPose {
+    /// The pose nearest a 16-joint skeleton: the pelvis frame from the hips and the
+    /// neck, each limb segment turned the shortest way from its parent onto its bone.
+    /// `None` for a degenerate skeleton (hips on top of each other, say).
+    pub fn from_skeleton(t: &BodyTemplate, s: &Skeleton) -> Option<Self> {
+        use Segment::*;
+        let x = (s[Joint::LeftHip] - s[Joint::RightHip]).try_normalize(1e-6)?;
+        let up = s[Joint::Neck] - s[Joint::Pelvis];
+        let y = (up - x * x.dot(&up)).try_normalize(1e-6)?;
+        let z = x.cross(&y);
+        let pelvis_r = Rotation3::from_basis_unchecked(&[x, y, z]);
+        let mut rotation = [pelvis_r; Segment::COUNT];
+        let turn = |from: &Rotation3<f32>, local: Vector3<f32>, want: Vector3<f32>| {
+            shortest_turn(&(from * local), &want) * from
+        };
+        let head_axis = t.joints[Joint::Head.index()].1.coords;
+        rotation[Head.index()] = turn(&pelvis_r, head_axis, s[Joint::Head] - s[Joint::Neck]);
+        for (upper, fore, j0, j1, j2) in [
+            (
+                LeftUpperArm,
+                LeftForearm,
+                Joint::LeftShoulder,
+                Joint::LeftElbow,
+                Joint::LeftHand,
+            ),
+            (
+                RightUpperArm,
+                RightForearm,
+                Joint::RightShoulder,
+                Joint::RightElbow,
+                Joint::RightHand,
+            ),
+            (
+                LeftThigh,
+                LeftShin,
+                Joint::LeftHip,
+                Joint::LeftKnee,
+                Joint::LeftFoot,
+            ),
+            (
+                RightThigh,
+                RightShin,
+                Joint::RightHip,
+                Joint::RightKnee,
+                Joint::RightFoot,
+            ),
+        ] {
+            // The template's own bone (its joints need not lie on the segment's axis).
+            let bone_upper = t.origin[fore.index()];
+            let bone_fore = t.joints[j2.index()].1.coords;
+            let ru = turn(&pelvis_r, bone_upper, s[j1] - s[j0]);
+            rotation[upper.index()] = ru;
+            rotation[fore.index()] = turn(&ru, bone_fore, s[j2] - s[j1]);
+        }
+        let pose = Self {
+            pelvis: s[Joint::Pelvis],
+            rotation,
+        };
+        pose.is_finite().then_some(pose)
+    }
+
+    pub fn is_finite(&self) -> bool {
+        self.pelvis.coords.iter().all(|c| c.is_finite())
+            && self
+                .rotation
+                .iter()
+                .all(|r| r.matrix().iter().all(|c| c.is_finite()))
+    }
+
+    /// Moves the pose by a step of the registration: `dt` for the pelvis, and for each
+    /// segment a small rotation `omega` (camera frame, radians) about its joint that
+    /// carries everything below it along.
+    pub fn step(&mut self, dt: &Vector3<f32>, omega: &[Vector3<f32>; Segment::COUNT]) {
+        self.pelvis += dt;
+        let mut turn = [Rotation3::identity(); Segment::COUNT];
+        for s in Segment::ALL {
+            let w = omega[s.index()];
+            let own = Unit::try_new(w, 1e-12).map_or(Rotation3::identity(), |axis| {
+                Rotation3::from_axis_angle(&axis, w.norm())
+            });
+            let parent = s
+                .parent()
+                .map_or(Rotation3::identity(), |p| turn[p.index()]);
+            turn[s.index()] = own * parent;
+        }
+        for s in Segment::ALL {
+            let r = turn[s.index()] * self.rotation[s.index()];
+            // Re-orthonormalise: many small steps would otherwise drift.
+            self.rotation[s.index()] = Rotation3::from_matrix_eps(r.matrix(), 1e-7, 4, r);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn standing() -> (BodyTemplate, BodyPose) {
+        let t = BodyTemplate::new(&PoseConfig::default());
+        // Facing the camera 2.5 m away: the person's left is the camera's +x, up is -y,
+        // forward is -z.
+        let r = Rotation3::from_basis_unchecked(&[Vector3::x(), -Vector3::y(), -Vector3::z()]);
+        let pose = BodyPose {
+            pelvis: Point3::new(0.0, 0.1, 2.5),
+            rotation: [r; Segment::COUNT],
+        };
+        (t, pose)
+    }
+
+    #[test]
+    fn standing_joints_are_where_the_template_puts_them() {
+        let (t, pose) = standing();
+        let s = Posed::new(&t, &pose).skeleton(&t);
+        // Head above the neck above the pelvis (camera y down), shoulders and hips on
+        // the person's own sides (left = camera +x when facing the camera).
+        assert!(s[Joint::Head].y < s[Joint::Neck].y && s[Joint::Neck].y < s[Joint::Pelvis].y);
+        assert!(s[Joint::LeftShoulder].x > 0.1 && s[Joint::RightShoulder].x < -0.1);
+        assert!(s[Joint::LeftHip].x > 0.05 && s[Joint::RightHip].x < -0.05);
+        // Bone lengths are the configured ones, to within the shape's placing of the
+        // joints (a joint may lie a little off its segment's axis).
+        let cfg = PoseConfig::default();
+        let ua = (s[Joint::LeftElbow] - s[Joint::LeftShoulder]).norm();
+        let fa = (s[Joint::LeftHand] - s[Joint::LeftElbow]).norm();
+        assert!((ua - cfg.upper_arm).abs() < 0.01 && (fa - cfg.forearm).abs() < 0.01);
+        let leg = s[Joint::LeftFoot].y - s[Joint::LeftHip].y;
+        assert!((leg - cfg.thigh - cfg.shin).abs() < 0.01, "{leg}");
+    }
+
+    #[test]
+    fn a_pose_read_back_from_its_own_skeleton_gives_the_same_joints() {
+        let (t, mut pose) = standing();
+        // Bend the body: turn the chest, raise the right arm forward, bend the left knee.
+        let mut w = [Vector3::zeros(); Segment::COUNT];
+        w[Segment::Chest.index()] = Vector3::new(0.0, 0.3, 0.1);
+        w[Segment::RightUpperArm.index()] = Vector3::new(1.2, 0.0, 0.0);
+        w[Segment::RightForearm.index()] = Vector3::new(0.6, 0.2, 0.0);
+        w[Segment::LeftShin.index()] = Vector3::new(-0.9, 0.0, 0.0);
+        pose.step(&Vector3::new(0.1, 0.0, 0.2), &w);
+        let s = Posed::new(&t, &pose).skeleton(&t);
+        eprintln!("{:?} {:?}", s, pose);
+        let back = BodyPose::from_skeleton(&t, &s).expect("a skeleton with hips apart");
+        let s2 = Posed::new(&t, &back).skeleton(&t);
+        for j in Joint::ALL {
+            // The chest's turn relative to the pelvis is not in the hips and neck alone:
+            // joints on the chest may differ by that turn; limbs keep their bones.
+            let tol = match segment_of(j) {
+                Segment::Pelvis => 1e-4,
+                _ => 0.12,
+            };
+            assert!(
+                (s[j] - s2[j]).norm() < tol,
+                "{j:?}: {:?} vs {:?}",
+                s[j],
+                s2[j]
+            );
+        }
+        // Bone directions are kept exactly, whatever the chest did.
+        for (a, b) in [
+            (Joint::RightElbow, Joint::RightHand),
+            (Joint::LeftKnee, Joint::LeftFoot),
+        ] {
+            let d1 = (s[b] - s[a]).normalize();
+            let d2 = (s2[b] - s2[a]).normalize();
+            assert!(d1.dot(&d2) > 0.9999, "{a:?}→{b:?}");
+        }
+    }
+
+    #[test]
+    fn a_step_moves_points_as_its_jacobian_says() {
+        // The registration's Jacobian: a point of segment s moves by
+        // dt + Σ_{j in chain(s)} ω_j × (x − p_j) for a small step.
+        let (t, pose) = standing();
+        let before = Posed::new(&t, &pose);
+        let local = Point3::new(0.01, -0.2, 0.03);
+        let x = before.point(Segment::LeftForearm, &local);
+        let mut w = [Vector3::zeros(); Segment::COUNT];
+        for (i, wi) in w.iter_mut().enumerate() {
+            *wi = Vector3::new(0.3, -0.2, 0.1 * i as f32) * 1e-4;
+        }
+        let dt = Vector3::new(1e-4, -2e-4, 3e-4);
+        let mut after = pose;
+        after.step(&dt, &w);
+        let moved = Posed::new(&t, &after).point(Segment::LeftForearm, &local) - x;
+        let mut predicted = dt;
+        for s in Segment::LeftForearm.chain() {
+            predicted += w[s.index()].cross(&(x - before.joint[s.index()]));
+        }
+        assert!(
+            (moved - predicted).norm() < 1e-6,
+            "{moved:?} vs {predicted:?}"
+        );
+    }
+}

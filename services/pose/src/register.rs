@@ -1,0 +1,549 @@
+//! Articulated registration: the body template ([`crate::body`]) fitted to the person's
+//! points by Gauss–Newton, beyond the seed.
+//!
+//! The seed's limbs are two-joint chains fitted one by one to target points around a
+//! geodesic path, on a torso registered alone; a torso model that turns a few degrees
+//! when an arm is raised before the chest, or slides along its own axis, then carries
+//! every key point with it. Here the whole body is fitted at once, from the geodesic
+//! estimate and from the last frame's fit, whichever explains the frame better:
+//!
+//! * data term: every sampled person point lies on the surface of the nearest capsule
+//!   (signed distance, Cauchy-weighted so points the body does not explain — a bag, a
+//!   second person's arm — cannot drag it);
+//! * silhouette term: the body's front surface, seen from the camera, projects onto the
+//!   person's pixels (a limb outside them is pulled to the nearest one);
+//! * free-space term: where the camera sees a surface behind the body's front, the body
+//!   cannot be (it would hide that surface);
+//! * extremity term: the limbs' tips near the geodesic maxima assigned to them.
+//!
+//! Bone lengths and the torso's shape are fixed by the template, so no step can stretch
+//! a limb or shear the torso. The unknowns are the pelvis position and a rotation per
+//! segment (36 numbers); a step moves each segment by a twist that is linear in them, so
+//! the normal equations are accumulated per segment (6×6) and assembled once.
+
+use crate::body::{BodyPose, BodyTemplate, Posed, Segment, Shape};
+use airglyph_core::Intrinsics;
+use nalgebra::{Matrix3, Point3, SMatrix, SVector, Vector3, Vector6};
+
+/// Unknowns of a step: the pelvis's translation, then a rotation per segment.
+const N: usize = 3 + 3 * Segment::COUNT;
+type Normal = SMatrix<f64, N, N>;
+type Gradient = SVector<f64, N>;
+type Local = SMatrix<f64, 6, 6>;
+
+const NONE: u32 = u32::MAX;
+/// Settings of the registration (part of [`crate::PoseConfig`]).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct RegisterConfig {
+    /// Fit the articulated body after the geodesic estimate (false: the seed's chains).
+    pub enabled: bool,
+    /// About this many person points are sampled for the data term.
+    pub points: usize,
+    /// Gauss–Newton steps per start.
+    pub iterations: usize,
+    /// Scale of the data term's Cauchy weight, metres.
+    pub sigma: f32,
+    /// Weight of a silhouette or free-space residual against one data point's.
+    pub silhouette_weight: f32,
+    pub free_space_weight: f32,
+    /// How far the body's front may lie before the surface seen, metres.
+    pub free_space_margin: f32,
+    /// Weight of a limb tip's distance to its geodesic maximum, and its Cauchy scale.
+    pub tip_weight: f32,
+    pub tip_sigma: f32,
+    /// Weight of the head's and the chest's turn from their rest against their parent
+    /// (per radian²): the head's turn about its own axis is not in the data at all.
+    pub head_prior: f64,
+    pub chest_prior: f64,
+    /// Levenberg–Marquardt damping: relative (of the diagonal) and absolute.
+    pub damping: f64,
+    pub damping_abs: f64,
+    /// The body's shape (bone lengths come from the configuration).
+    pub shape: Shape,
+}
+
+impl Default for RegisterConfig {
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            points: 1500,
+            iterations: 10,
+            sigma: 0.03,
+            silhouette_weight: 4.0,
+            free_space_weight: 4.0,
+            free_space_margin: 0.03,
+            tip_weight: 10.0,
+            tip_sigma: 0.1,
+            head_prior: 1.0,
+            chest_prior: 0.5,
+            damping: 0.05,
+            damping_abs: 0.01,
+            shape: Shape::makehuman(),
+        }
+    }
+}
+
+/// The frame the body is fitted to: the organized point cloud and the person mask of
+/// the work image.
+#[derive(Debug, Clone, Copy)]
+pub struct Frame<'a> {
+    pub points: &'a [Point3<f32>],
+    pub mask: &'a [bool],
+    pub width: usize,
+    pub height: usize,
+    pub k: &'a Intrinsics,
+}
+
+/// The result of one registration.
+#[derive(Debug, Clone, Copy)]
+pub struct Fit {
+    pub pose: BodyPose,
+    /// The robust energy at the end (lower explains the frame better).
+    pub energy: f32,
+    /// Per segment, the share of its front surface the camera sees where the body puts
+    /// it (1 = all of it; hidden or contradicted parts lower it).
+    pub seen: [f32; Segment::COUNT],
+}
+
+/// Reusable state: the sampled data and the nearest-person-pixel map of a frame.
+#[derive(Debug, Default)]
+pub struct Registration {
+    data: Vec<Point3<f32>>,
+    /// For every pixel, the nearest person pixel (itself when it is one), or NONE.
+    nearest: Vec<u32>,
+    d2: Vec<u32>,
+}
+
+/// A capsule of the posed body, camera frame.
+#[derive(Debug, Clone, Copy)]
+struct Placed {
+    segment: Segment,
+    a: Point3<f32>,
+    ab: Vector3<f32>,
+    len2: f32,
+    ra: f32,
+    rb: f32,
+}
+
+impl Placed {
+    /// Closest axis point, the radius there, and the signed distance to the surface.
+    #[inline]
+    fn nearest(&self, p: &Point3<f32>) -> (Point3<f32>, f32, f32) {
+        let t = if self.len2 > 1e-12 {
+            ((p - self.a).dot(&self.ab) / self.len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let c = self.a + self.ab * t;
+        let r = self.ra + (self.rb - self.ra) * t;
+        (c, r, (p - c).norm() - r)
+    }
+}
+
+/// Normal equations of one step, per segment: the segment's motion is a twist (v, ω),
+/// and a residual r along `dir` at point x of it changes by dirᵀ(v + ω × x).
+struct Accumulator {
+    h: [Local; Segment::COUNT],
+    g: [Vector6<f64>; Segment::COUNT],
+    energy: f64,
+}
+
+impl Accumulator {
+    fn new() -> Self {
+        Self {
+            h: [Local::zeros(); Segment::COUNT],
+            g: [Vector6::zeros(); Segment::COUNT],
+            energy: 0.0,
+        }
+    }
+
+    /// Adds residual `r` (weight `w` in the normal equations, `cost` to the energy).
+    #[inline]
+    fn add(&mut self, s: Segment, x: &Point3<f32>, dir: &Vector3<f32>, r: f32, w: f32) {
+        let m = x.coords.cross(dir);
+        let j = Vector6::new(
+            dir.x as f64,
+            dir.y as f64,
+            dir.z as f64,
+            m.x as f64,
+            m.y as f64,
+            m.z as f64,
+        );
+        let w = w as f64;
+        let h = &mut self.h[s.index()];
+        // Only the upper triangle; mirrored when assembled.
+        for a in 0..6 {
+            let wa = w * j[a];
+            for b in a..6 {
+                h[(a, b)] += wa * j[b];
+            }
+        }
+        self.g[s.index()] += j * (w * r as f64);
+    }
+
+    /// The full normal equations: a segment's twist is v = dt + Σ p_j × ω_j and
+    /// ω = Σ ω_j over the joints j of its chain.
+    fn assemble(&self, posed: &Posed) -> (Normal, Gradient) {
+        let mut hh = Normal::zeros();
+        let mut gg = Gradient::zeros();
+        for s in Segment::ALL {
+            let mut h = self.h[s.index()];
+            for a in 0..6 {
+                for b in 0..a {
+                    h[(a, b)] = h[(b, a)];
+                }
+            }
+            // A: 6 × N, the twist of s from the unknowns.
+            let mut cols: Vec<(usize, SMatrix<f64, 6, 3>)> = Vec::with_capacity(5);
+            let mut tr = SMatrix::<f64, 6, 3>::zeros();
+            tr.fixed_view_mut::<3, 3>(0, 0)
+                .copy_from(&Matrix3::identity());
+            cols.push((0, tr));
+            for j in s.chain() {
+                let p = posed.joint[j.index()].coords.cast::<f64>();
+                let mut blk = SMatrix::<f64, 6, 3>::zeros();
+                blk.fixed_view_mut::<3, 3>(0, 0)
+                    .copy_from(&p.cross_matrix());
+                blk.fixed_view_mut::<3, 3>(3, 0)
+                    .copy_from(&Matrix3::identity());
+                cols.push((3 + 3 * j.index(), blk));
+            }
+            let g = self.g[s.index()];
+            for (ca, a) in &cols {
+                let ha = a.transpose() * h;
+                let mut gr = gg.fixed_rows_mut::<3>(*ca);
+                gr += a.transpose() * g;
+                for (cb, b) in &cols {
+                    let blk = ha * b;
+                    let mut dst = hh.fixed_view_mut::<3, 3>(*ca, *cb);
+                    dst += blk;
+                }
+            }
+        }
+        (hh, gg)
+    }
+}
+
+fn place(t: &BodyTemplate, posed: &Posed) -> Vec<Placed> {
+    t.capsules
+        .iter()
+        .map(|c| {
+            let a = posed.point(c.segment, &c.a);
+            let b = posed.point(c.segment, &c.b);
+            let ab = b - a;
+            Placed {
+                segment: c.segment,
+                a,
+                ab,
+                len2: ab.norm_squared(),
+                ra: c.ra,
+                rb: c.rb,
+            }
+        })
+        .collect()
+}
+
+/// Cauchy's weight and cost for residual `r` at scale `s`.
+#[inline]
+fn cauchy(r: f32, s: f32) -> (f32, f32) {
+    let q = (r / s) * (r / s);
+    (1.0 / (1.0 + q), 0.5 * s * s * (1.0 + q).ln())
+}
+
+impl Registration {
+    /// Samples the person's points and builds the nearest-person-pixel map.
+    pub fn prepare(&mut self, f: &Frame, target_points: usize) {
+        let n_person = f.mask.iter().filter(|&&m| m).count();
+        let stride = ((n_person as f32 / target_points.max(1) as f32)
+            .sqrt()
+            .floor() as usize)
+            .max(1);
+        self.data.clear();
+        for v in (0..f.height).step_by(stride) {
+            for u in (0..f.width).step_by(stride) {
+                let i = v * f.width + u;
+                if f.mask[i] && f.points[i].z > 0.0 {
+                    self.data.push(f.points[i]);
+                }
+            }
+        }
+        self.nearest_map(f);
+    }
+
+    /// Two passes of nearest-seed propagation (8-neighbours): within a pixel of the
+    /// exact Euclidean answer, enough to pull a limb back onto the silhouette.
+    fn nearest_map(&mut self, f: &Frame) {
+        let (w, h) = (f.width, f.height);
+        self.nearest.clear();
+        self.d2.clear();
+        for (i, (&m, p)) in f.mask.iter().zip(f.points).enumerate() {
+            let person = m && p.z > 0.0;
+            self.nearest.push(if person { i as u32 } else { NONE });
+            self.d2.push(if person { 0 } else { u32::MAX });
+        }
+        let dist2 = |i: usize, q: u32| {
+            let (qu, qv) = ((q as usize % w) as i64, (q as usize / w) as i64);
+            let (u, v) = ((i % w) as i64, (i / w) as i64);
+            ((u - qu) * (u - qu) + (v - qv) * (v - qv)) as u32
+        };
+        let relax = |i: usize, j: usize, nearest: &mut Vec<u32>, d2: &mut Vec<u32>| {
+            let q = nearest[j];
+            if q != NONE {
+                let d = dist2(i, q);
+                if d < d2[i] {
+                    d2[i] = d;
+                    nearest[i] = q;
+                }
+            }
+        };
+        for v in 0..h {
+            for u in 0..w {
+                let i = v * w + u;
+                if u > 0 {
+                    relax(i, i - 1, &mut self.nearest, &mut self.d2);
+                }
+                if v > 0 {
+                    relax(i, i - w, &mut self.nearest, &mut self.d2);
+                    if u > 0 {
+                        relax(i, i - w - 1, &mut self.nearest, &mut self.d2);
+                    }
+                    if u + 1 < w {
+                        relax(i, i - w + 1, &mut self.nearest, &mut self.d2);
+                    }
+                }
+            }
+        }
+        for v in (0..h).rev() {
+            for u in (0..w).rev() {
+                let i = v * w + u;
+                if u + 1 < w {
+                    relax(i, i + 1, &mut self.nearest, &mut self.d2);
+                }
+                if v + 1 < h {
+                    relax(i, i + w, &mut self.nearest, &mut self.d2);
+                    if u + 1 < w {
+                        relax(i, i + w + 1, &mut self.nearest, &mut self.d2);
+                    }
+                    if u > 0 {
+                        relax(i, i + w - 1, &mut self.nearest, &mut self.d2);
+                    }
+                }
+            }
+        }
+    }
+
+    /// The sampled person points, each with the index (into `t.capsules`) of the
+    /// capsule nearest it on the posed body.
+    pub fn assignments(&self, t: &BodyTemplate, pose: &BodyPose) -> Vec<(usize, Point3<f32>)> {
+        let placed = place(t, &Posed::new(t, pose));
+        self.data
+            .iter()
+            .map(|p| {
+                let best = placed
+                    .iter()
+                    .enumerate()
+                    .map(|(i, c)| (i, c.nearest(p).2))
+                    .min_by(|a, b| a.1.total_cmp(&b.1))
+                    .map_or(0, |x| x.0);
+                (best, *p)
+            })
+            .collect()
+    }
+
+    /// How many person points the data term uses.
+    pub fn data_len(&self) -> usize {
+        self.data.len()
+    }
+
+    /// Fits the body from `start`. `tips`: per limb of [`crate::Limb::ALL`], the
+    /// geodesic maximum assigned to it (camera frame), if any.
+    pub fn fit(
+        &self,
+        f: &Frame,
+        t: &BodyTemplate,
+        start: BodyPose,
+        tips: &[Option<Point3<f32>>; 5],
+        cfg: &RegisterConfig,
+    ) -> Fit {
+        let mut pose = start;
+        let mut energy = f32::INFINITY;
+        let mut seen = [0.0; Segment::COUNT];
+        for it in 0..=cfg.iterations {
+            let posed = Posed::new(t, &pose);
+            let (acc, s) = self.accumulate(f, t, &posed, tips, cfg);
+            energy = acc.energy as f32;
+            seen = s;
+            if it == cfg.iterations {
+                break;
+            }
+            let (mut h, mut g) = acc.assemble(&posed);
+            // Priors on turns against the parent: the residual is the relative rotation
+            // vector φ (parent frame), which a world turn ω of the segment changes by
+            // R_parentᵀ ω.
+            for (seg, w) in [
+                (Segment::Head, cfg.head_prior),
+                (Segment::Chest, cfg.chest_prior),
+            ] {
+                let Some(parent) = seg.parent() else { continue };
+                let rp = pose.rotation[parent.index()];
+                let rel = rp.inverse() * pose.rotation[seg.index()];
+                let phi = rel.scaled_axis().cast::<f64>();
+                let o = 3 + 3 * seg.index();
+                for i in 0..3 {
+                    h[(o + i, o + i)] += w;
+                }
+                let grad = rp.matrix().cast::<f64>() * phi * w;
+                let mut gr = g.fixed_rows_mut::<3>(o);
+                gr += grad;
+            }
+            for i in 0..N {
+                h[(i, i)] += cfg.damping * h[(i, i)] + cfg.damping_abs;
+            }
+            let Some(ch) = h.cholesky() else {
+                break;
+            };
+            let step = -ch.solve(&g);
+            if !step.iter().all(|x| x.is_finite()) {
+                break;
+            }
+            let dt = Vector3::new(step[0] as f32, step[1] as f32, step[2] as f32);
+            let mut omega = [Vector3::zeros(); Segment::COUNT];
+            for (s, w) in omega.iter_mut().enumerate() {
+                let o = 3 + 3 * s;
+                *w = Vector3::new(step[o] as f32, step[o + 1] as f32, step[o + 2] as f32);
+                // A step is a linearisation: keep each turn small.
+                let a = w.norm();
+                if a > 0.3 {
+                    *w *= 0.3 / a;
+                }
+            }
+            let mut next = pose;
+            next.step(&dt, &omega);
+            if !next.is_finite() {
+                break;
+            }
+            pose = next;
+            if step.norm() < 1e-4 {
+                // Converged: the energy at the final pose.
+                let posed = Posed::new(t, &pose);
+                let (acc, s) = self.accumulate(f, t, &posed, tips, cfg);
+                energy = acc.energy as f32;
+                seen = s;
+                break;
+            }
+        }
+        Fit { pose, energy, seen }
+    }
+
+    fn accumulate(
+        &self,
+        f: &Frame,
+        t: &BodyTemplate,
+        posed: &Posed,
+        tips: &[Option<Point3<f32>>; 5],
+        cfg: &RegisterConfig,
+    ) -> (Accumulator, [f32; Segment::COUNT]) {
+        let placed = place(t, posed);
+        let mut acc = Accumulator::new();
+
+        // Data: each point on its nearest capsule's surface.
+        for p in &self.data {
+            let mut best = (f32::INFINITY, 0usize, Point3::origin());
+            for (ci, c) in placed.iter().enumerate() {
+                let (q, _, d) = c.nearest(p);
+                if d < best.0 {
+                    best = (d, ci, q);
+                }
+            }
+            let (d, ci, q) = best;
+            let off = p - q;
+            let len = off.norm();
+            if len < 1e-6 || !d.is_finite() {
+                continue;
+            }
+            let n = off / len;
+            let (w, cost) = cauchy(d, cfg.sigma);
+            acc.energy += cost as f64;
+            acc.add(placed[ci].segment, &q, &(-n), d, w);
+        }
+
+        // Silhouette and free space: the body's front surface as the camera sees it.
+        let mut seen_n = [0u32; Segment::COUNT];
+        let mut all_n = [0u32; Segment::COUNT];
+        let (w, h) = (f.width as i32, f.height as i32);
+        for c in &placed {
+            let len = c.len2.sqrt();
+            let k = ((len / 0.04).ceil() as usize + 1).max(2);
+            for i in 0..k {
+                let tt = i as f32 / (k - 1) as f32;
+                let axis = c.a + c.ab * tt;
+                let r = c.ra + (c.rb - c.ra) * tt;
+                let Some(ray) = axis.coords.try_normalize(1e-6) else {
+                    continue;
+                };
+                let s = axis - ray * r;
+                let Some((u, v)) = f.k.project(&s) else {
+                    continue;
+                };
+                let (u, v) = (u.round() as i32, v.round() as i32);
+                if u < 0 || v < 0 || u >= w || v >= h {
+                    continue;
+                }
+                let idx = (v * w + u) as usize;
+                all_n[c.segment.index()] += 1;
+                let q = self.nearest[idx];
+                if q == idx as u32 {
+                    let z_obs = f.points[idx].z;
+                    let gap = z_obs - s.z;
+                    if gap > cfg.free_space_margin {
+                        // The camera sees past the body's front: the body is not there.
+                        let res = cfg.free_space_margin - gap;
+                        let (wc, cost) = cauchy(res, 0.1);
+                        acc.energy += (cfg.free_space_weight * cost) as f64;
+                        acc.add(
+                            c.segment,
+                            &s,
+                            &Vector3::z(),
+                            res,
+                            cfg.free_space_weight * wc,
+                        );
+                    } else if gap > -0.05 {
+                        seen_n[c.segment.index()] += 1;
+                    }
+                } else if q != NONE {
+                    let (qu, qv) = ((q % w as u32) as f32, (q / w as u32) as f32);
+                    let target = f.k.back_project(qu, qv, s.z);
+                    let e = s - target;
+                    let (wc, cost) = cauchy(e.norm(), 0.1);
+                    acc.energy += (cfg.silhouette_weight * cost) as f64;
+                    let ws = cfg.silhouette_weight * wc;
+                    acc.add(c.segment, &s, &Vector3::x(), e.x, ws);
+                    acc.add(c.segment, &s, &Vector3::y(), e.y, ws);
+                }
+            }
+        }
+
+        // Tips near their geodesic maxima.
+        for (tip, target) in t.tips.iter().zip(tips) {
+            let Some(m) = target else { continue };
+            let x = posed.point(tip.0, &tip.1);
+            let e = x - m;
+            let (wc, cost) = cauchy(e.norm(), cfg.tip_sigma);
+            acc.energy += (cfg.tip_weight * cost) as f64;
+            let wt = cfg.tip_weight * wc;
+            acc.add(tip.0, &x, &Vector3::x(), e.x, wt);
+            acc.add(tip.0, &x, &Vector3::y(), e.y, wt);
+            acc.add(tip.0, &x, &Vector3::z(), e.z, wt);
+        }
+        let mut seen = [0.0; Segment::COUNT];
+        for s in 0..Segment::COUNT {
+            seen[s] = if all_n[s] > 0 {
+                seen_n[s] as f32 / all_n[s] as f32
+            } else {
+                0.0
+            };
+        }
+        (acc, seen)
+    }
+}
