@@ -79,6 +79,9 @@ fn main() {
     let mut cpu = 0.0f64;
     let mut ncpu = 0usize;
     let mut bias = [nalgebra::Vector3::<f32>::zeros(); Joint::COUNT];
+    let mut dump = std::env::var("DUMP")
+        .ok()
+        .map(|f| std::io::BufWriter::new(std::fs::File::create(f).unwrap()));
     let mut tdiff = [nalgebra::Vector3::<f32>::zeros(); Joint::COUNT];
     let mut tn = [0f32; Joint::COUNT];
     for i in 0..n {
@@ -98,6 +101,32 @@ fn main() {
         cpu += c1 - c0;
         ncpu += 1;
         let fe = ev.add(&r, &truth.skeleton);
+        if let Some(d) = &mut dump {
+            use std::io::Write;
+            let g = est.debug().geodesic.unwrap_or(r.skeleton);
+            let mut row = format!("{i}");
+            for s in [&truth.skeleton, &r.skeleton, &g] {
+                for j in [
+                    Joint::RightHand,
+                    Joint::LeftShoulder,
+                    Joint::RightShoulder,
+                    Joint::RightElbow,
+                    Joint::Neck,
+                    Joint::Pelvis,
+                ] {
+                    row += &format!(",{:.4},{:.4},{:.4}", s[j].x, s[j].y, s[j].z);
+                }
+            }
+            for j in [
+                Joint::RightHand,
+                Joint::LeftShoulder,
+                Joint::Neck,
+                Joint::Pelvis,
+            ] {
+                row += &format!(",{:.3}", r.skeleton.confidence[j.index()]);
+            }
+            writeln!(d, "{row}").unwrap();
+        }
         if let Some((bp, tpl)) = &est.debug().body {
             let posed = airglyph_pose::body::Posed::new(tpl, bp);
             for j in Joint::ALL {
@@ -122,6 +151,9 @@ fn main() {
             if i % every == 0 {
                 let mut im = overlay::depth_image(&img.view(), Some(est.mask()));
                 overlay::skeleton(&mut im, &k, &truth.skeleton, overlay::GREEN);
+                if let Some(g) = &est.debug().geodesic {
+                    overlay::skeleton(&mut im, &k, g, [255, 160, 0]);
+                }
                 if r.person_found {
                     overlay::skeleton(&mut im, &k, &r.skeleton, overlay::RED);
                 }

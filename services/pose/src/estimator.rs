@@ -6,7 +6,7 @@ use crate::config::{Limb, PoseConfig};
 use crate::dijkstra::{Dijkstra, Graph, INF};
 use crate::graph::{GeoGraph, NONE};
 use crate::limbs::{assign, fit_chain, Chain};
-use crate::register::{Fit, Frame, Registration};
+use crate::register::{Frame, Registration};
 use crate::segment::{Plane, Segmenter};
 use crate::torso::{keypoints, TorsoEstimator, TorsoPose};
 use airglyph_core::filter::OneEuro;
@@ -721,7 +721,8 @@ impl PoseEstimator {
                 height: h,
                 k: &k,
             };
-            self.reg.prepare(&frame, cfg.register.points);
+            self.reg
+                .prepare(&frame, Some(self.torso.distance_transform()), &cfg.register);
             // The configuration is already scaled to the person's limbs.
             let tpl = BodyTemplate::new(cfg);
             let mut tips = [None; 5];
@@ -730,19 +731,46 @@ impl PoseEstimator {
                     tips[l.index()] = Some(self.graph.pos[maxima[mi] as usize]);
                 }
             }
-            let starts = [self.prev_body, BodyPose::from_skeleton(&tpl, &skel)];
-            let mut best: Option<Fit> = None;
-            for start in starts.into_iter().flatten() {
-                let fit = self.reg.fit(&frame, &tpl, start, &tips, &cfg.register);
-                if best.is_none_or(|b| fit.energy < b.energy) {
-                    best = Some(fit);
-                }
-            }
+            let starts: Vec<BodyPose> = [self.prev_body, BodyPose::from_skeleton(&tpl, &skel)]
+                .into_iter()
+                .flatten()
+                .collect();
+            let best = self.reg.fit(&frame, &tpl, &starts, &tips, &cfg.register);
             self.debug.geodesic = Some(skel);
             if let Some(b) = best {
                 let fitted = Posed::new(&tpl, &b.pose).skeleton(&tpl);
                 if fitted.is_finite() {
                     skel.joints = fitted.joints;
+                    // Confidence: how much of the joint's segment the camera sees where
+                    // the body puts it.
+                    for j in Joint::ALL {
+                        let seen = b.seen[crate::body::segment_of(j).index()];
+                        skel.confidence[j.index()] = (0.1 + 0.9 * seen).clamp(0.0, 1.0);
+                    }
+                    // The hand follows the fingertips seen, as in the seed's chains: a
+                    // capsule forearm cannot bend at the wrist, and its end lags a
+                    // quickly drawing hand.
+                    let posed = Posed::new(&tpl, &b.pose);
+                    for (l, hand, elbow) in [
+                        (Limb::LeftArm, Joint::LeftHand, Joint::LeftElbow),
+                        (Limb::RightArm, Joint::RightHand, Joint::RightElbow),
+                    ] {
+                        let (Some(ext), true) = (tips[l.index()], cfg.hand_behind_tip > 0.0) else {
+                            continue;
+                        };
+                        let ext_b = ext + ext.coords.normalize() * cfg.surface_offset(l);
+                        let (seg, local) = tpl.tips[l.index()];
+                        let tip = posed.point(seg, &local);
+                        if (tip - ext_b).norm() > cfg.register.tip_trust {
+                            continue;
+                        }
+                        if let Some(u) = (ext_b - skel[elbow]).try_normalize(1e-6) {
+                            skel.set(hand, ext_b - u * cfg.hand_behind_tip);
+                            // Its fingertips are in sight.
+                            let c = &mut skel.confidence[hand.index()];
+                            *c = c.max(0.9);
+                        }
+                    }
                     self.prev_body = Some(b.pose);
                     self.debug.body = Some((b.pose, tpl));
                 }

@@ -38,10 +38,14 @@ const NONE: u32 = u32::MAX;
 pub struct RegisterConfig {
     /// Fit the articulated body after the geodesic estimate (false: the seed's chains).
     pub enabled: bool,
-    /// About this many person points are sampled for the data term.
-    pub points: usize,
-    /// Gauss–Newton steps per start.
+    /// Person points for the data term: every one within `thin_px` of the silhouette's
+    /// edge, the others on a grid of this stride.
+    pub thin_px: f32,
+    pub interior_stride: usize,
+    /// Gauss–Newton steps in all, and of them how many each start is given before the
+    /// best one alone goes on.
     pub iterations: usize,
+    pub race_iterations: usize,
     /// Scale of the data term's Cauchy weight, metres.
     pub sigma: f32,
     /// Weight of a silhouette or free-space residual against one data point's.
@@ -52,10 +56,14 @@ pub struct RegisterConfig {
     /// Weight of a limb tip's distance to its geodesic maximum, and its Cauchy scale.
     pub tip_weight: f32,
     pub tip_sigma: f32,
+    /// A hand is placed behind the fingertips seen (as the seed's chains place it) when
+    /// they lie this near the fitted body's fingertips; farther, the fit's hand stays.
+    pub tip_trust: f32,
     /// Weight of the head's and the chest's turn from their rest against their parent
     /// (per radian²): the head's turn about its own axis is not in the data at all.
     pub head_prior: f64,
     pub chest_prior: f64,
+    pub abdomen_prior: f64,
     /// Levenberg–Marquardt damping: relative (of the diagonal) and absolute.
     pub damping: f64,
     pub damping_abs: f64,
@@ -67,16 +75,20 @@ impl Default for RegisterConfig {
     fn default() -> Self {
         Self {
             enabled: true,
-            points: 1500,
+            thin_px: 3.0,
+            interior_stride: 2,
             iterations: 10,
+            race_iterations: 3,
             sigma: 0.03,
             silhouette_weight: 4.0,
             free_space_weight: 4.0,
             free_space_margin: 0.03,
             tip_weight: 10.0,
             tip_sigma: 0.1,
+            tip_trust: 0.12,
             head_prior: 1.0,
-            chest_prior: 0.5,
+            chest_prior: 3.0,
+            abdomen_prior: 3.0,
             damping: 0.05,
             damping_abs: 0.01,
             shape: Shape::makehuman(),
@@ -109,7 +121,8 @@ pub struct Fit {
 /// Reusable state: the sampled data and the nearest-person-pixel map of a frame.
 #[derive(Debug, Default)]
 pub struct Registration {
-    data: Vec<Point3<f32>>,
+    /// Sampled person points and the number of pixels each stands for.
+    data: Vec<(Point3<f32>, f32)>,
     /// For every pixel, the nearest person pixel (itself when it is one), or NONE.
     nearest: Vec<u32>,
     d2: Vec<u32>,
@@ -121,20 +134,21 @@ struct Placed {
     segment: Segment,
     a: Point3<f32>,
     ab: Vector3<f32>,
+    /// 1 / |ab|² (0 for a sphere).
+    inv_len2: f32,
     len2: f32,
     ra: f32,
     rb: f32,
+    /// A sphere around the whole capsule, for skipping it in nearest-capsule searches.
+    centre: Point3<f32>,
+    bound: f32,
 }
 
 impl Placed {
     /// Closest axis point, the radius there, and the signed distance to the surface.
     #[inline]
     fn nearest(&self, p: &Point3<f32>) -> (Point3<f32>, f32, f32) {
-        let t = if self.len2 > 1e-12 {
-            ((p - self.a).dot(&self.ab) / self.len2).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
+        let t = ((p - self.a).dot(&self.ab) * self.inv_len2).clamp(0.0, 1.0);
         let c = self.a + self.ab * t;
         let r = self.ra + (self.rb - self.ra) * t;
         (c, r, (p - c).norm() - r)
@@ -225,6 +239,25 @@ impl Accumulator {
     }
 }
 
+/// The capsule whose surface is nearest `p`: its index, the axis point and the signed
+/// distance. Capsules whose bounding sphere lies farther than the best so far are
+/// skipped without a square root.
+#[inline]
+fn nearest_capsule(placed: &[Placed], p: &Point3<f32>) -> (usize, Point3<f32>, f32) {
+    let mut best = (0usize, Point3::origin(), f32::INFINITY);
+    for (ci, c) in placed.iter().enumerate() {
+        let reach = best.2 + c.bound;
+        if reach > 0.0 && (p - c.centre).norm_squared() > reach * reach {
+            continue;
+        }
+        let (q, _, d) = c.nearest(p);
+        if d < best.2 {
+            best = (ci, q, d);
+        }
+    }
+    best
+}
+
 fn place(t: &BodyTemplate, posed: &Posed) -> Vec<Placed> {
     t.capsules
         .iter()
@@ -232,13 +265,17 @@ fn place(t: &BodyTemplate, posed: &Posed) -> Vec<Placed> {
             let a = posed.point(c.segment, &c.a);
             let b = posed.point(c.segment, &c.b);
             let ab = b - a;
+            let len2 = ab.norm_squared();
             Placed {
                 segment: c.segment,
                 a,
                 ab,
-                len2: ab.norm_squared(),
+                inv_len2: if len2 > 1e-12 { 1.0 / len2 } else { 0.0 },
+                len2,
                 ra: c.ra,
                 rb: c.rb,
+                centre: a + ab * 0.5,
+                bound: 0.5 * len2.sqrt() + c.ra.max(c.rb),
             }
         })
         .collect()
@@ -253,18 +290,26 @@ fn cauchy(r: f32, s: f32) -> (f32, f32) {
 
 impl Registration {
     /// Samples the person's points and builds the nearest-person-pixel map.
-    pub fn prepare(&mut self, f: &Frame, target_points: usize) {
-        let n_person = f.mask.iter().filter(|&&m| m).count();
-        let stride = ((n_person as f32 / target_points.max(1) as f32)
-            .sqrt()
-            .floor() as usize)
-            .max(1);
+    ///
+    /// Thin parts (limbs, within [`RegisterConfig::thin_px`] of the silhouette's edge by
+    /// the distance transform `thickness`, squared pixels) keep every pixel: a forearm
+    /// is two or three pixels wide. The thick interior is taken on a grid of
+    /// [`RegisterConfig::interior_stride`].
+    pub fn prepare(&mut self, f: &Frame, thickness: Option<&[f32]>, cfg: &RegisterConfig) {
+        let s = cfg.interior_stride.max(1);
+        let thin2 = cfg.thin_px * cfg.thin_px;
         self.data.clear();
-        for v in (0..f.height).step_by(stride) {
-            for u in (0..f.width).step_by(stride) {
+        for v in 0..f.height {
+            for u in 0..f.width {
                 let i = v * f.width + u;
-                if f.mask[i] && f.points[i].z > 0.0 {
-                    self.data.push(f.points[i]);
+                if !f.mask[i] || f.points[i].z <= 0.0 {
+                    continue;
+                }
+                let thin = thickness.is_none_or(|t| t.get(i).is_none_or(|&d| d <= thin2));
+                if thin {
+                    self.data.push((f.points[i], 1.0));
+                } else if u % s == 0 && v % s == 0 {
+                    self.data.push((f.points[i], (s * s) as f32));
                 }
             }
         }
@@ -339,15 +384,7 @@ impl Registration {
         let placed = place(t, &Posed::new(t, pose));
         self.data
             .iter()
-            .map(|p| {
-                let best = placed
-                    .iter()
-                    .enumerate()
-                    .map(|(i, c)| (i, c.nearest(p).2))
-                    .min_by(|a, b| a.1.total_cmp(&b.1))
-                    .map_or(0, |x| x.0);
-                (best, *p)
-            })
+            .map(|(p, _)| (nearest_capsule(&placed, p).0, *p))
             .collect()
     }
 
@@ -356,25 +393,55 @@ impl Registration {
         self.data.len()
     }
 
-    /// Fits the body from `start`. `tips`: per limb of [`crate::Limb::ALL`], the
-    /// geodesic maximum assigned to it (camera frame), if any.
+    /// Fits the body from the best of several starts: each is moved
+    /// [`RegisterConfig::race_iterations`] steps, and the one whose energy is then
+    /// lowest goes on to [`RegisterConfig::iterations`] in all. `tips`: per limb of
+    /// [`crate::Limb::ALL`], the geodesic maximum assigned to it (camera frame), if any.
+    /// `None` without a start.
     pub fn fit(
+        &self,
+        f: &Frame,
+        t: &BodyTemplate,
+        starts: &[BodyPose],
+        tips: &[Option<Point3<f32>>; 5],
+        cfg: &RegisterConfig,
+    ) -> Option<Fit> {
+        let race = if starts.len() > 1 {
+            cfg.race_iterations.clamp(1, cfg.iterations.max(1))
+        } else {
+            0
+        };
+        let mut best: Option<Fit> = None;
+        for &s in starts {
+            let fit = self.run(f, t, s, tips, cfg, race);
+            if best.is_none_or(|b| fit.energy < b.energy) {
+                best = Some(fit);
+            }
+        }
+        let b = best?;
+        Some(self.run(f, t, b.pose, tips, cfg, cfg.iterations.saturating_sub(race)))
+    }
+
+    /// `steps` Gauss–Newton steps from `start`. The energy returned is the one of the
+    /// last pose linearised at (the start's when `steps` is 0).
+    fn run(
         &self,
         f: &Frame,
         t: &BodyTemplate,
         start: BodyPose,
         tips: &[Option<Point3<f32>>; 5],
         cfg: &RegisterConfig,
+        steps: usize,
     ) -> Fit {
         let mut pose = start;
         let mut energy = f32::INFINITY;
         let mut seen = [0.0; Segment::COUNT];
-        for it in 0..=cfg.iterations {
+        for it in 0..=steps {
             let posed = Posed::new(t, &pose);
             let (acc, s) = self.accumulate(f, t, &posed, tips, cfg);
             energy = acc.energy as f32;
             seen = s;
-            if it == cfg.iterations {
+            if it == steps {
                 break;
             }
             let (mut h, mut g) = acc.assemble(&posed);
@@ -384,6 +451,7 @@ impl Registration {
             for (seg, w) in [
                 (Segment::Head, cfg.head_prior),
                 (Segment::Chest, cfg.chest_prior),
+                (Segment::Abdomen, cfg.abdomen_prior),
             ] {
                 let Some(parent) = seg.parent() else { continue };
                 let rp = pose.rotation[parent.index()];
@@ -425,11 +493,6 @@ impl Registration {
             }
             pose = next;
             if step.norm() < 1e-4 {
-                // Converged: the energy at the final pose.
-                let posed = Posed::new(t, &pose);
-                let (acc, s) = self.accumulate(f, t, &posed, tips, cfg);
-                energy = acc.energy as f32;
-                seen = s;
                 break;
             }
         }
@@ -448,15 +511,8 @@ impl Registration {
         let mut acc = Accumulator::new();
 
         // Data: each point on its nearest capsule's surface.
-        for p in &self.data {
-            let mut best = (f32::INFINITY, 0usize, Point3::origin());
-            for (ci, c) in placed.iter().enumerate() {
-                let (q, _, d) = c.nearest(p);
-                if d < best.0 {
-                    best = (d, ci, q);
-                }
-            }
-            let (d, ci, q) = best;
+        for (p, area) in &self.data {
+            let (ci, q, d) = nearest_capsule(&placed, p);
             let off = p - q;
             let len = off.norm();
             if len < 1e-6 || !d.is_finite() {
@@ -464,8 +520,8 @@ impl Registration {
             }
             let n = off / len;
             let (w, cost) = cauchy(d, cfg.sigma);
-            acc.energy += cost as f64;
-            acc.add(placed[ci].segment, &q, &(-n), d, w);
+            acc.energy += (area * cost) as f64;
+            acc.add(placed[ci].segment, &q, &(-n), d, area * w);
         }
 
         // Silhouette and free space: the body's front surface as the camera sees it.
