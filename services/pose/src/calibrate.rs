@@ -28,6 +28,8 @@ const MAX_RATIO: f32 = 1.4;
 #[derive(Debug, Clone, Default)]
 struct PairRatio {
     samples: VecDeque<f32>,
+    /// Set once the registration nudges it; then the geodesic samples are not used.
+    fitted: Option<f32>,
 }
 
 impl PairRatio {
@@ -41,7 +43,18 @@ impl PairRatio {
         self.samples.push_back(ratio);
     }
 
+    fn nudge(&mut self, step: f32, gain: f32) {
+        if !step.is_finite() {
+            return;
+        }
+        let r = self.fitted.unwrap_or(1.0);
+        self.fitted = Some((r * (1.0 + gain * step.clamp(-0.1, 0.1))).clamp(MIN_RATIO, MAX_RATIO));
+    }
+
     fn ratio(&self) -> f32 {
+        if let Some(r) = self.fitted {
+            return r;
+        }
         if self.samples.len() < MIN_SAMPLES {
             return 1.0;
         }
@@ -71,6 +84,18 @@ impl BodyCalibration {
             Limb::LeftArm | Limb::RightArm => self.arms.add(geodesic_length / reach / arm_ref),
             Limb::LeftLeg | Limb::RightLeg => self.legs.add(geodesic_length / reach / leg_ref),
             Limb::Head => {}
+        }
+    }
+
+    /// Moves the arms' and the legs' ratios by a share `gain` of the registration's
+    /// relative length steps ([`crate::register::Fit::length_step`]). Once nudged, a
+    /// ratio follows the registration only.
+    pub fn nudge(&mut self, steps: [Option<f32>; 2], gain: f32) {
+        if let Some(s) = steps[0] {
+            self.arms.nudge(s, gain);
+        }
+        if let Some(s) = steps[1] {
+            self.legs.nudge(s, gain);
         }
     }
 

@@ -518,9 +518,12 @@ impl PoseEstimator {
             .map(|&m| self.dist0[m as usize] as f32 * 1e-3)
             .collect();
         self.debug.assignment = assignment;
-        for l in Limb::ALL {
-            if let Some(mi) = assignment[l.index()] {
-                self.calib.measure(&self.cfg, l, lengths[mi][l.index()]);
+        // Without registration, the limbs' geodesic lengths measure the person.
+        if !cfg.register.enabled {
+            for l in Limb::ALL {
+                if let Some(mi) = assignment[l.index()] {
+                    self.calib.measure(&self.cfg, l, lengths[mi][l.index()]);
+                }
             }
         }
 
@@ -738,6 +741,9 @@ impl PoseEstimator {
             let best = self.reg.fit(&frame, &tpl, &starts, &tips, &cfg.register);
             self.debug.geodesic = Some(skel);
             if let Some(b) = best {
+                if self.cfg.calibrate_body {
+                    self.calib.nudge(b.length_step, cfg.register.length_gain);
+                }
                 let fitted = Posed::new(&tpl, &b.pose).skeleton(&tpl);
                 if fitted.is_finite() {
                     skel.joints = fitted.joints;

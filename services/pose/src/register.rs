@@ -64,6 +64,11 @@ pub struct RegisterConfig {
     pub head_prior: f64,
     pub chest_prior: f64,
     pub abdomen_prior: f64,
+    /// Σ w j² a limb pair's length gradient needs before it is trusted (j: metres a
+    /// point moves per unit change of the length ratio).
+    pub length_evidence: f64,
+    /// How much of each frame's length step the person's limb lengths take.
+    pub length_gain: f32,
     /// Levenberg–Marquardt damping: relative (of the diagonal) and absolute.
     pub damping: f64,
     pub damping_abs: f64,
@@ -89,6 +94,8 @@ impl Default for RegisterConfig {
             head_prior: 1.0,
             chest_prior: 3.0,
             abdomen_prior: 3.0,
+            length_evidence: 10.0,
+            length_gain: 0.05,
             damping: 0.05,
             damping_abs: 0.01,
             shape: Shape::makehuman(),
@@ -116,6 +123,9 @@ pub struct Fit {
     /// Per segment, the share of its front surface the camera sees where the body puts
     /// it (1 = all of it; hidden or contradicted parts lower it).
     pub seen: [f32; Segment::COUNT],
+    /// The change of the arms' and the legs' length ratio that would explain the frame
+    /// best (one Gauss–Newton step at the final pose), when the frame says enough.
+    pub length_step: [Option<f32>; 2],
 }
 
 /// Reusable state: the sampled data and the nearest-person-pixel map of a frame.
@@ -161,14 +171,33 @@ struct Accumulator {
     h: [Local; Segment::COUNT],
     g: [Vector6<f64>; Segment::COUNT],
     energy: f64,
+    /// Where each limb is rooted (shoulder, hip), for the limb-length gradient.
+    roots: [Option<Point3<f32>>; Segment::COUNT],
+    /// For arms and legs: Σ w j r and Σ w j² of the residuals' derivative j by the limbs'
+    /// length ratio (all points of a limb move away from its root as it grows).
+    length: [(f64, f64); 2],
 }
 
 impl Accumulator {
-    fn new() -> Self {
+    fn new(posed: &Posed) -> Self {
+        use Segment::*;
+        let mut roots = [None; Segment::COUNT];
+        for (root, segs) in [
+            (LeftUpperArm, [LeftUpperArm, LeftForearm]),
+            (RightUpperArm, [RightUpperArm, RightForearm]),
+            (LeftThigh, [LeftThigh, LeftShin]),
+            (RightThigh, [RightThigh, RightShin]),
+        ] {
+            for s in segs {
+                roots[s.index()] = Some(posed.joint[root.index()]);
+            }
+        }
         Self {
             h: [Local::zeros(); Segment::COUNT],
             g: [Vector6::zeros(); Segment::COUNT],
             energy: 0.0,
+            roots,
+            length: [(0.0, 0.0); 2],
         }
     }
 
@@ -194,6 +223,15 @@ impl Accumulator {
             }
         }
         self.g[s.index()] += j * (w * r as f64);
+        if let Some(root) = self.roots[s.index()] {
+            let pair = usize::from(matches!(
+                s,
+                Segment::LeftThigh | Segment::LeftShin | Segment::RightThigh | Segment::RightShin
+            ));
+            let js = dir.dot(&(x - root)) as f64;
+            self.length[pair].0 += w * js * r as f64;
+            self.length[pair].1 += w * js * js;
+        }
     }
 
     /// The full normal equations: a segment's twist is v = dt + Σ p_j × ω_j and
@@ -436,11 +474,13 @@ impl Registration {
         let mut pose = start;
         let mut energy = f32::INFINITY;
         let mut seen = [0.0; Segment::COUNT];
+        let mut length = [(0.0, 0.0); 2];
         for it in 0..=steps {
             let posed = Posed::new(t, &pose);
             let (acc, s) = self.accumulate(f, t, &posed, tips, cfg);
             energy = acc.energy as f32;
             seen = s;
+            length = acc.length;
             if it == steps {
                 break;
             }
@@ -496,7 +536,15 @@ impl Registration {
                 break;
             }
         }
-        Fit { pose, energy, seen }
+        // A step only where the limbs carry enough evidence (about a hundred points'
+        // worth of a limb's reach).
+        let length_step = length.map(|(g, h)| (h > cfg.length_evidence).then(|| (-g / h) as f32));
+        Fit {
+            pose,
+            energy,
+            seen,
+            length_step,
+        }
     }
 
     fn accumulate(
@@ -508,7 +556,7 @@ impl Registration {
         cfg: &RegisterConfig,
     ) -> (Accumulator, [f32; Segment::COUNT]) {
         let placed = place(t, posed);
-        let mut acc = Accumulator::new();
+        let mut acc = Accumulator::new(posed);
 
         // Data: each point on its nearest capsule's surface.
         for (p, area) in &self.data {
