@@ -77,6 +77,8 @@ fn main() {
     let mut local = [nalgebra::Vector3::<f32>::zeros(); Joint::COUNT];
     let mut nlocal = [0f32; Joint::COUNT];
     let mut cpu = 0.0f64;
+    let mut steps = [0.0f64; 6];
+    let (mut npass, mut npts, mut nrace) = (0usize, 0usize, 0usize);
     let mut ncpu = 0usize;
     let mut bias = [nalgebra::Vector3::<f32>::zeros(); Joint::COUNT];
     let mut dump = std::env::var("DUMP")
@@ -100,6 +102,20 @@ fn main() {
         ev.seconds += t.elapsed().as_secs_f64();
         cpu += c1 - c0;
         ncpu += 1;
+        npass += est.debug().register_passes;
+        nrace += usize::from(est.debug().raced);
+        npts += est.debug().register_points;
+        let st = est.step_times();
+        for (a, b) in steps.iter_mut().zip([
+            st.segment,
+            st.torso,
+            st.graph,
+            st.geodesic,
+            st.limbs,
+            st.register,
+        ]) {
+            *a += b;
+        }
         let fe = ev.add(&r, &truth.skeleton);
         if let Some(d) = &mut dump {
             use std::io::Write;
@@ -266,6 +282,21 @@ fn main() {
         ncpu as f64 / cpu.max(1e-9)
     );
     eprintln!("body ratios (arms, legs): {:?}", est.body_ratios());
+    eprintln!(
+        "registration: {:.0} points, {:.1} passes a frame, raced in {:.0} % of frames",
+        npts as f64 / ncpu.max(1) as f64,
+        npass as f64 / ncpu.max(1) as f64,
+        nrace as f64 / ncpu.max(1) as f64 * 100.0
+    );
+    eprintln!(
+        "mean step ms: segment {:.2} torso {:.2} graph {:.2} geodesic {:.2} limbs {:.2} register {:.2}",
+        steps[0] / ncpu.max(1) as f64 * 1e3,
+        steps[1] / ncpu.max(1) as f64 * 1e3,
+        steps[2] / ncpu.max(1) as f64 * 1e3,
+        steps[3] / ncpu.max(1) as f64 * 1e3,
+        steps[4] / ncpu.max(1) as f64 * 1e3,
+        steps[5] / ncpu.max(1) as f64 * 1e3
+    );
     let t = est.step_times();
     eprintln!("last frame steps: {t:?}");
 }

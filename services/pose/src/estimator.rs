@@ -67,6 +67,11 @@ pub struct Debug {
     pub body: Option<(BodyPose, BodyTemplate)>,
     /// The skeleton of the geodesic steps alone, before registration.
     pub geodesic: Option<Skeleton>,
+    /// Person points and passes over them the registration took.
+    pub register_points: usize,
+    pub register_passes: usize,
+    /// Whether the geodesic estimate raced the tracked body this frame.
+    pub raced: bool,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -103,8 +108,10 @@ pub struct PoseEstimator {
     prev_centroid: Option<Point3<f32>>,
     limbs: [Option<LimbState>; 5],
     reg: Registration,
-    /// The last frame's registered body.
+    /// The last frame's registered body, and frames since the torso was last
+    /// registered on its own.
     prev_body: Option<BodyPose>,
+    frames_tracked: usize,
     /// The person's limb lengths, learned as they move; kept when the person is lost
     /// for a moment.
     calib: BodyCalibration,
@@ -141,6 +148,7 @@ impl PoseEstimator {
             limbs: [None; 5],
             reg: Registration::default(),
             prev_body: None,
+            frames_tracked: 0,
             calib: BodyCalibration::default(),
             smooth: Vec::new(),
             clock: None,
@@ -179,6 +187,7 @@ impl PoseEstimator {
         self.prev_centroid = None;
         self.limbs = [None; 5];
         self.prev_body = None;
+        self.frames_tracked = 0;
     }
 
     /// Time of each step in the last frame.
@@ -194,6 +203,33 @@ impl PoseEstimator {
     /// The person mask of the last frame (row-major, one flag a pixel).
     pub fn mask(&self) -> &[bool] {
         &self.mask
+    }
+
+    /// The torso frame of the seed's steps (key points of [`PoseConfig::torso_keypoints`])
+    /// that fits the last frame's registered body best.
+    fn prev_body_torso(&self, cfg: &PoseConfig) -> Option<TorsoPose> {
+        let body = self.prev_body?;
+        let tpl = BodyTemplate::new(cfg);
+        let s = Posed::new(&tpl, &body).skeleton(&tpl);
+        let model: Vec<Point3<f32>> = cfg
+            .torso_keypoints
+            .iter()
+            .map(|&[x, y, z]| Point3::new(x, y, z))
+            .collect();
+        let seen: Vec<Point3<f32>> = [
+            Joint::Neck,
+            Joint::Pelvis,
+            Joint::LeftShoulder,
+            Joint::RightShoulder,
+            Joint::LeftHip,
+            Joint::RightHip,
+            Joint::Torso,
+        ]
+        .iter()
+        .map(|&j| s[j])
+        .collect();
+        let pose = crate::geom::horn_rigid(&model, &seen);
+        pose.is_finite().then_some(pose)
     }
 
     /// The skeleton of one depth frame, taken to follow the last one by a frame period
@@ -318,15 +354,31 @@ impl PoseEstimator {
 
         // 2. Torso: distance transform + PCA, then model registration.
         let up_hint = seg.floor.map(|p| p.n).unwrap_or(-Vector3::y());
-        let fit = self.torso.fit(
-            &self.points,
-            &self.mask,
-            w,
-            h,
-            cfg,
-            self.prev_torso.zip(self.prev_offset),
-            up_hint,
-        )?;
+        // While the registration tracks the body, its torso needs no registration of
+        // its own; every `redetect_every` frames the seed's torso step runs in full, so
+        // the geodesic start stays independent of the tracking.
+        self.frames_tracked += 1;
+        let redetect = self.frames_tracked >= cfg.register.redetect_every.max(1);
+        let tracked = (!redetect).then(|| self.prev_body_torso(cfg)).flatten();
+        let fit = match tracked {
+            Some(pose) => {
+                self.torso
+                    .fit_known(&self.points, &self.mask, w, h, cfg, pose, up_hint)?
+            }
+            None => {
+                self.frames_tracked = 0;
+                self.torso.fit(
+                    &self.points,
+                    &self.mask,
+                    w,
+                    h,
+                    cfg,
+                    self.prev_torso.zip(self.prev_offset),
+                    up_hint,
+                )?
+            }
+        };
+        let detecting = tracked.is_none();
         let mut torso = fit.pose;
         self.debug.torso_residual = fit.residual;
         self.debug.torso_reinit = fit.reinitialised;
@@ -559,6 +611,27 @@ impl PoseEstimator {
         }
         self.prev_offset = Some(offset);
 
+        // The limbs' tips, and whether the seed's chains are needed this frame: the
+        // geodesic estimate races the tracked body when detecting, when nothing is
+        // tracked, or when a limb tip lies far from the tracked body's; otherwise the
+        // registration alone follows the body from the last frame.
+        let tpl = BodyTemplate::new(cfg);
+        let mut tips = [None; 5];
+        for l in Limb::ALL {
+            if let Some(mi) = assignment[l.index()] {
+                tips[l.index()] = Some(self.graph.pos[maxima[mi] as usize]);
+            }
+        }
+        let race = !cfg.register.enabled
+            || detecting
+            || self.prev_body.is_none_or(|prev| {
+                let posed = Posed::new(&tpl, &prev);
+                tips.iter().zip(&tpl.tips).any(|(m, (seg, local))| {
+                    m.is_some_and(|m| (posed.point(*seg, local) - m).norm() > cfg.register.race_gap)
+                })
+            });
+        self.debug.raced = race;
+
         // 6. Target points and chain fitting per limb.
         let mut skel = Skeleton::new([Point3::origin(); Joint::COUNT]);
         skel.set(Joint::Torso, centre);
@@ -581,6 +654,9 @@ impl PoseEstimator {
         }
         let f = 0.5 * (k.fx + k.fy);
         for l in Limb::ALL {
+            if !race {
+                break;
+            }
             let li = l.index();
             let root_p = roots[li];
             let (l1, l2) = cfg.bones(l);
@@ -726,20 +802,13 @@ impl PoseEstimator {
             };
             self.reg
                 .prepare(&frame, Some(self.torso.distance_transform()), &cfg.register);
-            // The configuration is already scaled to the person's limbs.
-            let tpl = BodyTemplate::new(cfg);
-            let mut tips = [None; 5];
-            for l in Limb::ALL {
-                if let Some(mi) = assignment[l.index()] {
-                    tips[l.index()] = Some(self.graph.pos[maxima[mi] as usize]);
-                }
-            }
-            let starts: Vec<BodyPose> = [self.prev_body, BodyPose::from_skeleton(&tpl, &skel)]
-                .into_iter()
-                .flatten()
-                .collect();
+            let geodesic = race.then(|| BodyPose::from_skeleton(&tpl, &skel)).flatten();
+            let starts: Vec<BodyPose> = [self.prev_body, geodesic].into_iter().flatten().collect();
             let best = self.reg.fit(&frame, &tpl, &starts, &tips, &cfg.register);
-            self.debug.geodesic = Some(skel);
+            if race {
+                self.debug.geodesic = Some(skel);
+            }
+            let mut registered = false;
             if let Some(b) = best {
                 if self.cfg.calibrate_body {
                     self.calib.nudge(b.length_step, cfg.register.length_gain);
@@ -778,7 +847,29 @@ impl PoseEstimator {
                         }
                     }
                     self.prev_body = Some(b.pose);
+                    registered = true;
                     self.debug.body = Some((b.pose, tpl));
+                    self.debug.register_passes = b.passes;
+                    self.debug.register_points = self.reg.data_len();
+                }
+            }
+            if !race {
+                if !registered {
+                    // Neither chains nor a registered body: the frame is lost.
+                    self.prev_body = None;
+                    return None;
+                }
+                // The chains were skipped: their state (the limbs' last fits, in the
+                // torso frame) follows the registered body.
+                for l in Limb::ALL {
+                    let (_, jm, je) = l.joints();
+                    let end = inv.apply(&skel[je]);
+                    self.limbs[l.index()] = Some(LimbState {
+                        mid: jm.map_or(end, |j| inv.apply(&skel[j])),
+                        end,
+                        extremity: tips[l.index()].map(|m| inv.apply(&m)),
+                        confidence: skel.confidence[je.index()],
+                    });
                 }
             }
         }

@@ -31,7 +31,126 @@ type Normal = SMatrix<f64, N, N>;
 type Gradient = SVector<f64, N>;
 type Local = SMatrix<f64, 6, 6>;
 
-const NONE: u32 = u32::MAX;
+/// How far around the person's bounding box the nearest-person-pixel map reaches,
+/// pixels (a limb of the body farther out is pulled towards the box's edge first).
+const NEAREST_MARGIN: usize = 24;
+
+/// For every block of 2×2 pixels of the person's bounding box (and a margin), a person
+/// pixel of the nearest block that has one, by two passes of nearest-seed propagation
+/// over 8-neighbours: within a few pixels of the exact answer, enough to pull a limb
+/// back onto the silhouette, at a quarter of the cost of a full-resolution map.
+#[derive(Debug, Default)]
+struct NearestPixel {
+    /// The box in blocks: first block column and row, size.
+    bu0: usize,
+    bv0: usize,
+    w: usize,
+    h: usize,
+    /// Per block: a person pixel (image coordinates) of the nearest block with one,
+    /// `u16::MAX` for none, and the squared distance in blocks.
+    seed: Vec<(u16, u16)>,
+    d2: Vec<u32>,
+}
+
+/// Pixels a block of [`NearestPixel`] covers along each axis.
+const BLOCK: usize = 2;
+
+impl NearestPixel {
+    /// `bbox`: the person pixels' first and last column and row.
+    fn build(&mut self, f: &Frame, bbox: Option<(usize, usize, usize, usize)>, margin: usize) {
+        self.seed.clear();
+        self.d2.clear();
+        self.w = 0;
+        self.h = 0;
+        let Some((u0, v0, u1, v1)) = bbox else {
+            return;
+        };
+        self.bu0 = u0.saturating_sub(margin) / BLOCK;
+        self.bv0 = v0.saturating_sub(margin) / BLOCK;
+        self.w = (u1 + margin).min(f.width - 1) / BLOCK + 1 - self.bu0;
+        self.h = (v1 + margin).min(f.height - 1) / BLOCK + 1 - self.bv0;
+        let (w, h) = (self.w, self.h);
+        self.seed.resize(w * h, (u16::MAX, u16::MAX));
+        self.d2.resize(w * h, u32::MAX);
+        for v in v0..=v1 {
+            let row = &f.mask[v * f.width..(v + 1) * f.width];
+            for u in u0..=u1 {
+                if row[u] && f.points[v * f.width + u].z > 0.0 {
+                    let b = (v / BLOCK - self.bv0) * w + u / BLOCK - self.bu0;
+                    if self.d2[b] != 0 {
+                        self.seed[b] = (u as u16, v as u16);
+                        self.d2[b] = 0;
+                    }
+                }
+            }
+        }
+        // Distances between blocks, measured from the seed's block.
+        let (ou, ov) = (self.bu0 as i32, self.bv0 as i32);
+        let relax =
+            |seed: &mut [(u16, u16)], d2: &mut [u32], i: usize, j: usize, u: i32, v: i32| {
+                let q = seed[j];
+                if q.0 != u16::MAX {
+                    let du = q.0 as i32 / BLOCK as i32 - u - ou;
+                    let dv = q.1 as i32 / BLOCK as i32 - v - ov;
+                    let d = (du * du + dv * dv) as u32;
+                    if d < d2[i] {
+                        d2[i] = d;
+                        seed[i] = q;
+                    }
+                }
+            };
+        let (seed, d2) = (&mut self.seed[..], &mut self.d2[..]);
+        for v in 0..h {
+            for u in 0..w {
+                let i = v * w + u;
+                let (ui, vi) = (u as i32, v as i32);
+                if u > 0 {
+                    relax(seed, d2, i, i - 1, ui, vi);
+                }
+                if v > 0 {
+                    relax(seed, d2, i, i - w, ui, vi);
+                    if u > 0 {
+                        relax(seed, d2, i, i - w - 1, ui, vi);
+                    }
+                    if u + 1 < w {
+                        relax(seed, d2, i, i - w + 1, ui, vi);
+                    }
+                }
+            }
+        }
+        for v in (0..h).rev() {
+            for u in (0..w).rev() {
+                let i = v * w + u;
+                let (ui, vi) = (u as i32, v as i32);
+                if u + 1 < w {
+                    relax(seed, d2, i, i + 1, ui, vi);
+                }
+                if v + 1 < h {
+                    relax(seed, d2, i, i + w, ui, vi);
+                    if u + 1 < w {
+                        relax(seed, d2, i, i + w + 1, ui, vi);
+                    }
+                    if u > 0 {
+                        relax(seed, d2, i, i + w - 1, ui, vi);
+                    }
+                }
+            }
+        }
+    }
+
+    /// A person pixel near pixel (u, v) (for a pixel beyond the box, near the box's
+    /// closest block).
+    fn get(&self, u: usize, v: usize) -> Option<(u16, u16)> {
+        if self.w == 0 {
+            return None;
+        }
+        let bu = (u / BLOCK).clamp(self.bu0, self.bu0 + self.w - 1) - self.bu0;
+        let bv = (v / BLOCK).clamp(self.bv0, self.bv0 + self.h - 1) - self.bv0;
+        let q = self.seed[bv * self.w + bu];
+        (q.0 != u16::MAX).then_some(q)
+    }
+}
+
 /// Settings of the registration (part of [`crate::PoseConfig`]).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(default)]
@@ -69,6 +188,11 @@ pub struct RegisterConfig {
     pub length_evidence: f64,
     /// How much of each frame's length step the person's limb lengths take.
     pub length_gain: f32,
+    /// Every this many frames the seed's torso registration runs and the geodesic
+    /// estimate races the tracked body; in between it races only when a limb tip lies
+    /// farther than `race_gap` from the tracked body's.
+    pub redetect_every: usize,
+    pub race_gap: f32,
     /// Levenberg–Marquardt damping: relative (of the diagonal) and absolute.
     pub damping: f64,
     pub damping_abs: f64,
@@ -80,8 +204,8 @@ impl Default for RegisterConfig {
     fn default() -> Self {
         Self {
             enabled: true,
-            thin_px: 3.0,
-            interior_stride: 2,
+            thin_px: 2.0,
+            interior_stride: 3,
             iterations: 10,
             race_iterations: 3,
             sigma: 0.03,
@@ -96,6 +220,8 @@ impl Default for RegisterConfig {
             abdomen_prior: 3.0,
             length_evidence: 10.0,
             length_gain: 0.05,
+            redetect_every: 10,
+            race_gap: 0.25,
             damping: 0.05,
             damping_abs: 0.01,
             shape: Shape::makehuman(),
@@ -126,6 +252,8 @@ pub struct Fit {
     /// The change of the arms' and the legs' length ratio that would explain the frame
     /// best (one Gauss–Newton step at the final pose), when the frame says enough.
     pub length_step: [Option<f32>; 2],
+    /// Passes over the data this fit took (all starts).
+    pub passes: usize,
 }
 
 /// Reusable state: the sampled data and the nearest-person-pixel map of a frame.
@@ -133,9 +261,7 @@ pub struct Fit {
 pub struct Registration {
     /// Sampled person points and the number of pixels each stands for.
     data: Vec<(Point3<f32>, f32)>,
-    /// For every pixel, the nearest person pixel (itself when it is one), or NONE.
-    nearest: Vec<u32>,
-    d2: Vec<u32>,
+    nearest: NearestPixel,
 }
 
 /// A capsule of the posed body, camera frame.
@@ -337,10 +463,17 @@ impl Registration {
         let s = cfg.interior_stride.max(1);
         let thin2 = cfg.thin_px * cfg.thin_px;
         self.data.clear();
+        let (mut u0, mut v0, mut u1, mut v1) = (usize::MAX, usize::MAX, 0, 0);
         for v in 0..f.height {
-            for u in 0..f.width {
+            let row = &f.mask[v * f.width..(v + 1) * f.width];
+            let Some(a) = row.iter().position(|&m| m) else {
+                continue;
+            };
+            let b = row.iter().rposition(|&m| m).unwrap_or(a);
+            (u0, u1, v0, v1) = (u0.min(a), u1.max(b), v0.min(v), v1.max(v));
+            for u in a..=b {
                 let i = v * f.width + u;
-                if !f.mask[i] || f.points[i].z <= 0.0 {
+                if !row[u] || f.points[i].z <= 0.0 {
                     continue;
                 }
                 let thin = thickness.is_none_or(|t| t.get(i).is_none_or(|&d| d <= thin2));
@@ -351,69 +484,8 @@ impl Registration {
                 }
             }
         }
-        self.nearest_map(f);
-    }
-
-    /// Two passes of nearest-seed propagation (8-neighbours): within a pixel of the
-    /// exact Euclidean answer, enough to pull a limb back onto the silhouette.
-    fn nearest_map(&mut self, f: &Frame) {
-        let (w, h) = (f.width, f.height);
-        self.nearest.clear();
-        self.d2.clear();
-        for (i, (&m, p)) in f.mask.iter().zip(f.points).enumerate() {
-            let person = m && p.z > 0.0;
-            self.nearest.push(if person { i as u32 } else { NONE });
-            self.d2.push(if person { 0 } else { u32::MAX });
-        }
-        let dist2 = |i: usize, q: u32| {
-            let (qu, qv) = ((q as usize % w) as i64, (q as usize / w) as i64);
-            let (u, v) = ((i % w) as i64, (i / w) as i64);
-            ((u - qu) * (u - qu) + (v - qv) * (v - qv)) as u32
-        };
-        let relax = |i: usize, j: usize, nearest: &mut Vec<u32>, d2: &mut Vec<u32>| {
-            let q = nearest[j];
-            if q != NONE {
-                let d = dist2(i, q);
-                if d < d2[i] {
-                    d2[i] = d;
-                    nearest[i] = q;
-                }
-            }
-        };
-        for v in 0..h {
-            for u in 0..w {
-                let i = v * w + u;
-                if u > 0 {
-                    relax(i, i - 1, &mut self.nearest, &mut self.d2);
-                }
-                if v > 0 {
-                    relax(i, i - w, &mut self.nearest, &mut self.d2);
-                    if u > 0 {
-                        relax(i, i - w - 1, &mut self.nearest, &mut self.d2);
-                    }
-                    if u + 1 < w {
-                        relax(i, i - w + 1, &mut self.nearest, &mut self.d2);
-                    }
-                }
-            }
-        }
-        for v in (0..h).rev() {
-            for u in (0..w).rev() {
-                let i = v * w + u;
-                if u + 1 < w {
-                    relax(i, i + 1, &mut self.nearest, &mut self.d2);
-                }
-                if v + 1 < h {
-                    relax(i, i + w, &mut self.nearest, &mut self.d2);
-                    if u + 1 < w {
-                        relax(i, i + w + 1, &mut self.nearest, &mut self.d2);
-                    }
-                    if u > 0 {
-                        relax(i, i + w - 1, &mut self.nearest, &mut self.d2);
-                    }
-                }
-            }
-        }
+        let bbox = (u0 != usize::MAX).then_some((u0, v0, u1, v1));
+        self.nearest.build(f, bbox, NEAREST_MARGIN);
     }
 
     /// The sampled person points, each with the index (into `t.capsules`) of the
@@ -450,14 +522,18 @@ impl Registration {
             0
         };
         let mut best: Option<Fit> = None;
+        let mut passes = 0;
         for &s in starts {
             let fit = self.run(f, t, s, tips, cfg, race);
+            passes += fit.passes;
             if best.is_none_or(|b| fit.energy < b.energy) {
                 best = Some(fit);
             }
         }
         let b = best?;
-        Some(self.run(f, t, b.pose, tips, cfg, cfg.iterations.saturating_sub(race)))
+        let mut fit = self.run(f, t, b.pose, tips, cfg, cfg.iterations.saturating_sub(race));
+        fit.passes += passes;
+        Some(fit)
     }
 
     /// `steps` Gauss–Newton steps from `start`. The energy returned is the one of the
@@ -475,7 +551,9 @@ impl Registration {
         let mut energy = f32::INFINITY;
         let mut seen = [0.0; Segment::COUNT];
         let mut length = [(0.0, 0.0); 2];
+        let mut passes = 0;
         for it in 0..=steps {
+            passes += 1;
             let posed = Posed::new(t, &pose);
             let (acc, s) = self.accumulate(f, t, &posed, tips, cfg);
             energy = acc.energy as f32;
@@ -544,6 +622,7 @@ impl Registration {
             energy,
             seen,
             length_step,
+            passes,
         }
     }
 
@@ -596,8 +675,8 @@ impl Registration {
                 }
                 let idx = (v * w + u) as usize;
                 all_n[c.segment.index()] += 1;
-                let q = self.nearest[idx];
-                if q == idx as u32 {
+                let person = f.mask[idx] && f.points[idx].z > 0.0;
+                if person {
                     let z_obs = f.points[idx].z;
                     let gap = z_obs - s.z;
                     if gap > cfg.free_space_margin {
@@ -615,14 +694,12 @@ impl Registration {
                     } else if gap > -0.05 {
                         seen_n[c.segment.index()] += 1;
                     }
-                } else if q != NONE {
-                    let (qu, qv) = ((q % w as u32) as f32, (q / w as u32) as f32);
-                    let target = f.k.back_project(qu, qv, s.z);
+                } else if let Some((qu, qv)) = self.nearest.get(u as usize, v as usize) {
+                    let target = f.k.back_project(qu as f32, qv as f32, s.z);
                     let e = s - target;
                     let (wc, cost) = cauchy(e.norm(), 0.1);
                     acc.energy += (cfg.silhouette_weight * cost) as f64;
                     let ws = cfg.silhouette_weight * wc;
-                    acc.add(c.segment, &s, &Vector3::x(), e.x, ws);
                     acc.add(c.segment, &s, &Vector3::y(), e.y, ws);
                 }
             }

@@ -389,6 +389,32 @@ impl TorsoEstimator {
     }
 }
 
+impl TorsoEstimator {
+    /// The torso step when the pose is already known (from the last frame's registered
+    /// body): the distance transform and the torso region's PCA only, no model
+    /// registration.
+    pub fn fit_known(
+        &mut self,
+        points: &[Point3<f32>],
+        mask: &[bool],
+        width: usize,
+        height: usize,
+        cfg: &PoseConfig,
+        pose: TorsoPose,
+        up_hint: Vector3<f32>,
+    ) -> Option<TorsoFit> {
+        let (init, core) = self.initial_pose(points, mask, width, height, cfg, up_hint)?;
+        Some(TorsoFit {
+            pose,
+            residual: 0.0,
+            matches: 0,
+            reinitialised: false,
+            core_pixel: core,
+            pca: init,
+        })
+    }
+}
+
 /// The torso key points in the camera frame: neck, pelvis, left/right shoulder,
 /// left/right hip, torso.
 pub fn keypoints(pose: &TorsoPose, cfg: &PoseConfig) -> [Point3<f32>; 7] {
