@@ -74,8 +74,8 @@ impl NearestPixel {
         self.d2.resize(w * h, u32::MAX);
         for v in v0..=v1 {
             let row = &f.mask[v * f.width..(v + 1) * f.width];
-            for u in u0..=u1 {
-                if row[u] && f.points[v * f.width + u].z > 0.0 {
+            for (u, &m) in row.iter().enumerate().take(u1 + 1).skip(u0) {
+                if m && f.points[v * f.width + u].z > 0.0 {
                     let b = (v / BLOCK - self.bv0) * w + u / BLOCK - self.bu0;
                     if self.d2[b] != 0 {
                         self.seed[b] = (u as u16, v as u16);
@@ -471,9 +471,9 @@ impl Registration {
             };
             let b = row.iter().rposition(|&m| m).unwrap_or(a);
             (u0, u1, v0, v1) = (u0.min(a), u1.max(b), v0.min(v), v1.max(v));
-            for u in a..=b {
+            for (u, &m) in row.iter().enumerate().take(b + 1).skip(a) {
                 let i = v * f.width + u;
-                if !row[u] || f.points[i].z <= 0.0 {
+                if !m || f.points[i].z <= 0.0 {
                     continue;
                 }
                 let thin = thickness.is_none_or(|t| t.get(i).is_none_or(|&d| d <= thin2));
