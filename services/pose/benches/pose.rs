@@ -10,7 +10,7 @@ use airglyph_pose::dijkstra::{Dijkstra, Graph};
 use airglyph_pose::dt::DistanceTransform;
 use airglyph_pose::graph::GeoGraph;
 use airglyph_pose::segment::Segmenter;
-use airglyph_pose::torso::TorsoEstimator;
+use airglyph_pose::torso::{TorsoEstimator, TorsoStart};
 use airglyph_pose::{PoseConfig, PoseEstimator};
 use airglyph_synth::{Background, MotionSpec, SceneConfig, ScriptedPose, Synthesizer};
 use criterion::{criterion_group, criterion_main, Criterion};
@@ -58,10 +58,10 @@ fn bench(c: &mut Criterion) {
         let mut torso = TorsoEstimator::new(&cfg);
         let up = -Vector3::y();
         g.bench_function("2 torso (DT + PCA + registration from PCA)", |b| {
-            b.iter(|| black_box(torso.fit(&points, &mask, wu, hu, &cfg, None, up)))
+            b.iter(|| black_box(torso.fit(&points, &mask, wu, hu, &cfg, TorsoStart::Fresh, up)))
         });
         let fit = torso
-            .fit(&points, &mask, wu, hu, &cfg, None, up)
+            .fit(&points, &mask, wu, hu, &cfg, TorsoStart::Fresh, up)
             .expect("torso");
         g.bench_function("2b torso registration from last frame", |b| {
             b.iter(|| {
@@ -71,7 +71,7 @@ fn bench(c: &mut Criterion) {
                     wu,
                     hu,
                     &cfg,
-                    Some((fit.pose, Vector3::zeros())),
+                    TorsoStart::Track(fit.pose, Vector3::zeros()),
                     up,
                 ))
             })

@@ -8,7 +8,7 @@ use crate::graph::{GeoGraph, NONE};
 use crate::limbs::{assign, fit_chain, Chain};
 use crate::register::{Frame, Registration};
 use crate::segment::{Plane, Segmenter};
-use crate::torso::{keypoints, TorsoEstimator, TorsoPose};
+use crate::torso::{keypoints, TorsoEstimator, TorsoPose, TorsoStart};
 use airglyph_core::filter::OneEuro;
 use airglyph_core::{DepthView, Intrinsics, Joint, Skeleton};
 use nalgebra::{Point3, Vector3};
@@ -360,24 +360,17 @@ impl PoseEstimator {
         self.frames_tracked += 1;
         let redetect = self.frames_tracked >= cfg.register.redetect_every.max(1);
         let tracked = (!redetect).then(|| self.prev_body_torso(cfg)).flatten();
-        let fit = match tracked {
-            Some(pose) => {
-                self.torso
-                    .fit_known(&self.points, &self.mask, w, h, cfg, pose, up_hint)?
-            }
-            None => {
-                self.frames_tracked = 0;
-                self.torso.fit(
-                    &self.points,
-                    &self.mask,
-                    w,
-                    h,
-                    cfg,
-                    self.prev_torso.zip(self.prev_offset),
-                    up_hint,
-                )?
-            }
+        let start = match (tracked, self.prev_torso.zip(self.prev_offset)) {
+            (Some(pose), _) => TorsoStart::Known(pose),
+            (None, Some((pose, offset))) => TorsoStart::Track(pose, offset),
+            (None, None) => TorsoStart::Fresh,
         };
+        if tracked.is_none() {
+            self.frames_tracked = 0;
+        }
+        let fit = self
+            .torso
+            .fit(&self.points, &self.mask, w, h, cfg, start, up_hint)?;
         let detecting = tracked.is_none();
         let mut torso = fit.pose;
         self.debug.torso_residual = fit.residual;

@@ -67,6 +67,19 @@ impl TorsoModel {
     }
 }
 
+/// Where the torso step starts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum TorsoStart {
+    /// Nothing known: registration from the PCA frame.
+    Fresh,
+    /// The last frame's pose and its offset from the torso region's centre: registration
+    /// from there, redone from PCA when the residual is too large.
+    Track(TorsoPose, Vector3<f32>),
+    /// The pose is known (the last frame's registered body): the distance transform and
+    /// the torso region's PCA only.
+    Known(TorsoPose),
+}
+
 /// Reusable state of the torso step.
 #[derive(Debug)]
 pub struct TorsoEstimator {
@@ -339,10 +352,24 @@ impl TorsoEstimator {
         width: usize,
         height: usize,
         cfg: &PoseConfig,
-        prev: Option<(TorsoPose, Vector3<f32>)>,
+        start: TorsoStart,
         up_hint: Vector3<f32>,
     ) -> Option<TorsoFit> {
         let (init, core) = self.initial_pose(points, mask, width, height, cfg, up_hint)?;
+        let prev = match start {
+            TorsoStart::Known(pose) => {
+                return Some(TorsoFit {
+                    pose,
+                    residual: 0.0,
+                    matches: 0,
+                    reinitialised: false,
+                    core_pixel: core,
+                    pca: init,
+                })
+            }
+            TorsoStart::Track(pose, offset) => Some((pose, offset)),
+            TorsoStart::Fresh => None,
+        };
         // Tracking starts from the last orientation, placed where the torso region is now
         // (the last frame's offset from its centre kept): a cylinder cannot be pulled
         // along its axis by closest points, so a jump would otherwise be lost.
@@ -383,32 +410,6 @@ impl TorsoEstimator {
             residual,
             matches,
             reinitialised: true,
-            core_pixel: core,
-            pca: init,
-        })
-    }
-}
-
-impl TorsoEstimator {
-    /// The torso step when the pose is already known (from the last frame's registered
-    /// body): the distance transform and the torso region's PCA only, no model
-    /// registration.
-    pub fn fit_known(
-        &mut self,
-        points: &[Point3<f32>],
-        mask: &[bool],
-        width: usize,
-        height: usize,
-        cfg: &PoseConfig,
-        pose: TorsoPose,
-        up_hint: Vector3<f32>,
-    ) -> Option<TorsoFit> {
-        let (init, core) = self.initial_pose(points, mask, width, height, cfg, up_hint)?;
-        Some(TorsoFit {
-            pose,
-            residual: 0.0,
-            matches: 0,
-            reinitialised: false,
             core_pixel: core,
             pca: init,
         })
