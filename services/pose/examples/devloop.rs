@@ -271,6 +271,35 @@ fn main() {
     }
     let s = ev.summary();
     println!("{}", serde_json::to_string(&s).unwrap());
+    {
+        let mut line = String::from("beyond 10 cm:");
+        for j in Joint::ALL {
+            let n = ev
+                .frames
+                .iter()
+                .filter(|f| f.joint[j.index()] >= 0.10)
+                .count();
+            line += &format!(
+                " {} {:.1}%",
+                j.name(),
+                n as f64 / ev.frames.len().max(1) as f64 * 100.0
+            );
+        }
+        println!("{line}");
+        // Frames with any joint beyond 20 cm, as runs.
+        let bad: Vec<usize> = ev
+            .frames
+            .iter()
+            .enumerate()
+            .filter(|(_, f)| f.max() >= 0.2)
+            .map(|(i, _)| i)
+            .collect();
+        println!(
+            "frames (in view) with a joint beyond 20 cm: {} {:?}",
+            bad.len(),
+            &bad[..bad.len().min(40)]
+        );
+    }
     for j in Joint::ALL {
         let b = bias[j.index()] * 100.0;
         let lo = local[j.index()] / nlocal[j.index()].max(1.0);

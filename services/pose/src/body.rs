@@ -413,6 +413,19 @@ impl BodyTemplate {
     }
 }
 
+/// The segments of a limb of [`crate::Limb::ALL`], root first.
+pub fn limb_segments(limb: crate::Limb) -> &'static [Segment] {
+    use crate::Limb;
+    use Segment::*;
+    match limb {
+        Limb::Head => &[Head],
+        Limb::LeftArm => &[LeftUpperArm, LeftForearm],
+        Limb::RightArm => &[RightUpperArm, RightForearm],
+        Limb::LeftLeg => &[LeftThigh, LeftShin],
+        Limb::RightLeg => &[RightThigh, RightShin],
+    }
+}
+
 /// The segment that carries a joint.
 pub fn segment_of(j: Joint) -> Segment {
     use Segment::*;
@@ -553,6 +566,16 @@ impl BodyPose {
             rotation,
         };
         pose.is_finite().then_some(pose)
+    }
+
+    /// This pose with one limb's segments turned as in `other` (the limb stays attached
+    /// where this pose puts its root).
+    pub fn with_limb_of(&self, other: &BodyPose, limb: crate::Limb) -> BodyPose {
+        let mut p = *self;
+        for s in limb_segments(limb) {
+            p.rotation[s.index()] = other.rotation[s.index()];
+        }
+        p
     }
 
     pub fn is_finite(&self) -> bool {

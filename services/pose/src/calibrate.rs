@@ -28,8 +28,9 @@ const MAX_RATIO: f32 = 1.4;
 #[derive(Debug, Clone, Default)]
 struct PairRatio {
     samples: VecDeque<f32>,
-    /// Set once the registration nudges it; then the geodesic samples are not used.
-    fitted: Option<f32>,
+    /// The registration's estimates (the ratio each frame's fit asks for); once there
+    /// are any, the geodesic samples are not used.
+    fitted: VecDeque<f32>,
 }
 
 impl PairRatio {
@@ -43,17 +44,29 @@ impl PairRatio {
         self.samples.push_back(ratio);
     }
 
-    fn nudge(&mut self, step: f32, gain: f32) {
+    fn refine(&mut self, step: f32) {
         if !step.is_finite() {
             return;
         }
-        let r = self.fitted.unwrap_or(1.0);
-        self.fitted = Some((r * (1.0 + gain * step.clamp(-0.1, 0.1))).clamp(MIN_RATIO, MAX_RATIO));
+        // The ratio this frame asks for: the one it was fitted with, moved by its step.
+        let asked = self.ratio() * (1.0 + step.clamp(-0.2, 0.2));
+        if self.fitted.len() == WINDOW {
+            self.fitted.pop_front();
+        }
+        self.fitted.push_back(asked);
     }
 
     fn ratio(&self) -> f32 {
-        if let Some(r) = self.fitted {
-            return r;
+        if !self.fitted.is_empty() {
+            if self.fitted.len() < MIN_SAMPLES {
+                return 1.0;
+            }
+            // The median: a bad stretch of frames (a limb mistaken for another, a
+            // person half out of view) cannot drag it.
+            let mut v: Vec<f32> = self.fitted.iter().copied().collect();
+            let k = v.len() / 2;
+            let (_, x, _) = v.select_nth_unstable_by(k, f32::total_cmp);
+            return x.clamp(MIN_RATIO, MAX_RATIO);
         }
         if self.samples.len() < MIN_SAMPLES {
             return 1.0;
@@ -87,15 +100,16 @@ impl BodyCalibration {
         }
     }
 
-    /// Moves the arms' and the legs' ratios by a share `gain` of the registration's
-    /// relative length steps ([`crate::register::Fit::length_step`]). Once nudged, a
-    /// ratio follows the registration only.
-    pub fn nudge(&mut self, steps: [Option<f32>; 2], gain: f32) {
+    /// Records the registration's relative length steps of a frame
+    /// ([`crate::register::Fit::length_step`]): each asks for the ratio it was fitted
+    /// with times (1 + step), and the ratios become the median of what recent frames
+    /// asked for. Once refined, a ratio follows the registration only.
+    pub fn refine(&mut self, steps: [Option<f32>; 2]) {
         if let Some(s) = steps[0] {
-            self.arms.nudge(s, gain);
+            self.arms.refine(s);
         }
         if let Some(s) = steps[1] {
-            self.legs.nudge(s, gain);
+            self.legs.refine(s);
         }
     }
 

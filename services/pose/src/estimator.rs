@@ -796,15 +796,48 @@ impl PoseEstimator {
             self.reg
                 .prepare(&frame, Some(self.torso.distance_transform()), &cfg.register);
             let geodesic = race.then(|| BodyPose::from_skeleton(&tpl, &skel)).flatten();
-            let starts: Vec<BodyPose> = [self.prev_body, geodesic].into_iter().flatten().collect();
+            // Besides the tracked body and the geodesic one: the tracked body with every
+            // limb whose tip strayed taken from the geodesic estimate (an arm dropped
+            // from a T-pose within a frame, say, while the rest is tracked well).
+            let geo_for_hybrid = geodesic.filter(|_| cfg.register.race_hybrid);
+            let hybrid = self.prev_body.zip(geo_for_hybrid).and_then(|(prev, geo)| {
+                let posed = Posed::new(&tpl, &prev);
+                let mut h = prev;
+                let mut changed = false;
+                for l in Limb::ALL {
+                    let (seg, local) = tpl.tips[l.index()];
+                    if tips[l.index()].is_some_and(|m| {
+                        (posed.point(seg, &local) - m).norm() > cfg.register.race_gap
+                    }) {
+                        h = h.with_limb_of(&geo, l);
+                        changed = true;
+                    }
+                }
+                changed.then_some(h)
+            });
+            let starts: Vec<BodyPose> = [self.prev_body, hybrid, geodesic]
+                .into_iter()
+                .flatten()
+                .collect();
             let best = self.reg.fit(&frame, &tpl, &starts, &tips, &cfg.register);
             if race {
                 self.debug.geodesic = Some(skel);
             }
             let mut registered = false;
             if let Some(b) = best {
+                // Lengths are learned from frames whose limbs the camera sees well.
                 if self.cfg.calibrate_body {
-                    self.calib.nudge(b.length_step, cfg.register.length_gain);
+                    use crate::body::Segment::*;
+                    let seen = |segs: [crate::body::Segment; 4]| {
+                        segs.iter().map(|s| b.seen[s.index()]).sum::<f32>() / 4.0
+                    };
+                    let gate = cfg.register.length_seen;
+                    let arms = seen([LeftUpperArm, LeftForearm, RightUpperArm, RightForearm]);
+                    let legs = seen([LeftThigh, LeftShin, RightThigh, RightShin]);
+                    self.calib.refine([
+                        b.length_step[0].filter(|_| arms >= gate),
+                        b.length_step[1].filter(|_| legs >= gate),
+                    ]);
                 }
                 let fitted = Posed::new(&tpl, &b.pose).skeleton(&tpl);
                 if fitted.is_finite() {

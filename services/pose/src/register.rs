@@ -183,16 +183,26 @@ pub struct RegisterConfig {
     pub head_prior: f64,
     pub chest_prior: f64,
     pub abdomen_prior: f64,
+    /// Elbows and knees: weight of a twist and of a sideways bend (per radian²), of
+    /// bending the wrong way beyond `hinge_slack` radians.
+    pub hinge_twist_prior: f64,
+    pub hinge_side_prior: f64,
+    pub hinge_limit_prior: f64,
+    pub hinge_slack: f32,
     /// Σ w j² a limb pair's length gradient needs before it is trusted (j: metres a
     /// point moves per unit change of the length ratio).
     pub length_evidence: f64,
-    /// How much of each frame's length step the person's limb lengths take.
-    pub length_gain: f32,
+    /// The share of a limb pair's front surface the camera must see where the fit puts
+    /// it for the frame to count towards the pair's length.
+    pub length_seen: f32,
     /// Every this many frames the seed's torso registration runs and the geodesic
     /// estimate races the tracked body; in between it races only when a limb tip lies
     /// farther than `race_gap` from the tracked body's.
     pub redetect_every: usize,
     pub race_gap: f32,
+    /// Also race the tracked body with its strayed limbs taken from the geodesic
+    /// estimate.
+    pub race_hybrid: bool,
     /// Levenberg–Marquardt damping: relative (of the diagonal) and absolute.
     pub damping: f64,
     pub damping_abs: f64,
@@ -218,10 +228,15 @@ impl Default for RegisterConfig {
             head_prior: 1.0,
             chest_prior: 3.0,
             abdomen_prior: 3.0,
+            hinge_twist_prior: 0.05,
+            hinge_side_prior: 2.0,
+            hinge_limit_prior: 5.0,
+            hinge_slack: 0.15,
             length_evidence: 10.0,
-            length_gain: 0.05,
+            length_seen: 0.6,
             redetect_every: 10,
             race_gap: 0.25,
+            race_hybrid: false,
             damping: 0.05,
             damping_abs: 0.01,
             shape: Shape::makehuman(),
@@ -291,11 +306,15 @@ impl Placed {
     }
 }
 
-/// Normal equations of one step, per segment: the segment's motion is a twist (v, ω),
-/// and a residual r along `dir` at point x of it changes by dirᵀ(v + ω × x).
+/// Normal equations of one step, per segment: the segment's motion is a twist (v, ω)
+/// about its own joint o, and a residual r along `dir` at point x of it changes by
+/// dirᵀ(v + ω × (x − o)). Sums are in f32 (lever arms are a limb long, not the
+/// camera's distance), over the full 6×6 outer product so they vectorise.
 struct Accumulator {
-    h: [Local; Segment::COUNT],
-    g: [Vector6<f64>; Segment::COUNT],
+    h: [[f32; 36]; Segment::COUNT],
+    g: [[f32; 6]; Segment::COUNT],
+    /// The twists' origins: each segment's joint.
+    origin: [Point3<f32>; Segment::COUNT],
     energy: f64,
     /// Where each limb is rooted (shoulder, hip), for the limb-length gradient.
     roots: [Option<Point3<f32>>; Segment::COUNT],
@@ -319,83 +338,80 @@ impl Accumulator {
             }
         }
         Self {
-            h: [Local::zeros(); Segment::COUNT],
-            g: [Vector6::zeros(); Segment::COUNT],
+            h: [[0.0; 36]; Segment::COUNT],
+            g: [[0.0; 6]; Segment::COUNT],
+            origin: posed.joint,
             energy: 0.0,
             roots,
             length: [(0.0, 0.0); 2],
         }
     }
 
-    /// Adds residual `r` (weight `w` in the normal equations, `cost` to the energy).
+    /// Adds residual `r` with weight `w` in the normal equations.
     #[inline]
     fn add(&mut self, s: Segment, x: &Point3<f32>, dir: &Vector3<f32>, r: f32, w: f32) {
-        let m = x.coords.cross(dir);
-        let j = Vector6::new(
-            dir.x as f64,
-            dir.y as f64,
-            dir.z as f64,
-            m.x as f64,
-            m.y as f64,
-            m.z as f64,
-        );
-        let w = w as f64;
-        let h = &mut self.h[s.index()];
-        // Only the upper triangle; mirrored when assembled.
+        let si = s.index();
+        let m = (x - self.origin[si]).cross(dir);
+        let j = [dir.x, dir.y, dir.z, m.x, m.y, m.z];
+        let h = &mut self.h[si];
         for a in 0..6 {
             let wa = w * j[a];
-            for b in a..6 {
-                h[(a, b)] += wa * j[b];
+            for b in 0..6 {
+                h[a * 6 + b] += wa * j[b];
             }
         }
-        self.g[s.index()] += j * (w * r as f64);
-        if let Some(root) = self.roots[s.index()] {
+        let wr = w * r;
+        for (ga, ja) in self.g[si].iter_mut().zip(j) {
+            *ga += wr * ja;
+        }
+        if let Some(root) = self.roots[si] {
             let pair = usize::from(matches!(
                 s,
                 Segment::LeftThigh | Segment::LeftShin | Segment::RightThigh | Segment::RightShin
             ));
             let js = dir.dot(&(x - root)) as f64;
-            self.length[pair].0 += w * js * r as f64;
-            self.length[pair].1 += w * js * js;
+            self.length[pair].0 += w as f64 * js * r as f64;
+            self.length[pair].1 += w as f64 * js * js;
         }
     }
 
-    /// The full normal equations: a segment's twist is v = dt + Σ p_j × ω_j and
-    /// ω = Σ ω_j over the joints j of its chain.
-    fn assemble(&self, posed: &Posed) -> (Normal, Gradient) {
+    /// The full normal equations: about its joint o, a segment's twist is
+    /// v = dt + Σ (p_j − o) × ω_j and ω = Σ ω_j over the joints j of its chain.
+    fn assemble(&self) -> (Normal, Gradient) {
         let mut hh = Normal::zeros();
         let mut gg = Gradient::zeros();
         for s in Segment::ALL {
-            let mut h = self.h[s.index()];
-            for a in 0..6 {
-                for b in 0..a {
-                    h[(a, b)] = h[(b, a)];
-                }
-            }
-            // A: 6 × N, the twist of s from the unknowns.
-            let mut cols: Vec<(usize, SMatrix<f64, 6, 3>)> = Vec::with_capacity(5);
-            let mut tr = SMatrix::<f64, 6, 3>::zeros();
-            tr.fixed_view_mut::<3, 3>(0, 0)
+            let si = s.index();
+            let h = Local::from_row_slice(&self.h[si].map(f64::from));
+            let g = Vector6::from_row_slice(&self.g[si].map(f64::from));
+            // A: 6 × N, the twist of s from the unknowns, as (column, 6×3 block)s.
+            let o = self.origin[si];
+            let mut cols = [(0usize, SMatrix::<f64, 6, 3>::zeros()); 6];
+            let mut n = 0;
+            cols[n]
+                .1
+                .fixed_view_mut::<3, 3>(0, 0)
                 .copy_from(&Matrix3::identity());
-            cols.push((0, tr));
+            n += 1;
             for j in s.chain() {
-                let p = posed.joint[j.index()].coords.cast::<f64>();
-                let mut blk = SMatrix::<f64, 6, 3>::zeros();
-                blk.fixed_view_mut::<3, 3>(0, 0)
+                let p = (self.origin[j.index()] - o).cast::<f64>();
+                let blk = &mut cols[n];
+                blk.0 = 3 + 3 * j.index();
+                blk.1
+                    .fixed_view_mut::<3, 3>(0, 0)
                     .copy_from(&p.cross_matrix());
-                blk.fixed_view_mut::<3, 3>(3, 0)
+                blk.1
+                    .fixed_view_mut::<3, 3>(3, 0)
                     .copy_from(&Matrix3::identity());
-                cols.push((3 + 3 * j.index(), blk));
+                n += 1;
             }
-            let g = self.g[s.index()];
-            for (ca, a) in &cols {
+            for (ca, a) in &cols[..n] {
                 let ha = a.transpose() * h;
                 let mut gr = gg.fixed_rows_mut::<3>(*ca);
                 gr += a.transpose() * g;
-                for (cb, b) in &cols {
-                    let blk = ha * b;
+                for (cb, b) in &cols[..n] {
                     let mut dst = hh.fixed_view_mut::<3, 3>(*ca, *cb);
-                    dst += blk;
+                    dst += ha * b;
                 }
             }
         }
@@ -448,9 +464,98 @@ fn place(t: &BodyTemplate, posed: &Posed) -> Vec<Placed> {
 /// Cauchy's weight and cost for residual `r` at scale `s`.
 #[inline]
 fn cauchy(r: f32, s: f32) -> (f32, f32) {
-    let q = (r / s) * (r / s);
-    (1.0 / (1.0 + q), 0.5 * s * s * (1.0 + q).ln())
+    (cauchy_weight(r, s), cauchy_cost(r, s))
 }
+
+#[inline]
+fn cauchy_weight(r: f32, s: f32) -> f32 {
+    let q = (r / s) * (r / s);
+    1.0 / (1.0 + q)
+}
+
+#[inline]
+fn cauchy_cost(r: f32, s: f32) -> f32 {
+    let q = (r / s) * (r / s);
+    0.5 * s * s * q.ln_1p()
+}
+
+/// Priors on each joint's turn, the rotation vector φ of a segment against its parent
+/// (parent frame, x = the person's left, y = up, z = forward at rest). A world turn ω
+/// of the segment changes φ by R_parentᵀ ω; its parent's turn moves both and leaves φ
+/// alone. The spine and the neck keep near their rest (the head's turn about its own
+/// axis is not in the data at all). Elbows and knees are hinges about x: they do not
+/// bend sideways (z), twist little (y), and bend one way only (the knee back, the
+/// elbow forward).
+fn add_joint_priors(h: &mut Normal, g: &mut Gradient, pose: &BodyPose, cfg: &RegisterConfig) {
+    use Segment::*;
+    // (segment, weight per axis of φ, bending limit on φ.x: (sign, allowed))
+    let hinge = |seg| (seg, [0.0, cfg.hinge_twist_prior, cfg.hinge_side_prior]);
+    let spine = [
+        (Head, [cfg.head_prior; 3]),
+        (Chest, [cfg.chest_prior; 3]),
+        (Abdomen, [cfg.abdomen_prior; 3]),
+        hinge(LeftForearm),
+        hinge(RightForearm),
+        hinge(LeftShin),
+        hinge(RightShin),
+    ];
+    for (seg, w) in spine {
+        let Some(parent) = seg.parent() else { continue };
+        let rp = pose.rotation[parent.index()];
+        let phi = (rp.inverse() * pose.rotation[seg.index()]).scaled_axis();
+        let rpm = rp.matrix().cast::<f64>();
+        let o = 3 + 3 * seg.index();
+        let mut add = |axis: usize, r: f32, w: f64| {
+            if w <= 0.0 {
+                return;
+            }
+            // J = e_axisᵀ R_pᵀ: the axis of the parent frame, in the camera frame.
+            let d = rpm.column(axis).into_owned();
+            let mut hb = h.fixed_view_mut::<3, 3>(o, o);
+            hb += d * d.transpose() * w;
+            let mut gr = g.fixed_rows_mut::<3>(o);
+            gr += d * (w * r as f64);
+        };
+        for (axis, &wa) in w.iter().enumerate() {
+            add(axis, phi[axis], wa);
+        }
+        // One-way bending: the knee flexes with φ.x > 0 (the shin goes back), the elbow
+        // with φ.x < 0 (the forearm comes forward).
+        let over = match seg {
+            LeftShin | RightShin => (-phi.x - cfg.hinge_slack).max(0.0),
+            LeftForearm | RightForearm => (phi.x - cfg.hinge_slack).max(0.0),
+            _ => 0.0,
+        };
+        if over > 0.0 {
+            let sign = if matches!(seg, LeftShin | RightShin) {
+                -1.0
+            } else {
+                1.0
+            };
+            add(0, sign * over, cfg.hinge_limit_prior);
+        }
+    }
+}
+
+/// What one registration fits, to what, and how.
+struct Problem<'a> {
+    frame: &'a Frame<'a>,
+    body: &'a BodyTemplate,
+    tips: &'a [Option<Point3<f32>>; 5],
+    cfg: &'a RegisterConfig,
+}
+
+/// What a pass over the data does besides the normal equations.
+#[derive(Debug, Clone, Copy)]
+struct Pass {
+    /// Search every point's nearest capsule (else keep the last pass's).
+    search: bool,
+    /// Sum the energy (only the last pass of a run needs it).
+    energy: bool,
+}
+
+/// Passes between two nearest-capsule searches.
+const REASSIGN: usize = 2;
 
 impl Registration {
     /// Samples the person's points and builds the nearest-person-pixel map.
@@ -488,16 +593,6 @@ impl Registration {
         self.nearest.build(f, bbox, NEAREST_MARGIN);
     }
 
-    /// The sampled person points, each with the index (into `t.capsules`) of the
-    /// capsule nearest it on the posed body.
-    pub fn assignments(&self, t: &BodyTemplate, pose: &BodyPose) -> Vec<(usize, Point3<f32>)> {
-        let placed = place(t, &Posed::new(t, pose));
-        self.data
-            .iter()
-            .map(|(p, _)| (nearest_capsule(&placed, p).0, *p))
-            .collect()
-    }
-
     /// How many person points the data term uses.
     pub fn data_len(&self) -> usize {
         self.data.len()
@@ -521,68 +616,55 @@ impl Registration {
         } else {
             0
         };
+        let problem = Problem {
+            frame: f,
+            body: t,
+            tips,
+            cfg,
+        };
         let mut best: Option<Fit> = None;
         let mut passes = 0;
         for &s in starts {
-            let fit = self.run(f, t, s, tips, cfg, race);
+            let fit = self.run(&problem, s, race);
             passes += fit.passes;
             if best.is_none_or(|b| fit.energy < b.energy) {
                 best = Some(fit);
             }
         }
         let b = best?;
-        let mut fit = self.run(f, t, b.pose, tips, cfg, cfg.iterations.saturating_sub(race));
+        let mut fit = self.run(&problem, b.pose, cfg.iterations.saturating_sub(race));
         fit.passes += passes;
         Some(fit)
     }
 
     /// `steps` Gauss–Newton steps from `start`. The energy returned is the one of the
     /// last pose linearised at (the start's when `steps` is 0).
-    fn run(
-        &self,
-        f: &Frame,
-        t: &BodyTemplate,
-        start: BodyPose,
-        tips: &[Option<Point3<f32>>; 5],
-        cfg: &RegisterConfig,
-        steps: usize,
-    ) -> Fit {
+    fn run(&self, p: &Problem, start: BodyPose, steps: usize) -> Fit {
+        let (t, cfg) = (p.body, p.cfg);
         let mut pose = start;
         let mut energy = f32::INFINITY;
         let mut seen = [0.0; Segment::COUNT];
         let mut length = [(0.0, 0.0); 2];
         let mut passes = 0;
+        // Each point's capsule, searched afresh every `REASSIGN` passes: in between the
+        // body moves by millimetres, and the search is most of a pass's work.
+        let mut assign = vec![0u16; self.data.len()];
         for it in 0..=steps {
             passes += 1;
             let posed = Posed::new(t, &pose);
-            let (acc, s) = self.accumulate(f, t, &posed, tips, cfg);
+            let pass = Pass {
+                search: it % REASSIGN == 0,
+                energy: it == steps,
+            };
+            let (acc, s) = self.accumulate(p, &posed, pass, &mut assign);
             energy = acc.energy as f32;
             seen = s;
             length = acc.length;
             if it == steps {
                 break;
             }
-            let (mut h, mut g) = acc.assemble(&posed);
-            // Priors on turns against the parent: the residual is the relative rotation
-            // vector φ (parent frame), which a world turn ω of the segment changes by
-            // R_parentᵀ ω.
-            for (seg, w) in [
-                (Segment::Head, cfg.head_prior),
-                (Segment::Chest, cfg.chest_prior),
-                (Segment::Abdomen, cfg.abdomen_prior),
-            ] {
-                let Some(parent) = seg.parent() else { continue };
-                let rp = pose.rotation[parent.index()];
-                let rel = rp.inverse() * pose.rotation[seg.index()];
-                let phi = rel.scaled_axis().cast::<f64>();
-                let o = 3 + 3 * seg.index();
-                for i in 0..3 {
-                    h[(o + i, o + i)] += w;
-                }
-                let grad = rp.matrix().cast::<f64>() * phi * w;
-                let mut gr = g.fixed_rows_mut::<3>(o);
-                gr += grad;
-            }
+            let (mut h, mut g) = acc.assemble();
+            add_joint_priors(&mut h, &mut g, &pose, cfg);
             for i in 0..N {
                 h[(i, i)] += cfg.damping * h[(i, i)] + cfg.damping_abs;
             }
@@ -628,27 +710,36 @@ impl Registration {
 
     fn accumulate(
         &self,
-        f: &Frame,
-        t: &BodyTemplate,
+        p: &Problem,
         posed: &Posed,
-        tips: &[Option<Point3<f32>>; 5],
-        cfg: &RegisterConfig,
+        pass: Pass,
+        assign: &mut [u16],
     ) -> (Accumulator, [f32; Segment::COUNT]) {
+        let (f, t, tips, cfg) = (p.frame, p.body, p.tips, p.cfg);
         let placed = place(t, posed);
         let mut acc = Accumulator::new(posed);
 
         // Data: each point on its nearest capsule's surface.
-        for (p, area) in &self.data {
-            let (ci, q, d) = nearest_capsule(&placed, p);
+        for ((p, area), ci) in self.data.iter().zip(assign.iter_mut()) {
+            let (q, d) = if pass.search {
+                let (c, q, d) = nearest_capsule(&placed, p);
+                *ci = c as u16;
+                (q, d)
+            } else {
+                let (q, _, d) = placed[*ci as usize].nearest(p);
+                (q, d)
+            };
             let off = p - q;
             let len = off.norm();
             if len < 1e-6 || !d.is_finite() {
                 continue;
             }
             let n = off / len;
-            let (w, cost) = cauchy(d, cfg.sigma);
-            acc.energy += (area * cost) as f64;
-            acc.add(placed[ci].segment, &q, &(-n), d, area * w);
+            let w = cauchy_weight(d, cfg.sigma);
+            if pass.energy {
+                acc.energy += (area * cauchy_cost(d, cfg.sigma)) as f64;
+            }
+            acc.add(placed[*ci as usize].segment, &q, &(-n), d, area * w);
         }
 
         // Silhouette and free space: the body's front surface as the camera sees it.
