@@ -1,5 +1,6 @@
 //! Time of each step and of the whole estimator at 320×240 and 640×480, on a synthetic
-//! person (airglyph-synth, procedural body, T-pose before floor and wall with sensor noise).
+//! person (airglyph-synth, procedural body, waving before floor and wall with sensor noise),
+//! and of the whole estimator on a person air-drawing (tracking from frame to frame).
 //!
 //! The estimator bins frames wider than `PoseConfig::work_width` (320) before it starts,
 //! so its 640×480 figure is binning plus the 320×240 work; the steps at 640×480 are timed
@@ -27,6 +28,21 @@ fn frame(k: Intrinsics) -> DepthImage {
         ..SceneConfig::default()
     };
     Synthesizer::new(cfg).expect("scene").render(0).0
+}
+
+/// `n` frames of the procedural person air-drawing before floor and wall, with sensor
+/// noise.
+fn moving(k: Intrinsics, n: usize) -> Vec<DepthImage> {
+    let cfg = SceneConfig {
+        intrinsics: k,
+        motion: MotionSpec::parse("draw:25", None, false).expect("a drawing"),
+        background: Background::FloorAndWall,
+        sensor_noise: true,
+        ..SceneConfig::default()
+    };
+    let mut synth = Synthesizer::new(cfg).expect("scene");
+    // Skip the approach to the first symbol.
+    (30..30 + n).map(|i| synth.render(i).0).collect()
 }
 
 fn bench(c: &mut Criterion) {
@@ -105,8 +121,23 @@ fn bench(c: &mut Criterion) {
         });
         let mut est = PoseEstimator::new(k, cfg.clone());
         est.estimate(img.view());
-        g.bench_function("whole estimator", |b| {
+        g.bench_function("whole estimator, the same frame again", |b| {
             b.iter(|| black_box(est.estimate(img.view())))
+        });
+        // A person moving (air-drawing, as the demo): tracking frame to frame, the
+        // seed's full steps every tenth frame and when a limb strays.
+        let clip = moving(k, 90);
+        let mut est = PoseEstimator::new(k, cfg.clone());
+        let mut i = 0;
+        g.bench_function("whole estimator, a person drawing", |b| {
+            b.iter(|| {
+                if i % clip.len() == 0 {
+                    est.reset();
+                }
+                let r = est.estimate(clip[i % clip.len()].view());
+                i += 1;
+                black_box(r)
+            })
         });
         g.finish();
     }

@@ -165,6 +165,9 @@ pub struct RegisterConfig {
     /// best one alone goes on.
     pub iterations: usize,
     pub race_iterations: usize,
+    /// A run stops early once a step is smaller than this (metres and radians
+    /// together).
+    pub converged: f32,
     /// Scale of the data term's Cauchy weight, metres.
     pub sigma: f32,
     /// Weight of a silhouette or free-space residual against one data point's.
@@ -218,6 +221,7 @@ impl Default for RegisterConfig {
             interior_stride: 3,
             iterations: 10,
             race_iterations: 3,
+            converged: 1e-4,
             sigma: 0.03,
             silhouette_weight: 4.0,
             free_space_weight: 4.0,
@@ -611,35 +615,37 @@ impl Registration {
         tips: &[Option<Point3<f32>>; 5],
         cfg: &RegisterConfig,
     ) -> Option<Fit> {
-        let race = if starts.len() > 1 {
-            cfg.race_iterations.clamp(1, cfg.iterations.max(1))
-        } else {
-            0
-        };
         let problem = Problem {
             frame: f,
             body: t,
             tips,
             cfg,
         };
+        if let [only] = starts {
+            return Some(self.run(&problem, *only, cfg.iterations, true));
+        }
+        let race = cfg.race_iterations.clamp(1, cfg.iterations.max(1));
         let mut best: Option<Fit> = None;
         let mut passes = 0;
         for &s in starts {
-            let fit = self.run(&problem, s, race);
+            // Each start's energy at its own final pose: the energy before the last
+            // step would favour the start that moved least.
+            let fit = self.run(&problem, s, race, true);
             passes += fit.passes;
             if best.is_none_or(|b| fit.energy < b.energy) {
                 best = Some(fit);
             }
         }
         let b = best?;
-        let mut fit = self.run(&problem, b.pose, cfg.iterations.saturating_sub(race));
+        let mut fit = self.run(&problem, b.pose, cfg.iterations.saturating_sub(race), true);
         fit.passes += passes;
         Some(fit)
     }
 
-    /// `steps` Gauss–Newton steps from `start`. The energy returned is the one of the
-    /// last pose linearised at (the start's when `steps` is 0).
-    fn run(&self, p: &Problem, start: BodyPose, steps: usize) -> Fit {
+    /// `steps` Gauss–Newton steps from `start`. With `finish`, a last pass measures the
+    /// final pose (energy, what is seen, the length steps); without (a start racing
+    /// others), the energy is the one of the last pose linearised at.
+    fn run(&self, p: &Problem, start: BodyPose, steps: usize, finish: bool) -> Fit {
         let (t, cfg) = (p.body, p.cfg);
         let mut pose = start;
         let mut energy = f32::INFINITY;
@@ -649,12 +655,13 @@ impl Registration {
         // Each point's capsule, searched afresh every `REASSIGN` passes: in between the
         // body moves by millimetres, and the search is most of a pass's work.
         let mut assign = vec![0u16; self.data.len()];
-        for it in 0..=steps {
+        let last = if finish { steps } else { steps.saturating_sub(1) };
+        for it in 0..=last {
             passes += 1;
             let posed = Posed::new(t, &pose);
             let pass = Pass {
                 search: it % REASSIGN == 0,
-                energy: it == steps,
+                energy: it == last,
             };
             let (acc, s) = self.accumulate(p, &posed, pass, &mut assign);
             energy = acc.energy as f32;
@@ -692,7 +699,7 @@ impl Registration {
                 break;
             }
             pose = next;
-            if step.norm() < 1e-4 {
+            if step.norm() < cfg.converged as f64 {
                 break;
             }
         }
