@@ -7,6 +7,7 @@
 //! at full resolution to show what skipping the binning would cost.
 
 use airglyph_core::{DepthImage, Intrinsics};
+use airglyph_pose::config::RegisterConfig;
 use airglyph_pose::dijkstra::{Dijkstra, Graph};
 use airglyph_pose::dt::DistanceTransform;
 use airglyph_pose::graph::GeoGraph;
@@ -127,18 +128,33 @@ fn bench(c: &mut Criterion) {
         // A person moving (air-drawing, as the demo): tracking frame to frame, the
         // seed's full steps every tenth frame and when a limb strays.
         let clip = moving(k, 90);
-        let mut est = PoseEstimator::new(k, cfg.clone());
-        let mut i = 0;
-        g.bench_function("whole estimator, a person drawing", |b| {
-            b.iter(|| {
-                if i % clip.len() == 0 {
-                    est.reset();
-                }
-                let r = est.estimate(clip[i % clip.len()].view());
-                i += 1;
-                black_box(r)
-            })
-        });
+        let seed_only = PoseConfig {
+            register: RegisterConfig {
+                enabled: false,
+                ..RegisterConfig::default()
+            },
+            ..cfg.clone()
+        };
+        for (name, c) in [
+            ("whole estimator, a person drawing", &cfg),
+            (
+                "seed's steps alone (no registration), a person drawing",
+                &seed_only,
+            ),
+        ] {
+            let mut est = PoseEstimator::new(k, c.clone());
+            let mut i = 0;
+            g.bench_function(name, |b| {
+                b.iter(|| {
+                    if i % clip.len() == 0 {
+                        est.reset();
+                    }
+                    let r = est.estimate(clip[i % clip.len()].view());
+                    i += 1;
+                    black_box(r)
+                })
+            });
+        }
         g.finish();
     }
 }
