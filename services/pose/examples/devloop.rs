@@ -81,6 +81,9 @@ fn main() {
     let (mut npass, mut npts, mut nrace) = (0usize, 0usize, 0usize);
     let mut ncpu = 0usize;
     let mut bias = [nalgebra::Vector3::<f32>::zeros(); Joint::COUNT];
+    let mut series = std::env::var("SERIES")
+        .ok()
+        .map(|f| std::io::BufWriter::new(std::fs::File::create(f).unwrap()));
     let mut dump = std::env::var("DUMP")
         .ok()
         .map(|f| std::io::BufWriter::new(std::fs::File::create(f).unwrap()));
@@ -117,6 +120,21 @@ fn main() {
             *a += b;
         }
         let fe = ev.add(&r, &truth.skeleton);
+        if let Some(f) = &mut series {
+            use std::io::Write;
+            let worst = (0..Joint::COUNT)
+                .max_by(|&a, &b| fe.joint[a].total_cmp(&fe.joint[b]))
+                .unwrap_or(0);
+            writeln!(
+                f,
+                "{i} {:.2} {:.2} {} {}",
+                fe.mean() * 100.0,
+                fe.max() * 100.0,
+                Joint::ALL[worst].name(),
+                u8::from(est.debug().raced)
+            )
+            .unwrap();
+        }
         if let Some(d) = &mut dump {
             use std::io::Write;
             let g = est.debug().geodesic.unwrap_or(r.skeleton);

@@ -25,6 +25,8 @@ fn driver(s: Segment) -> Bone {
         Abdomen => Bone::Spine,
         Chest => Bone::Chest,
         Head => Bone::Neck,
+        LeftCollar => Bone::LeftCollar,
+        RightCollar => Bone::RightCollar,
         LeftUpperArm => Bone::LeftUpperArm,
         LeftForearm => Bone::LeftForearm,
         RightUpperArm => Bone::RightUpperArm,
@@ -57,7 +59,10 @@ fn segment_of_bone(b: Bone) -> Segment {
 
 fn is_right(s: Segment) -> bool {
     use Segment::*;
-    matches!(s, RightUpperArm | RightForearm | RightThigh | RightShin)
+    matches!(
+        s,
+        RightCollar | RightUpperArm | RightForearm | RightThigh | RightShin
+    )
 }
 
 /// Per frame, each segment's origin and rotation (segment frame → camera frame).
@@ -103,6 +108,8 @@ impl Rig {
         rest_origin[Abdomen.index()] = head(Abdomen);
         rest_origin[Chest.index()] = head(Chest);
         rest_origin[Head.index()] = j[Joint::Neck.index()];
+        rest_origin[LeftCollar.index()] = head(LeftCollar);
+        rest_origin[RightCollar.index()] = head(RightCollar);
         for (s, a, b) in [
             (LeftUpperArm, Joint::LeftShoulder, Joint::LeftElbow),
             (LeftForearm, Joint::LeftElbow, Joint::LeftHand),
@@ -261,7 +268,6 @@ fn main() {
             0.5 * (a[2] + b[2]),
         ]
     };
-    shape.shoulder = pair(Chest, Joint::LeftShoulder, Joint::RightShoulder);
     shape.hip = pair(Pelvis, Joint::LeftHip, Joint::RightHip);
     let lr = |l: Segment, r: Segment, jl: Joint, jr: Joint| {
         let a = mean(&|s| joint_in(s, l, jl));
@@ -272,6 +278,24 @@ fn main() {
             0.5 * (a[2] + b[2]),
         ]
     };
+    // The collarbones' rest is the chest's own turn (the prior holds them near it), so
+    // their joint and the shoulder are measured in the chest's frame: the shoulder where
+    // the standing body has it on average.
+    shape.collar = {
+        let l = origin_in(s0, Chest, LeftCollar);
+        let r = origin_in(s0, Chest, RightCollar);
+        [
+            0.5 * (l[0] - r[0]),
+            0.5 * (l[1] + r[1]),
+            0.5 * (l[2] + r[2]),
+        ]
+    };
+    let sh = pair(Chest, Joint::LeftShoulder, Joint::RightShoulder);
+    shape.shoulder = [
+        sh[0] - shape.collar[0],
+        sh[1] - shape.collar[1],
+        sh[2] - shape.collar[2],
+    ];
     shape.elbow = lr(
         LeftUpperArm,
         RightUpperArm,

@@ -1,6 +1,6 @@
 //! The articulated body the registration ([`crate::register`]) fits to the depth data:
-//! twelve rigid segments in a tree (pelvis → abdomen → chest → head and arms, pelvis →
-//! legs), each
+//! fourteen rigid segments in a tree (pelvis → abdomen → chest → head, and collars →
+//! arms; pelvis → legs), each
 //! carrying tapered capsules that approximate its surface, and the 16 joints as points of
 //! the segments.
 //!
@@ -28,8 +28,11 @@ pub enum Segment {
     Abdomen,
     Chest,
     Head,
+    /// The collarbones: the shoulder joint rises and comes forward with the arm.
+    LeftCollar,
     LeftUpperArm,
     LeftForearm,
+    RightCollar,
     RightUpperArm,
     RightForearm,
     LeftThigh,
@@ -39,15 +42,17 @@ pub enum Segment {
 }
 
 impl Segment {
-    pub const COUNT: usize = 12;
+    pub const COUNT: usize = 14;
     /// Every segment, each after its parent.
     pub const ALL: [Segment; Segment::COUNT] = [
         Segment::Pelvis,
         Segment::Abdomen,
         Segment::Chest,
         Segment::Head,
+        Segment::LeftCollar,
         Segment::LeftUpperArm,
         Segment::LeftForearm,
+        Segment::RightCollar,
         Segment::RightUpperArm,
         Segment::RightForearm,
         Segment::LeftThigh,
@@ -66,7 +71,9 @@ impl Segment {
             Pelvis => None,
             Abdomen | LeftThigh | RightThigh => Some(Pelvis),
             Chest => Some(Abdomen),
-            Head | LeftUpperArm | RightUpperArm => Some(Chest),
+            Head | LeftCollar | RightCollar => Some(Chest),
+            LeftUpperArm => Some(LeftCollar),
+            RightUpperArm => Some(RightCollar),
             LeftForearm => Some(LeftUpperArm),
             RightForearm => Some(RightUpperArm),
             LeftShin => Some(LeftThigh),
@@ -125,9 +132,11 @@ pub struct Shape {
     /// The abdomen's joint (lower back), pelvis frame; the chest's, abdomen frame.
     pub abdomen: [f32; 3],
     pub chest: [f32; 3],
-    /// Chest frame: the neck (the head's joint), the torso joint, the left shoulder.
+    /// Chest frame: the neck (the head's joint), the torso joint, the left collarbone's
+    /// joint (at the breastbone); the left shoulder in the collarbone's frame.
     pub neck: [f32; 3],
     pub torso: [f32; 3],
+    pub collar: [f32; 3],
     pub shoulder: [f32; 3],
     /// Pelvis frame: the left hip.
     pub hip: [f32; 3],
@@ -165,23 +174,24 @@ impl Shape {
             chest: [0.000, 0.314, 0.006],
             neck: [0.000, 0.156, 0.016],
             torso: [0.000, 0.062, 0.006],
-            shoulder: [0.176, 0.072, 0.083],
+            collar: [0.027, 0.085, 0.077],
+            shoulder: [0.149, -0.014, 0.006],
             hip: [0.110, 0.000, 0.000],
             head: [0.000, 0.094, 0.101],
-            elbow: [0.000, -1.003, -0.000],
+            elbow: [0.000, -1.003, 0.000],
             hand: [0.027, -0.982, 0.005],
-            knee: [-0.000, -1.003, -0.000],
-            ankle: [-0.000, -0.999, 0.000],
+            knee: [0.000, -1.003, 0.000],
+            ankle: [0.000, -0.999, 0.000],
             head_tip: [0.000, 0.240, 0.015],
             finger_tip: [0.000, -1.400, 0.000],
             toe_tip: [0.000, -1.120, 0.160],
             capsules: vec![
                 cap(
                     Pelvis,
-                    [0.051, -0.020, 0.008],
+                    [0.050, -0.020, 0.008],
                     0.111,
-                    [0.049, 0.100, 0.007],
-                    0.109,
+                    [0.052, 0.100, 0.008],
+                    0.108,
                 ),
                 cap(
                     Abdomen,
@@ -192,24 +202,24 @@ impl Shape {
                 ),
                 cap(
                     Chest,
-                    [0.097, -0.050, 0.083],
-                    0.106,
-                    [0.064, 0.080, 0.026],
+                    [0.302, -0.050, 0.105],
                     0.085,
+                    [0.021, 0.080, 0.018],
+                    0.080,
                 ),
                 cap(
                     Head,
-                    [0.000, -0.040, -0.005],
-                    0.093,
+                    [0.000, -0.040, -0.004],
+                    0.092,
                     [0.000, 0.040, 0.016],
-                    0.032,
+                    0.033,
                 ),
                 cap(
                     Head,
-                    [0.000, 0.060, 0.071],
-                    0.071,
-                    [0.000, 0.150, 0.065],
-                    0.089,
+                    [0.000, 0.060, 0.072],
+                    0.070,
+                    [0.000, 0.150, 0.064],
+                    0.090,
                 ),
                 cap(
                     LeftUpperArm,
@@ -236,13 +246,13 @@ impl Shape {
                     LeftShin,
                     [0.000, 0.000, -0.029],
                     0.059,
-                    [0.000, -1.000, -0.000],
+                    [0.000, -1.000, 0.000],
                     0.030,
                 ),
                 cap(
                     LeftShin,
                     [0.000, -1.090, -0.007],
-                    0.037,
+                    0.038,
                     [0.000, -1.120, 0.148],
                     0.045,
                 ),
@@ -256,6 +266,8 @@ impl Segment {
     pub fn mirrored(self) -> Segment {
         use Segment::*;
         match self {
+            LeftCollar => RightCollar,
+            RightCollar => LeftCollar,
             LeftUpperArm => RightUpperArm,
             RightUpperArm => LeftUpperArm,
             LeftForearm => RightForearm,
@@ -312,7 +324,7 @@ impl Limbs {
             LeftForearm | RightForearm => self.forearm,
             LeftThigh | RightThigh => self.thigh,
             LeftShin | RightShin => self.shin,
-            Pelvis | Abdomen | Chest | Head => 1.0,
+            Pelvis | Abdomen | Chest | Head | LeftCollar | RightCollar => 1.0,
         }
     }
 }
@@ -335,6 +347,8 @@ impl BodyTemplate {
         origin[Abdomen.index()] = v(shape.abdomen);
         origin[Chest.index()] = v(shape.chest);
         origin[Head.index()] = v(shape.neck);
+        origin[LeftCollar.index()] = v(shape.collar);
+        origin[RightCollar.index()] = v(mirror(shape.collar));
         origin[LeftUpperArm.index()] = v(shape.shoulder);
         origin[RightUpperArm.index()] = v(mirror(shape.shoulder));
         for (s, p) in both(LeftUpperArm, shape.elbow) {
@@ -387,10 +401,10 @@ impl BodyTemplate {
             (Chest, p3(shape.neck)),
             (Chest, p3(shape.torso)),
             (Pelvis, o),
-            (Chest, p3(shape.shoulder)),
+            (LeftCollar, p3(shape.shoulder)),
             (LeftForearm, o),
             lhand,
-            (Chest, p3(mirror(shape.shoulder))),
+            (RightCollar, p3(mirror(shape.shoulder))),
             (RightForearm, o),
             rhand,
             (Pelvis, p3(shape.hip)),
@@ -431,7 +445,9 @@ pub fn segment_of(j: Joint) -> Segment {
     use Segment::*;
     match j {
         Joint::Head => Head,
-        Joint::Neck | Joint::Torso | Joint::LeftShoulder | Joint::RightShoulder => Chest,
+        Joint::Neck | Joint::Torso => Chest,
+        Joint::LeftShoulder => LeftCollar,
+        Joint::RightShoulder => RightCollar,
         Joint::Pelvis | Joint::LeftHip | Joint::RightHip => Pelvis,
         Joint::LeftElbow | Joint::LeftHand => LeftForearm,
         Joint::RightElbow | Joint::RightHand => RightForearm,

@@ -84,6 +84,8 @@ impl PairRatio {
 pub struct BodyCalibration {
     arms: PairRatio,
     legs: PairRatio,
+    /// The collarbones' rest turns against the chest (left, right), rotation vectors.
+    collars: [[f32; 3]; 2],
 }
 
 impl BodyCalibration {
@@ -123,16 +125,32 @@ impl BodyCalibration {
         self.legs.ratio()
     }
 
-    /// `base` with the bone lengths scaled to this person.
+    /// Moves the collarbones' rest turns a share `gain` of the way to the turns of the
+    /// frame's fit (rotation vectors against the chest, left and right): a person's
+    /// shoulders sit higher or lower than the template's, which the collarbone prior
+    /// would otherwise hold them to.
+    pub fn refine_collars(&mut self, fitted: [[f32; 3]; 2], gain: f32) {
+        for (rest, f) in self.collars.iter_mut().zip(fitted) {
+            if f.iter().all(|x| x.is_finite()) {
+                for (r, x) in rest.iter_mut().zip(f) {
+                    *r = (*r + gain * (x.clamp(-0.5, 0.5) - *r)).clamp(-0.5, 0.5);
+                }
+            }
+        }
+    }
+
+    /// `base` with the bone lengths scaled to this person and its collarbones' rest.
     pub fn apply(&self, base: &PoseConfig) -> PoseConfig {
         let (a, l) = (self.arm_ratio(), self.leg_ratio());
-        PoseConfig {
+        let mut cfg = PoseConfig {
             upper_arm: base.upper_arm * a,
             forearm: base.forearm * a,
             thigh: base.thigh * l,
             shin: base.shin * l,
             ..base.clone()
-        }
+        };
+        cfg.register.collar_rest = self.collars;
+        cfg
     }
 
     /// Forgets the person (another may step in).

@@ -838,6 +838,18 @@ impl PoseEstimator {
                         b.length_step[0].filter(|_| arms >= gate),
                         b.length_step[1].filter(|_| legs >= gate),
                     ]);
+                    if arms >= gate {
+                        let rel = |s: crate::body::Segment| {
+                            let r = b.pose.rotation[Chest.index()].inverse()
+                                * b.pose.rotation[s.index()];
+                            let v = r.scaled_axis();
+                            [v.x, v.y, v.z]
+                        };
+                        self.calib.refine_collars(
+                            [rel(LeftCollar), rel(RightCollar)],
+                            cfg.register.collar_gain,
+                        );
+                    }
                 }
                 let fitted = Posed::new(&tpl, &b.pose).skeleton(&tpl);
                 if fitted.is_finite() {

@@ -186,6 +186,13 @@ pub struct RegisterConfig {
     pub head_prior: f64,
     pub chest_prior: f64,
     pub abdomen_prior: f64,
+    /// The collarbones' raising and bringing forward of the shoulders, against their
+    /// rest turn (rotation vectors against the chest, left and right), which
+    /// [`crate::calibrate`] learns for the person.
+    pub collar_prior: f64,
+    pub collar_rest: [[f32; 3]; 2],
+    /// The share of the way to each well-seen frame's collarbone turns their rest moves.
+    pub collar_gain: f32,
     /// Elbows and knees: weight of a twist and of a sideways bend (per radian²), of
     /// bending the wrong way beyond `hinge_slack` radians.
     pub hinge_twist_prior: f64,
@@ -232,6 +239,9 @@ impl Default for RegisterConfig {
             head_prior: 1.0,
             chest_prior: 3.0,
             abdomen_prior: 3.0,
+            collar_prior: 3.0,
+            collar_rest: [[0.0; 3]; 2],
+            collar_gain: 0.02,
             hinge_twist_prior: 0.05,
             hinge_side_prior: 2.0,
             hinge_limit_prior: 5.0,
@@ -390,7 +400,8 @@ impl Accumulator {
             let g = Vector6::from_row_slice(&self.g[si].map(f64::from));
             // A: 6 × N, the twist of s from the unknowns, as (column, 6×3 block)s.
             let o = self.origin[si];
-            let mut cols = [(0usize, SMatrix::<f64, 6, 3>::zeros()); 6];
+            // The translation and one block a joint of the longest chain (pelvis to forearm).
+            let mut cols = [(0usize, SMatrix::<f64, 6, 3>::zeros()); 7];
             let mut n = 0;
             cols[n]
                 .1
@@ -498,6 +509,15 @@ fn add_joint_priors(h: &mut Normal, g: &mut Gradient, pose: &BodyPose, cfg: &Reg
         (Head, [cfg.head_prior; 3]),
         (Chest, [cfg.chest_prior; 3]),
         (Abdomen, [cfg.abdomen_prior; 3]),
+        // The collarbone points sideways (x): its turn about x is no motion at all.
+        (
+            LeftCollar,
+            [cfg.hinge_twist_prior, cfg.collar_prior, cfg.collar_prior],
+        ),
+        (
+            RightCollar,
+            [cfg.hinge_twist_prior, cfg.collar_prior, cfg.collar_prior],
+        ),
         hinge(LeftForearm),
         hinge(RightForearm),
         hinge(LeftShin),
@@ -506,7 +526,13 @@ fn add_joint_priors(h: &mut Normal, g: &mut Gradient, pose: &BodyPose, cfg: &Reg
     for (seg, w) in spine {
         let Some(parent) = seg.parent() else { continue };
         let rp = pose.rotation[parent.index()];
-        let phi = (rp.inverse() * pose.rotation[seg.index()]).scaled_axis();
+        let mut phi = (rp.inverse() * pose.rotation[seg.index()]).scaled_axis();
+        // The collarbones keep near the person's own rest, learned as they move.
+        match seg {
+            LeftCollar => phi -= Vector3::from(cfg.collar_rest[0]),
+            RightCollar => phi -= Vector3::from(cfg.collar_rest[1]),
+            _ => {}
+        }
         let rpm = rp.matrix().cast::<f64>();
         let o = 3 + 3 * seg.index();
         let mut add = |axis: usize, r: f32, w: f64| {
@@ -819,12 +845,14 @@ impl Registration {
             acc.add(tip.0, &x, &Vector3::y(), e.y, wt);
             acc.add(tip.0, &x, &Vector3::z(), e.z, wt);
         }
+        // A segment without a surface of its own (a collarbone) is seen as its parent.
         let mut seen = [0.0; Segment::COUNT];
-        for s in 0..Segment::COUNT {
-            seen[s] = if all_n[s] > 0 {
-                seen_n[s] as f32 / all_n[s] as f32
+        for s in Segment::ALL {
+            let i = s.index();
+            seen[i] = if all_n[i] > 0 {
+                seen_n[i] as f32 / all_n[i] as f32
             } else {
-                0.0
+                s.parent().map_or(0.0, |p| seen[p.index()])
             };
         }
         (acc, seen)
@@ -994,11 +1022,18 @@ mod tests {
         let cfg = RegisterConfig::default();
         let mut reg = Registration::default();
         reg.prepare(&frame, None, &cfg);
+        let posed = Posed::new(&t, &truth);
+        let tips = t.tips.map(|(s, local)| Some(posed.point(s, &local)));
         for starts in [[away, near], [near, away]] {
-            let fit = reg
-                .fit(&frame, &t, &starts, &[None; 5], &cfg)
-                .expect("starts");
+            let fit = reg.fit(&frame, &t, &starts, &tips, &cfg).expect("starts");
             let err = worst(&t, &fit.pose, &truth);
+            let (sa, sb) = (
+                Posed::new(&t, &fit.pose).skeleton(&t),
+                Posed::new(&t, &truth).skeleton(&t),
+            );
+            for j in Joint::ALL {
+                eprintln!("{j:?} {:.3}", (sa[j] - sb[j]).norm());
+            }
             assert!(err < 0.02, "worst joint {err} m off");
         }
     }
