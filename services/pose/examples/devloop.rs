@@ -127,11 +127,12 @@ fn main() {
                 .unwrap_or(0);
             writeln!(
                 f,
-                "{i} {:.2} {:.2} {} {}",
+                "{i} {:.2} {:.2} {} {} {:.3}",
                 fe.mean() * 100.0,
                 fe.max() * 100.0,
                 Joint::ALL[worst].name(),
-                u8::from(est.debug().raced)
+                u8::from(est.debug().raced),
+                est.debug().register_energy * 1e4
             )
             .unwrap();
         }

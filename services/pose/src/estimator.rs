@@ -70,6 +70,8 @@ pub struct Debug {
     /// Person points and passes over them the registration took.
     pub register_points: usize,
     pub register_passes: usize,
+    /// The registration's energy per data point.
+    pub register_energy: f32,
     /// Whether the geodesic estimate raced the tracked body this frame.
     pub raced: bool,
 }
@@ -362,6 +364,12 @@ impl PoseEstimator {
         let tracked = (!redetect).then(|| self.prev_body_torso(cfg)).flatten();
         let start = match (tracked, self.prev_torso.zip(self.prev_offset)) {
             (Some(pose), _) => TorsoStart::Known(pose),
+            // A redetection keeps the tracked torso's turn but starts it at the torso
+            // region's centre: a body that drifted off would otherwise take the seed's
+            // estimate with it (from scratch, front and back could swap).
+            (None, Some((pose, _))) if redetect && cfg.register.enabled => {
+                TorsoStart::Track(pose, Vector3::zeros())
+            }
             (None, Some((pose, offset))) => TorsoStart::Track(pose, offset),
             (None, None) => TorsoStart::Fresh,
         };
@@ -888,6 +896,7 @@ impl PoseEstimator {
                     registered = true;
                     self.debug.body = Some((b.pose, tpl));
                     self.debug.register_passes = b.passes;
+                    self.debug.register_energy = b.energy / self.reg.data_len().max(1) as f32;
                     self.debug.register_points = self.reg.data_len();
                 }
             }

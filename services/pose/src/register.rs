@@ -173,6 +173,8 @@ pub struct RegisterConfig {
     /// Weight of a silhouette or free-space residual against one data point's.
     pub silhouette_weight: f32,
     pub free_space_weight: f32,
+    /// Beyond this (metres) the silhouette and free-space terms pull linearly (Huber).
+    pub silhouette_scale: f32,
     /// How far the body's front may lie before the surface seen, metres.
     pub free_space_margin: f32,
     /// Weight of a limb tip's distance to its geodesic maximum, and its Cauchy scale.
@@ -232,6 +234,7 @@ impl Default for RegisterConfig {
             sigma: 0.03,
             silhouette_weight: 4.0,
             free_space_weight: 4.0,
+            silhouette_scale: 0.05,
             free_space_margin: 0.03,
             tip_weight: 10.0,
             tip_sigma: 0.1,
@@ -480,6 +483,20 @@ fn place(t: &BodyTemplate, posed: &Posed) -> Vec<Placed> {
 #[inline]
 fn cauchy(r: f32, s: f32) -> (f32, f32) {
     (cauchy_weight(r, s), cauchy_cost(r, s))
+}
+
+/// Huber's weight and cost at scale `s`: quadratic near, linear far. For the body
+/// outside the silhouette or before a seen surface, which is wrong however far it is
+/// (a data point far from the body may be something else; a limb in empty space is
+/// not), so its pull must not fade with distance.
+#[inline]
+fn huber(r: f32, s: f32) -> (f32, f32) {
+    let a = r.abs();
+    if a <= s {
+        (1.0, 0.5 * r * r)
+    } else {
+        (s / a, s * (a - 0.5 * s))
+    }
 }
 
 #[inline]
@@ -810,7 +827,7 @@ impl Registration {
                     if gap > cfg.free_space_margin {
                         // The camera sees past the body's front: the body is not there.
                         let res = cfg.free_space_margin - gap;
-                        let (wc, cost) = cauchy(res, 0.1);
+                        let (wc, cost) = huber(res, cfg.silhouette_scale);
                         acc.energy += (cfg.free_space_weight * cost) as f64;
                         acc.add(
                             c.segment,
@@ -825,7 +842,7 @@ impl Registration {
                 } else if let Some((qu, qv)) = self.nearest.get(u as usize, v as usize) {
                     let target = f.k.back_project(qu as f32, qv as f32, s.z);
                     let e = s - target;
-                    let (wc, cost) = cauchy(e.norm(), 0.1);
+                    let (wc, cost) = huber(e.norm(), cfg.silhouette_scale);
                     acc.energy += (cfg.silhouette_weight * cost) as f64;
                     let ws = cfg.silhouette_weight * wc;
                     acc.add(c.segment, &s, &Vector3::y(), e.y, ws);
