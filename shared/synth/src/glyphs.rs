@@ -78,7 +78,37 @@ pub const BUILT_IN: &str = "0123456789ABCDEFGHIJKLMNOPQRSTUVWXYZ";
 pub fn template(c: char) -> Option<Glyph> {
     let c = c.to_ascii_uppercase();
     let strokes: Vec<Vec<Point2<f32>>> = match c {
-        '0' => vec![arc(0.5, 0.5, 0.3, 0.5, -90.0, -450.0)],
+        // UNIPEN writers draw "0" and "O" alike on the whole (the same median width,
+        // start and turn, even within one writer): these two are the mean shapes of the
+        // held-out writers' samples that a writer-independent classifier reads as their
+        // own label (the "O" widened to their median width, 0.8 of the height, which
+        // averaging loops narrows). A "0" starts at the top's left shoulder, runs down
+        // the left, and closes across the top below its start…
+        '0' => vec![pl(&[
+            (0.31, 0.13),
+            (0.23, 0.23),
+            (0.17, 0.33),
+            (0.12, 0.44),
+            (0.08, 0.56),
+            (0.08, 0.68),
+            (0.10, 0.78),
+            (0.16, 0.85),
+            (0.25, 0.88),
+            (0.34, 0.86),
+            (0.43, 0.82),
+            (0.51, 0.76),
+            (0.58, 0.68),
+            (0.65, 0.58),
+            (0.68, 0.49),
+            (0.68, 0.41),
+            (0.64, 0.34),
+            (0.58, 0.29),
+            (0.49, 0.26),
+            (0.40, 0.24),
+            (0.31, 0.24),
+            (0.23, 0.25),
+            (0.20, 0.22),
+        ])],
         '1' => vec![pl(&[(0.3, 0.2), (0.55, 0.0), (0.55, 1.0)])],
         '2' => vec![cat(&[
             arc(0.5, 0.3, 0.35, 0.3, -160.0, 30.0),
@@ -93,9 +123,11 @@ pub fn template(c: char) -> Option<Glyph> {
             pl(&[(0.8, 0.0), (0.25, 0.0), (0.22, 0.45)]),
             arc(0.48, 0.68, 0.33, 0.32, -135.0, 150.0),
         ])],
+        // Down the left, then the bowl anticlockwise (left, bottom, right, top), as
+        // every UNIPEN writer closes it.
         '6' => vec![cat(&[
             pl(&[(0.75, 0.05), (0.45, 0.15), (0.25, 0.42)]),
-            arc(0.5, 0.72, 0.3, 0.27, 180.0, 540.0),
+            arc(0.5, 0.72, 0.3, 0.27, 180.0, -180.0),
         ])],
         '7' => vec![pl(&[(0.1, 0.0), (0.9, 0.0), (0.4, 1.0)])],
         '8' => vec![cat(&[
@@ -163,7 +195,32 @@ pub fn template(c: char) -> Option<Glyph> {
             (0.9, 1.0),
         ])],
         'N' => vec![pl(&[(0.2, 1.0), (0.2, 0.0), (0.8, 1.0), (0.8, 0.0)])],
-        'O' => vec![arc(0.5, 0.5, 0.45, 0.5, -90.0, -450.0)],
+        // …an "O" starts at the top, runs left along it and closes where it began.
+        'O' => vec![pl(&[
+            (0.53, 0.15),
+            (0.44, 0.11),
+            (0.34, 0.12),
+            (0.27, 0.16),
+            (0.23, 0.23),
+            (0.20, 0.32),
+            (0.20, 0.41),
+            (0.21, 0.52),
+            (0.26, 0.62),
+            (0.32, 0.72),
+            (0.41, 0.80),
+            (0.52, 0.85),
+            (0.60, 0.86),
+            (0.70, 0.84),
+            (0.76, 0.78),
+            (0.78, 0.71),
+            (0.80, 0.62),
+            (0.78, 0.52),
+            (0.76, 0.42),
+            (0.71, 0.32),
+            (0.67, 0.24),
+            (0.64, 0.18),
+            (0.64, 0.14),
+        ])],
         'P' => vec![cat(&[
             pl(&[(0.2, 1.0), (0.2, 0.0), (0.55, 0.0)]),
             arc(0.55, 0.25, 0.27, 0.25, -90.0, 90.0),

@@ -1,0 +1,469 @@
+//! Spotting gestures in a continuous hand trajectory: where each one starts and ends,
+//! and which it is, among ordinary movement.
+//!
+//! 1. Where a gesture can start or end ([`Segmenter`]): people slow down before and
+//!    after drawing, and often rest; so the hand's path is cut at the local minima of
+//!    its speed that lie well below the speed just before, and at rests. A gesture is
+//!    a stretch between two such breaks (corners inside a symbol are breaks too).
+//! 2. Which stretches are gestures: every stretch between breaks that is long and large
+//!    enough is a candidate, judged by three pieces of evidence — the model's classifier
+//!    (which symbol, how sure), Lee & Kim's threshold model ("An HMM-based threshold
+//!    model approach for gesture recognition", PAMI 1999: one left-right HMM per label
+//!    over the stretch's direction codes, against an ergodic non-gesture HMM made of all
+//!    the gesture HMMs' states, [`LeeKim`]), and the [`Verifier`], a network that weighs
+//!    those with the stretch's coarse shape, size, place and the hand's path just before
+//!    and after it, and tells a whole gesture from movement, part of a gesture or a
+//!    gesture with movement around it.
+//! 3. Overlapping accepted candidates compete (verifier × classifier); the winner is
+//!    published once nothing better has come for `hold_seconds` or the hand rests.
+
+mod segmenter;
+mod threshold;
+mod verifier;
+
+pub use segmenter::Segmenter;
+pub use threshold::{sample_codes, LeeKim, Quantizer, ThresholdModel, REST_CODE, STREAM_SYMBOLS};
+pub use verifier::{
+    context, stream_examples, Verifier, VerifierInput, CONTEXT_ARC, CONTEXT_POINTS, CONTEXT_SECONDS,
+};
+
+use crate::data::{Sample, Trajectory};
+use crate::hmm::{DiscreteHmm, HmmTrainConfig};
+use crate::model::{LabelledHmm, Model};
+use crate::tracker::{Hand, HandPoint, HandTracker, TrackerConfig};
+use airglyph_core::Skeleton;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// The HMMs over stream codes, stored in the model file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SpottingModel {
+    /// Chord step as a fraction of the gesture's larger side.
+    pub step: f64,
+    pub models: Vec<LabelledHmm>,
+    /// Judge of candidate segments: not a gesture, or a whole gesture of which label.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub verifier: Option<Verifier>,
+}
+
+/// Whether a segment's size (larger side, gesture-size units) can be a gesture's.
+fn size_ok(pts: &[[f32; 2]], cfg: &SpotterConfig) -> bool {
+    let (mut x0, mut y0, mut x1, mut y1) = (f32::MAX, f32::MAX, f32::MIN, f32::MIN);
+    for p in pts {
+        x0 = x0.min(p[0]);
+        y0 = y0.min(p[1]);
+        x1 = x1.max(p[0]);
+        y1 = y1.max(p[1]);
+    }
+    let size = (x1 - x0).max(y1 - y0);
+    size >= cfg.min_size && size <= cfg.max_size
+}
+
+impl SpottingModel {
+    pub fn validate(&self) -> Result<(), String> {
+        if !(self.step > 0.0 && self.step < 1.0) {
+            return Err(format!("spotting step {} is not in (0, 1)", self.step));
+        }
+        if let Some(v) = &self.verifier {
+            v.net
+                .validate()
+                .map_err(|e| format!("spotting verifier: {e}"))?;
+            if v.net.inputs() != v.dim() || v.net.outputs() != v.classes.len() + 1 {
+                return Err("spotting verifier has the wrong dimensions".into());
+            }
+        }
+        for m in &self.models {
+            m.hmm
+                .validate()
+                .map_err(|e| format!("spotting HMM of label {:?}: {e}", m.label))?;
+            if m.hmm.n_symbols() != STREAM_SYMBOLS {
+                return Err(format!(
+                    "spotting HMM of label {:?} has {} symbols, expected {STREAM_SYMBOLS}",
+                    m.label,
+                    m.hmm.n_symbols()
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Trains one banded HMM per label on the stream codes of the samples (each scaled
+    /// so that its larger side is 1), and the verifier, which uses `classifier` (a model
+    /// with the same labels; its spotting part is not used).
+    pub fn train(samples: &[Sample], classifier: &Model, step: f64, states: usize) -> Self {
+        let labels = &classifier.labels;
+        let cfg = HmmTrainConfig {
+            states,
+            symbols: STREAM_SYMBOLS,
+            band: 1,
+            iterations: 12,
+            emission_prior: 0.3,
+            transition_prior: 0.5,
+            floor: 1e-3,
+        };
+        let models = labels
+            .par_iter()
+            .map(|l| {
+                let seqs: Vec<Vec<usize>> = samples
+                    .iter()
+                    .filter(|s| &s.label == l)
+                    .map(|s| sample_codes(&s.trajectory(), step))
+                    .filter(|c| !c.is_empty())
+                    .collect();
+                LabelledHmm {
+                    label: l.clone(),
+                    hmm: DiscreteHmm::train(&seqs, &cfg),
+                }
+            })
+            .collect();
+        let mut model = Self {
+            step,
+            models,
+            verifier: None,
+        };
+        model.verifier = Some(Verifier::train(samples, classifier, &model, 7));
+        model
+    }
+}
+
+/// Run-time settings of the spotter.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SpotterConfig {
+    /// Expected size of a drawn gesture (its larger side) in shoulder widths.
+    pub gesture_size: f32,
+    /// A break is a local minimum of the hand's speed over this many frames each side…
+    pub min_window: usize,
+    /// …below this fraction of the fastest speed of the last `peak_seconds`.
+    pub break_ratio: f32,
+    pub peak_seconds: f64,
+    /// Below this speed (gesture sizes a second) the hand is at rest.
+    pub rest_speed: f32,
+    /// Shortest and longest gesture, seconds.
+    pub min_seconds: f64,
+    pub max_seconds: f64,
+    /// Smallest and largest gesture (larger side), in gesture sizes.
+    pub min_size: f32,
+    pub max_size: f32,
+    /// Lee & Kim as a hard test: the best gesture HMM must beat the threshold model
+    /// by this log-likelihood margin per code (None: the ratio is only evidence for
+    /// the verifier).
+    pub margin: Option<f64>,
+    /// Smallest classifier confidence to publish a gesture.
+    pub min_score: f64,
+    /// Smallest verifier probability that the segment is a whole gesture.
+    pub min_gesture_prob: f64,
+    /// How long after a candidate's end to wait for a longer, better one (seconds);
+    /// a rest of `rest_seconds` after it decides at once.
+    pub hold_seconds: f64,
+    pub rest_seconds: f64,
+    pub tracker: TrackerConfig,
+}
+
+impl Default for SpotterConfig {
+    fn default() -> Self {
+        Self {
+            gesture_size: 1.0,
+            min_window: 3,
+            break_ratio: 0.6,
+            peak_seconds: 0.5,
+            rest_speed: 0.15,
+            min_seconds: 0.3,
+            max_seconds: 4.0,
+            min_size: 0.3,
+            max_size: 2.5,
+            margin: None,
+            min_score: 0.5,
+            min_gesture_prob: 0.2,
+            hold_seconds: 1.5,
+            rest_seconds: 0.4,
+            tracker: TrackerConfig::default(),
+        }
+    }
+}
+
+/// A gesture found in the stream.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SpottedGesture {
+    pub label: String,
+    /// Index into the model's labels.
+    pub class: usize,
+    /// The classifier's confidence in [0, 1].
+    pub score: f64,
+    pub start_seq: u64,
+    pub end_seq: u64,
+    pub start_ns: u64,
+    pub end_ns: u64,
+    pub hand: Hand,
+}
+
+/// Why a spotter cannot be built.
+#[derive(Debug, thiserror::Error)]
+pub enum SpotError {
+    #[error("the model has no spotting HMMs (train it with `airglyph train`, which adds them)")]
+    NoSpottingModel,
+}
+
+/// A scored segment of the stream (point indices, inclusive).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Candidate {
+    pub start: usize,
+    pub end: usize,
+    /// Frame sequence numbers of `start` and `end`.
+    pub start_seq: u64,
+    pub end_seq: u64,
+    pub class: usize,
+    /// Classifier confidence.
+    pub score: f64,
+    /// Verifier probability of a whole gesture.
+    pub p_gesture: f64,
+    /// Lee & Kim: best gesture HMM minus threshold model, log-likelihood.
+    pub ratio: f64,
+    /// What candidates are ranked by.
+    pub rank: f64,
+    pub accepted: bool,
+}
+
+/// The streaming spotter: feed it skeletons (or body-frame points), get gestures.
+///
+/// The [`Segmenter`] cuts the hand's path where a gesture may start or end. Every
+/// stretch between two such breaks that is long and large enough to be a gesture is a
+/// candidate; it is accepted when the best gesture HMM beats the threshold model on its
+/// direction codes (Lee & Kim), the verifier network calls it a whole gesture, and the
+/// classifier is confident. Overlapping accepted candidates compete (the best verifier
+/// and classifier evidence wins); the winner is published once no better one has
+/// appeared for `hold_seconds`, or the hand rests.
+pub struct Spotter {
+    model: Model,
+    cfg: SpotterConfig,
+    tracker: HandTracker,
+    seg: Segmenter,
+    lee_kim: LeeKim,
+    /// Breaks (gesture ends) waiting for the context after them.
+    waiting: std::collections::VecDeque<usize>,
+    pending: Option<Candidate>,
+    /// Points before this may not start a gesture (the end of the last one published).
+    barrier: usize,
+    hand: Hand,
+    trace: Option<Vec<Candidate>>,
+}
+
+impl Spotter {
+    pub fn new(model: Model, cfg: SpotterConfig) -> Result<Spotter, SpotError> {
+        let sm = model.spotting.as_ref().ok_or(SpotError::NoSpottingModel)?;
+        let lee_kim = LeeKim::new(sm);
+        Ok(Spotter {
+            tracker: HandTracker::new(cfg.tracker),
+            seg: Segmenter::new(&cfg),
+            lee_kim,
+            model,
+            cfg,
+            waiting: Default::default(),
+            pending: None,
+            barrier: 0,
+            hand: Hand::Right,
+            trace: None,
+        })
+    }
+
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+
+    pub fn config(&self) -> &SpotterConfig {
+        &self.cfg
+    }
+
+    /// Records every candidate the spotter scores (for evaluation tools).
+    pub fn set_trace(&mut self, on: bool) {
+        self.trace = on.then(Vec::new);
+    }
+
+    /// The candidates scored since the last call.
+    pub fn take_trace(&mut self) -> Vec<Candidate> {
+        self.trace.as_mut().map(std::mem::take).unwrap_or_default()
+    }
+
+    /// Forgets the stream (e.g. the person was lost).
+    pub fn reset(&mut self) {
+        self.tracker.reset();
+        self.seg.reset();
+        self.waiting.clear();
+        self.pending = None;
+        self.barrier = self.seg.next_index();
+    }
+
+    /// The stream has ended: judges what waits for more context and publishes what is
+    /// pending (at most two gestures).
+    pub fn finish(&mut self) -> Vec<SpottedGesture> {
+        let mut out = Vec::new();
+        while let Some(e) = self.waiting.pop_front() {
+            out.extend(self.candidates_ending(e));
+        }
+        if let Some(p) = self.pending.take() {
+            out.extend(self.publish(p));
+        }
+        out
+    }
+
+    /// Feeds one skeleton (frame `seq`, capture time `time_ns`). Unusable skeletons
+    /// (no person, non-finite joints) are skipped.
+    pub fn push(&mut self, skeleton: &Skeleton, seq: u64, time_ns: u64) -> Option<SpottedGesture> {
+        let p = self.tracker.update(skeleton, time_ns)?;
+        self.push_point(p, seq, time_ns)
+    }
+
+    /// Feeds one body-frame hand point (shoulder widths, x right, y down).
+    pub fn push_point(&mut self, p: HandPoint, seq: u64, time_ns: u64) -> Option<SpottedGesture> {
+        if !(p.x.is_finite() && p.y.is_finite()) {
+            return None;
+        }
+        if p.hand != self.hand {
+            // The other hand's path does not continue this one.
+            let hand = p.hand;
+            self.reset();
+            self.hand = hand;
+        }
+        let inv = 1.0 / self.cfg.gesture_size.max(1e-3);
+        let now = self.seg.next_index();
+        self.waiting
+            .extend(self.seg.push([p.x * inv, p.y * inv], seq, time_ns));
+        let mut out = None;
+        // A break's candidates are judged once the context after it is in.
+        let after = (CONTEXT_SECONDS * self.seg.fps()).round() as usize;
+        while let Some(&e) = self.waiting.front() {
+            if e + after > now {
+                break;
+            }
+            self.waiting.pop_front();
+            if let Some(g) = self.candidates_ending(e) {
+                out = Some(g);
+            }
+        }
+        if out.is_none() {
+            out = self.decide(now);
+        }
+        self.trim();
+        out
+    }
+
+    /// Scores the segments from every earlier break to `e`, keeps the best accepted one
+    /// pending, and publishes a pending gesture that this one does not overlap.
+    fn candidates_ending(&mut self, e: usize) -> Option<SpottedGesture> {
+        let fps = self.seg.fps();
+        let min_len = (self.cfg.min_seconds * fps) as usize;
+        let max_len = (self.cfg.max_seconds * fps) as usize;
+        let mut best: Option<Candidate> = None;
+        for s in self.seg.starts(e, self.barrier, min_len, max_len) {
+            let Some(c) = self.score(s, e) else { continue };
+            if let Some(t) = self.trace.as_mut() {
+                t.push(c);
+            }
+            if c.accepted && best.is_none_or(|b| c.rank > b.rank) {
+                best = Some(c);
+            }
+        }
+        let c = best?;
+        let mut out = None;
+        match self.pending {
+            Some(p) if c.start >= p.end => {
+                out = self.publish(p);
+                self.pending = Some(c);
+            }
+            Some(p) if c.rank <= p.rank => {}
+            _ => self.pending = Some(c),
+        }
+        out
+    }
+
+    /// Scores the segment of points s..=e.
+    fn score(&mut self, s: usize, e: usize) -> Option<Candidate> {
+        let mut input = self.seg.input(s, e, self.seg.fps())?;
+        if !size_ok(&input.segment, &self.cfg) {
+            return None;
+        }
+        let sm = self.model.spotting.as_ref()?;
+        let t = Trajectory::from_points(input.segment.clone());
+        let post = self.model.posterior(&t);
+        input.posterior = post.iter().map(|&p| p as f32).collect();
+        let ratio = self.lee_kim.ratio(&input.segment);
+        input.ratio = ratio;
+        // Without a verifier (a model trained without one), every segment the
+        // classifier is sure of passes: boundaries then rest on the breaks alone.
+        let p_gesture = sm
+            .verifier
+            .as_ref()
+            .map_or(1.0, |v| 1.0 - v.probs(&input)[0]);
+        let class = (0..post.len())
+            .max_by(|&a, &b| post[a].total_cmp(&post[b]))
+            .unwrap_or(0);
+        let score = post.get(class).copied().unwrap_or(0.0);
+        let accepted = self.cfg.margin.is_none_or(|m| ratio > m)
+            && score >= self.cfg.min_score
+            && p_gesture >= self.cfg.min_gesture_prob;
+        Some(Candidate {
+            start: s,
+            end: e,
+            start_seq: self.seg.point(s)?.1,
+            end_seq: self.seg.point(e)?.1,
+            class,
+            score,
+            p_gesture,
+            ratio,
+            rank: p_gesture.max(1e-9).ln() + score.max(1e-9).ln(),
+            accepted,
+        })
+    }
+
+    /// Publishes the pending gesture when it has waited long enough.
+    fn decide(&mut self, now: usize) -> Option<SpottedGesture> {
+        let p = self.pending?;
+        let fps = self.seg.fps();
+        let hold = (self.cfg.hold_seconds * fps) as usize;
+        // A break within the hold still waits for its context: it may end a longer,
+        // better gesture.
+        if self.waiting.iter().any(|&e| e <= p.end + hold) {
+            return None;
+        }
+        // Breaks are judged this many points late.
+        let after = (CONTEXT_SECONDS * fps).round() as usize;
+        let judged = now.saturating_sub(after);
+        let rested = self
+            .seg
+            .resting_since()
+            .is_some_and(|r| r >= p.end && (now - r) as f64 / fps >= self.cfg.rest_seconds);
+        if judged >= p.end + hold || rested {
+            self.pending = None;
+            return self.publish(p);
+        }
+        None
+    }
+
+    fn publish(&mut self, c: Candidate) -> Option<SpottedGesture> {
+        self.barrier = self.barrier.max(c.end);
+        let (a, b) = (self.seg.point(c.start)?, self.seg.point(c.end)?);
+        Some(SpottedGesture {
+            label: self.model.labels[c.class].clone(),
+            class: c.class,
+            score: c.score * c.p_gesture,
+            start_seq: a.1,
+            end_seq: b.1,
+            start_ns: a.2,
+            end_ns: b.2,
+            hand: self.hand,
+        })
+    }
+
+    /// Forgets what no candidate can reach any more.
+    fn trim(&mut self) {
+        let fps = self.seg.fps();
+        let keep = ((self.cfg.max_seconds + self.cfg.hold_seconds + 1.0) * fps) as usize;
+        if self.seg.len() < 2 * keep.max(64) {
+            return;
+        }
+        let mut from = self.seg.next_index() - keep;
+        if let Some(p) = self.pending {
+            from = from.min(p.start);
+        }
+        self.seg.forget_before(from);
+    }
+}

@@ -1,0 +1,235 @@
+//! Lee & Kim's threshold model ("An HMM-based threshold model approach for gesture
+//! recognition", PAMI 1999): the stream's direction codes, one left-right HMM per label,
+//! and the ergodic non-gesture HMM made of all their states.
+
+use crate::data::Trajectory;
+use crate::hmm::LogHmm;
+use crate::model::LabelledHmm;
+
+use super::SpottingModel;
+
+/// Symbols of the spotting HMMs: direction codes 0..8 and a resting code 8 (which a
+/// segment between two breaks never holds: rests are breaks; it stays so that the
+/// models keep their shape).
+pub const STREAM_SYMBOLS: usize = 9;
+pub const REST_CODE: usize = 8;
+
+/// Quantizes a path into direction codes at equal chord steps.
+#[derive(Debug, Clone)]
+pub struct Quantizer {
+    pub step: f32,
+    anchor: Option<[f32; 2]>,
+}
+
+impl Quantizer {
+    pub fn new(step: f32) -> Self {
+        Self { step, anchor: None }
+    }
+
+    pub fn reset(&mut self) {
+        self.anchor = None;
+    }
+
+    /// Feeds a point; calls `emit(code)` for every full step the path made.
+    pub fn push(&mut self, p: [f32; 2], mut emit: impl FnMut(usize)) {
+        let Some(mut a) = self.anchor else {
+            self.anchor = Some(p);
+            return;
+        };
+        loop {
+            let (dx, dy) = (p[0] - a[0], p[1] - a[1]);
+            let d = (dx * dx + dy * dy).sqrt();
+            if d < self.step {
+                break;
+            }
+            emit(crate::bezier::direction_code(dx as f64, dy as f64, 8, 0.0));
+            a = [a[0] + dx / d * self.step, a[1] + dy / d * self.step];
+        }
+        self.anchor = Some(a);
+    }
+}
+
+/// The stream codes of a whole trajectory scaled so that its larger side is 1.
+pub fn sample_codes(t: &Trajectory, step: f64) -> Vec<usize> {
+    let (mut x0, mut y0, mut x1, mut y1) = (f32::MAX, f32::MAX, f32::MIN, f32::MIN);
+    for p in &t.points {
+        x0 = x0.min(p[0]);
+        y0 = y0.min(p[1]);
+        x1 = x1.max(p[0]);
+        y1 = y1.max(p[1]);
+    }
+    let s = (x1 - x0).max(y1 - y0).max(1e-6);
+    let mut q = Quantizer::new(step as f32);
+    let mut out = Vec::new();
+    for p in &t.points {
+        q.push([(p[0] - x0) / s, (p[1] - y0) / s], |c| out.push(c));
+    }
+    out
+}
+
+const NEG: f64 = f64::NEG_INFINITY;
+
+/// The threshold (non-gesture) model of Lee & Kim: every state of every gesture HMM,
+/// each keeping its emissions and self-transition and moving to any other state with
+/// equal probability. It explains any sequence of gesture pieces in any order, so a
+/// gesture model beats it only on a whole gesture of its own.
+#[derive(Debug, Clone)]
+pub struct ThresholdModel {
+    stay: Vec<f64>,
+    leave: Vec<f64>,
+    log_b: Vec<f64>,
+}
+
+impl ThresholdModel {
+    pub fn new(models: &[LabelledHmm]) -> Self {
+        let (mut stay, mut leave, mut log_b) = (Vec::new(), Vec::new(), Vec::new());
+        for lm in models {
+            let h = &lm.hmm;
+            for i in 0..h.n_states() {
+                let s = h.a[i][i].clamp(0.05, 0.95);
+                stay.push(s.ln());
+                leave.push((1.0 - s).ln());
+                log_b.extend(h.b[i].iter().map(|p| p.ln()));
+            }
+        }
+        Self { stay, leave, log_b }
+    }
+
+    /// Viterbi log-likelihood of the codes.
+    pub fn log_likelihood(&self, codes: &[usize]) -> f64 {
+        let n = self.stay.len();
+        let m = STREAM_SYMBOLS;
+        if n == 0 || codes.is_empty() {
+            return 0.0;
+        }
+        let ljump = -((n - 1).max(1) as f64).ln();
+        let mut d: Vec<f64> = (0..n)
+            .map(|j| -(n as f64).ln() + self.log_b[j * m + codes[0]])
+            .collect();
+        for &o in &codes[1..] {
+            // The best and second best "leave" scores give every state's best jump in
+            // O(n) (a state cannot jump to itself).
+            let (mut b1, mut b1i, mut b2) = (NEG, usize::MAX, NEG);
+            for i in 0..n {
+                let v = d[i] + self.leave[i];
+                if v > b1 {
+                    b2 = b1;
+                    b1 = v;
+                    b1i = i;
+                } else if v > b2 {
+                    b2 = v;
+                }
+            }
+            for j in 0..n {
+                let other = if j == b1i { b2 } else { b1 };
+                d[j] = (d[j] + self.stay[j]).max(other + ljump) + self.log_b[j * m + o];
+            }
+        }
+        d.iter().cloned().fold(NEG, f64::max)
+    }
+}
+
+/// Viterbi log-likelihood of the codes ending in the model's last state (a whole
+/// gesture, as Lee & Kim score it).
+fn whole_gesture_ll(h: &LogHmm, codes: &[usize], buf: &mut Vec<f64>) -> f64 {
+    let n = h.n;
+    if codes.is_empty() || n == 0 {
+        return NEG;
+    }
+    buf.clear();
+    buf.extend((0..n).map(|i| h.log_pi[i] + h.log_b[i * h.m + codes[0]]));
+    let mut next = vec![NEG; n];
+    for &o in &codes[1..] {
+        for j in 0..n {
+            // Left-right: only a state at most two behind can lead here.
+            let mut best = NEG;
+            for i in j.saturating_sub(2)..=j {
+                best = best.max(buf[i] + h.log_a[i * n + j]);
+            }
+            next[j] = best + h.log_b[j * h.m + o];
+        }
+        buf.copy_from_slice(&next);
+    }
+    buf[n - 1]
+}
+
+/// Lee & Kim's test of a segment: how much better the best gesture HMM explains its
+/// direction codes than the threshold model does.
+#[derive(Debug, Clone)]
+pub struct LeeKim {
+    step: f64,
+    threshold: ThresholdModel,
+    gestures: Vec<LogHmm>,
+}
+
+impl LeeKim {
+    pub fn new(sm: &SpottingModel) -> Self {
+        Self {
+            step: sm.step,
+            threshold: ThresholdModel::new(&sm.models),
+            gestures: sm.models.iter().map(|m| m.hmm.to_log()).collect(),
+        }
+    }
+
+    /// log P(codes | best gesture HMM, ending in its last state) − log P(codes |
+    /// threshold model), per code; −∞ when no gesture HMM can end there.
+    pub fn ratio(&self, points: &[[f32; 2]]) -> f64 {
+        let codes = sample_codes(&Trajectory::from_points(points.to_vec()), self.step);
+        if codes.is_empty() {
+            return NEG;
+        }
+        let thr = self.threshold.log_likelihood(&codes);
+        let mut buf = Vec::new();
+        let best = self
+            .gestures
+            .iter()
+            .map(|h| whole_gesture_ll(h, &codes, &mut buf))
+            .fold(NEG, f64::max);
+        (best - thr) / codes.len() as f64
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::hmm::{DiscreteHmm, HmmTrainConfig};
+
+    #[test]
+    fn the_threshold_model_beats_gesture_models_on_a_shuffled_gesture() {
+        let models = ["A", "B"]
+            .iter()
+            .enumerate()
+            .map(|(k, l)| {
+                // A: right then down; B: left then up (codes 0 and 2, 4 and 6).
+                let seqs = vec![
+                    if k == 0 {
+                        [vec![0; 6], vec![2; 6]].concat()
+                    } else {
+                        [vec![4; 6], vec![6; 6]].concat()
+                    };
+                    5
+                ];
+                let cfg = HmmTrainConfig {
+                    states: 4,
+                    symbols: STREAM_SYMBOLS,
+                    band: 1,
+                    iterations: 5,
+                    emission_prior: 0.1,
+                    transition_prior: 0.5,
+                    floor: 1e-3,
+                };
+                LabelledHmm {
+                    label: l.to_string(),
+                    hmm: DiscreteHmm::train(&seqs, &cfg),
+                }
+            })
+            .collect::<Vec<_>>();
+        let thr = ThresholdModel::new(&models);
+        let a = models[0].hmm.to_log();
+        let mut buf = Vec::new();
+        let whole = [vec![0; 6], vec![2; 6]].concat();
+        let shuffled = [vec![2; 6], vec![0; 6]].concat();
+        assert!(whole_gesture_ll(&a, &whole, &mut buf) > thr.log_likelihood(&whole));
+        assert!(whole_gesture_ll(&a, &shuffled, &mut buf) < thr.log_likelihood(&shuffled));
+    }
+}

@@ -1,0 +1,355 @@
+//! The verifier: a network that judges a stretch of the hand's path between two breaks
+//! — a whole gesture (and which), or movement, part of a gesture, a gesture with
+//! movement around it — from its coarse shape, size, place, the hand's path just before
+//! and after it, the classifier's posterior and Lee & Kim's ratio; and its training on
+//! the stretches the spotter itself cuts from synthetic streams.
+
+use super::threshold::LeeKim;
+use super::{size_ok, Segmenter, SpotterConfig, SpottingModel};
+use crate::data::{Sample, Trajectory};
+use crate::features::{feature_vector, FeatureConfig};
+use crate::mlp::{Mlp, MlpTrainConfig};
+use crate::model::Model;
+use crate::tracker::HandTracker;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// Points of context the verifier sees on each side of a segment…
+pub const CONTEXT_POINTS: usize = 6;
+/// …one every this much of the hand's path (gesture sizes)…
+pub const CONTEXT_ARC: f32 = 0.08;
+/// …looking at most this far in time: so the context tells the way the hand came and
+/// went, and whether it was still, however fast it moved.
+pub const CONTEXT_SECONDS: f64 = 0.4;
+
+/// The context of one end of a segment: walking from `points[at]` backwards (`back`)
+/// or forwards, the points where the path has covered `k · CONTEXT_ARC`, k = 1…, within
+/// `max_steps` points; beyond that, the last point looked at.
+pub fn context(
+    points: &[[f32; 2]],
+    at: usize,
+    back: bool,
+    max_steps: usize,
+) -> [[f32; 2]; CONTEXT_POINTS] {
+    let mut out = [points[at]; CONTEXT_POINTS];
+    let (mut i, mut walked, mut k) = (at, 0.0f32, 0usize);
+    for _ in 0..max_steps {
+        let j = if back {
+            match i.checked_sub(1) {
+                Some(j) => j,
+                None => break,
+            }
+        } else if i + 1 < points.len() {
+            i + 1
+        } else {
+            break;
+        };
+        let (a, b) = (points[i], points[j]);
+        walked += ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
+        i = j;
+        while k < CONTEXT_POINTS && walked >= (k + 1) as f32 * CONTEXT_ARC {
+            out[k] = points[i];
+            k += 1;
+        }
+        if k == CONTEXT_POINTS {
+            return out;
+        }
+    }
+    for o in &mut out[k..] {
+        *o = points[i];
+    }
+    out
+}
+
+/// What the verifier judges: a segment of the hand's path and where the hand was just
+/// before and just after it (nearest first), all in gesture-size units.
+#[derive(Debug, Clone, PartialEq)]
+pub struct VerifierInput {
+    pub segment: Vec<[f32; 2]>,
+    pub before: [[f32; 2]; CONTEXT_POINTS],
+    pub after: [[f32; 2]; CONTEXT_POINTS],
+    /// The classifier's posterior of the segment (model label order), when the
+    /// verifier uses it.
+    pub posterior: Vec<f32>,
+    /// Lee & Kim's ratio of the segment ([`LeeKim::ratio`]).
+    pub ratio: f64,
+}
+
+/// A network telling a whole gesture from movement around, before, after or inside
+/// one, and naming it. It sees the segment's coarse shape (the classifier has the fine
+/// one: a verifier that sees every detail learns its training writers by heart), its
+/// size and place in the body frame, the hand's path just before and after it (a
+/// stroke followed by more drawing is part of a larger gesture), the classifier's
+/// posterior and Lee & Kim's ratio; it answers "not a whole gesture" or "a whole
+/// gesture of label L".
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Verifier {
+    pub features: FeatureConfig,
+    /// Labels of outputs 1…; output 0 is "not a whole gesture".
+    pub classes: Vec<String>,
+    pub net: Mlp,
+}
+
+/// Training examples for every drawn gesture (each sample is drawn this many times, in
+/// different streams and a little distorted each time)…
+const VERIFIER_REPEATS: usize = 3;
+/// …and this many other segments for each whole gesture.
+const VERIFIER_NEGATIVES: f64 = 4.0;
+/// A segment is a whole gesture when it covers a drawn one this closely (intersection
+/// over union)…
+const WHOLE_IOU: f64 = 0.85;
+/// …and not one below this.
+const NOT_WHOLE_IOU: f64 = 0.6;
+
+impl Verifier {
+    /// Input size: segment features, log size, context, posterior, ratio, place.
+    pub fn dim(&self) -> usize {
+        self.features.dim() + 1 + 4 * CONTEXT_POINTS + self.classes.len() + 1 + 2
+    }
+
+    /// Probabilities: [not a gesture, label 0, label 1, …].
+    pub fn probs(&self, input: &VerifierInput) -> Vec<f64> {
+        let mut f = Vec::with_capacity(self.dim());
+        verifier_features(input, self, &mut f);
+        self.net
+            .log_probs(&f)
+            .iter()
+            .map(|&l| (l as f64).exp())
+            .collect()
+    }
+
+    /// Trains on the segments the spotter will judge: the samples are drawn in
+    /// synthetic continuous streams (see [`crate::stream`]), the [`Segmenter`] cuts
+    /// them, and every segment between two of its breaks is an example — a whole
+    /// gesture of its label when it covers a drawn gesture closely (intersection over
+    /// union ≥ 0.85), not a gesture when it does not (< 0.6: movement, part of a
+    /// gesture, a gesture with movement before or after it); those in between are
+    /// left out. `labels` are the model's labels.
+    pub fn train(
+        samples: &[Sample],
+        classifier: &Model,
+        spotting: &SpottingModel,
+        seed: u64,
+    ) -> Verifier {
+        let features = FeatureConfig {
+            pen_up: false,
+            points: 12,
+            grid: 3,
+        };
+        let mut shell = Verifier {
+            features,
+            classes: classifier.labels.clone(),
+            net: Mlp::default(),
+        };
+        let lee_kim = LeeKim::new(spotting);
+        let mut examples = stream_examples(samples, classifier, &lee_kim, seed);
+        let pos = examples.iter().filter(|e| e.1 > 0).count().max(1);
+        let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5EED);
+        let keep =
+            (VERIFIER_NEGATIVES * pos as f64 / (examples.len() - pos).max(1) as f64).min(1.0);
+        examples.retain(|e| e.1 > 0 || rng.gen_bool(keep));
+        let targets: Vec<usize> = examples.iter().map(|e| e.1).collect();
+        let cfg = MlpTrainConfig {
+            hidden: 128,
+            epochs: 20,
+            seed,
+            ..MlpTrainConfig::default()
+        };
+        let feats = |epoch: usize, i: usize| {
+            let input = &examples[i].0;
+            let mut f = Vec::new();
+            if epoch == usize::MAX {
+                verifier_features(input, &shell, &mut f);
+                return f;
+            }
+            // A little rotation and scale, fresh every epoch.
+            let mut rng = ChaCha8Rng::seed_from_u64(
+                seed ^ ((epoch as u64).wrapping_mul(0x1000_0001))
+                    ^ (i as u64).wrapping_mul(0x9E37_79B9),
+            );
+            let scale = rng.gen_range(0.85..1.15f32);
+            let rot = rng.gen_range(-0.1..0.1f32);
+            let (c, s) = (rot.cos(), rot.sin());
+            let tf = |p: &[f32; 2]| [scale * (c * p[0] - s * p[1]), scale * (s * p[0] + c * p[1])];
+            let moved = VerifierInput {
+                segment: input.segment.iter().map(tf).collect(),
+                before: input.before.map(|p| tf(&p)),
+                after: input.after.map(|p| tf(&p)),
+                posterior: input.posterior.clone(),
+                ratio: input.ratio,
+            };
+            verifier_features(&moved, &shell, &mut f);
+            f
+        };
+        let net = Mlp::train(
+            examples.len(),
+            shell.dim(),
+            &targets,
+            shell.classes.len() + 1,
+            &cfg,
+            feats,
+            |_| {},
+        );
+        shell.net = net;
+        shell
+    }
+}
+
+fn verifier_features(input: &VerifierInput, v: &Verifier, out: &mut Vec<f32>) {
+    let t = Trajectory::from_points(input.segment.clone());
+    feature_vector(&t, &v.features, out);
+    let (mut x0, mut y0, mut x1, mut y1) = (f32::MAX, f32::MAX, f32::MIN, f32::MIN);
+    for p in &input.segment {
+        x0 = x0.min(p[0]);
+        y0 = y0.min(p[1]);
+        x1 = x1.max(p[0]);
+        y1 = y1.max(p[1]);
+    }
+    let size = (x1 - x0).max(y1 - y0).max(1e-3);
+    out.push(size.ln());
+    // Context relative to the segment's box, in its sizes (clamped: far is far).
+    let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
+    for p in input.before.iter().chain(&input.after) {
+        out.push(((p[0] - cx) / size).clamp(-3.0, 3.0));
+        out.push(((p[1] - cy) / size).clamp(-3.0, 3.0));
+    }
+    // The classifier's posterior (zeros when it is not known).
+    out.extend((0..v.classes.len()).map(|c| input.posterior.get(c).copied().unwrap_or(0.0)));
+    // −∞ (no gesture HMM can end there) is as bad as a ratio gets.
+    out.push(if input.ratio.is_finite() {
+        input.ratio.clamp(-5.0, 5.0) as f32
+    } else {
+        -5.0
+    });
+    // Where in front of the body (people draw in front of the chest).
+    out.push(cx.clamp(-3.0, 3.0));
+    out.push(cy.clamp(-3.0, 3.0));
+}
+
+/// Candidate segments of synthetic streams of the samples, each with its verifier
+/// target: 0 = not a whole gesture, 1 + i = a whole gesture of the classifier's label i
+/// (see [`Verifier::train`]).
+pub fn stream_examples(
+    samples: &[Sample],
+    classifier: &Model,
+    lee_kim: &LeeKim,
+    seed: u64,
+) -> Vec<(VerifierInput, usize)> {
+    use crate::stream::{build_stream, StreamConfig};
+    use rand::seq::SliceRandom;
+    let labels = &classifier.labels;
+    let mut order: Vec<&Sample> = (0..VERIFIER_REPEATS).flat_map(|_| samples.iter()).collect();
+    order.shuffle(&mut ChaCha8Rng::seed_from_u64(seed));
+    let chunks: Vec<(usize, Vec<&Sample>)> =
+        order.chunks(20).map(|c| c.to_vec()).enumerate().collect();
+    let scfg = SpotterConfig::default();
+    chunks
+        .par_iter()
+        .flat_map_iter(|(k, chunk)| {
+            let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_mul(31).wrapping_add(*k as u64));
+            // Streams more varied than the evaluation's defaults, so that the verifier
+            // does not learn one way of moving: a third of the symbols drawn in one
+            // smooth movement, reaches up to twice as fast.
+            let cfg = StreamConfig {
+                speed: rng.gen_range(1.2..1.8),
+                pause_prob: rng.gen_range(0.1..0.6),
+                flow: rng.gen_range(0.3..0.7),
+                one_movement: 0.3,
+                reach_speed: (0.8, 4.0),
+                ..StreamConfig::default()
+            };
+            // Writer variation (as the classifier is trained with): every sample a
+            // little rotated, sheared and stretched.
+            let varied: Vec<Sample> = chunk
+                .iter()
+                .map(|s| {
+                    let t = crate::features::augment(&s.trajectory(), &mut rng, 1.0);
+                    Sample {
+                        label: s.label.clone(),
+                        subject: s.subject.clone(),
+                        strokes: vec![t.points],
+                    }
+                })
+                .collect();
+            let refs: Vec<&Sample> = varied.iter().collect();
+            let stream = build_stream(&refs, &cfg, &mut rng);
+            let mut tracker = HandTracker::new(scfg.tracker);
+            let mut seg = Segmenter::new(&scfg);
+            let dt = (1e9 / cfg.fps as f64) as u64;
+            let mut ends = Vec::new();
+            for i in 0..stream.points.len() {
+                let sk = stream.skeleton(i, cfg.distance);
+                let Some(p) = tracker.update(&sk, i as u64 * dt) else {
+                    continue;
+                };
+                ends.extend(seg.push([p.x, p.y], i as u64, i as u64 * dt));
+            }
+            let fps = cfg.fps as f64;
+            let min_len = (scfg.min_seconds * fps) as usize;
+            let max_len = (scfg.max_seconds * fps) as usize;
+            let mut out = Vec::new();
+            for e in ends {
+                for s in seg.starts(e, 0, min_len, max_len) {
+                    let Some(mut input) = seg.input(s, e, fps) else {
+                        continue;
+                    };
+                    if !size_ok(&input.segment, &scfg) {
+                        continue;
+                    }
+                    let t = Trajectory::from_points(input.segment.clone());
+                    input.posterior = classifier.posterior(&t).iter().map(|&p| p as f32).collect();
+                    input.ratio = lee_kim.ratio(&input.segment);
+                    let (Some(a), Some(b)) = (seg.point(s), seg.point(e)) else {
+                        continue;
+                    };
+                    // The drawn gesture it overlaps most (intersection over union).
+                    let best = stream
+                        .truth
+                        .iter()
+                        .map(|t| {
+                            let inter = b.1.min(t.end) as f64 - a.1.max(t.start) as f64;
+                            let union = b.1.max(t.end) as f64 - a.1.min(t.start) as f64;
+                            ((inter / union.max(1.0)).max(0.0), t)
+                        })
+                        .max_by(|x, y| x.0.total_cmp(&y.0));
+                    match best {
+                        Some((iou, t)) if iou >= WHOLE_IOU => {
+                            if let Some(c) = labels.iter().position(|l| *l == t.label) {
+                                out.push((input, 1 + c));
+                            }
+                        }
+                        Some((iou, _)) if iou >= NOT_WHOLE_IOU => {}
+                        _ => out.push((input, 0)),
+                    }
+                }
+            }
+            out
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn context_walks_the_path_by_arc_length_within_its_time() {
+        let pts: Vec<[f32; 2]> = (0..40).map(|i| [i as f32 * 0.02, 0.0]).collect();
+        // 0.02 a point: the k-th context point is the first at least 0.08 k back.
+        let c = context(&pts, 30, true, 100);
+        for (k, p) in c.iter().enumerate() {
+            let back = 0.6 - p[0];
+            let want = 0.08 * (k + 1) as f32;
+            assert!(back > want - 1e-4 && back < want + 0.02 + 1e-4, "{c:?}");
+        }
+        // Only 6 steps allowed: the path is not long enough, the rest is its end.
+        let c = context(&pts, 30, false, 6);
+        assert!(c[0][0] > 0.68 - 1e-4 && c[0][0] < 0.70 + 1e-4, "{c:?}");
+        assert!((c[5][0] - 0.72).abs() < 1e-4, "{c:?}");
+        // A resting hand: all at the same point.
+        let still = vec![[0.3f32, 0.4]; 20];
+        assert_eq!(context(&still, 10, true, 12), [[0.3, 0.4]; CONTEXT_POINTS]);
+    }
+}
