@@ -8,6 +8,7 @@ use airglyph_system_tests::{
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
 use std::path::{Path, PathBuf};
+use std::os::unix::process::CommandExt;
 use std::process::{Command, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
@@ -61,6 +62,19 @@ fn state(addr: SocketAddr) -> Option<serde_json::Value> {
     }
 }
 
+/// The viewer's state, asked again for up to 10 s: on a loaded machine (a Chromium that
+/// hung and was killed, a full CI run beside it) one request can time out.
+fn state_soon(addr: SocketAddr) -> serde_json::Value {
+    let deadline = Instant::now() + Duration::from_secs(10);
+    loop {
+        if let Some(s) = state(addr) {
+            return s;
+        }
+        assert!(Instant::now() < deadline, "the viewer gave no state for 10 s");
+        std::thread::sleep(Duration::from_millis(200));
+    }
+}
+
 /// Runs headless Chromium on `url` with `action` (e.g. --dump-dom) and returns its
 /// stdout. Chromium with --virtual-time-budget now and then never lets the budget run
 /// out (about one run in fifteen here, before writing anything; a known Chromium
@@ -94,8 +108,13 @@ fn try_chromium(bin: &Path, url: &str, action: &[&str], limit: Duration) -> Opti
         .arg(url)
         .stdout(Stdio::piped())
         .stderr(Stdio::null())
+        // Its own process group, so a hung run goes with all its renderers: one left
+        // behind keeps polling the viewer and takes its web threads.
+        .process_group(0)
         .spawn()
         .expect("start chromium");
+    // SAFETY: kill(2) on the process group of the child just started.
+    let kill_group = |pid: u32| unsafe { libc::kill(-(pid as i32), libc::SIGKILL) };
     let mut out = child.stdout.take().unwrap();
     let reader = std::thread::spawn(move || {
         let mut buf = Vec::new();
@@ -105,11 +124,12 @@ fn try_chromium(bin: &Path, url: &str, action: &[&str], limit: Duration) -> Opti
     let deadline = Instant::now() + limit;
     loop {
         if let Some(status) = child.try_wait().unwrap() {
+            kill_group(child.id());
             assert!(status.success(), "chromium {action:?}: {status}");
             return Some(reader.join().unwrap());
         }
         if Instant::now() > deadline {
-            let _ = child.kill();
+            kill_group(child.id());
             let _ = child.wait();
             return None;
         }
@@ -223,7 +243,7 @@ fn the_page_shows_the_skeleton_and_a_recognized_gesture() {
     // capture and pose keep their rate, and the viewer catches up when it runs again.
     let viewer = children_named(supervisor.id(), "airglyph-viewer");
     assert_eq!(viewer.len(), 1, "one viewer child: {viewer:?}");
-    let before = state(addr).unwrap()["viewer"]["frames_in"]
+    let before = state_soon(addr)["viewer"]["frames_in"]
         .as_u64()
         .unwrap();
     // SAFETY: kill(2) on the viewer child we just found.

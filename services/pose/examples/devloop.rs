@@ -87,6 +87,7 @@ fn main() {
     let mut dump = std::env::var("DUMP")
         .ok()
         .map(|f| std::io::BufWriter::new(std::fs::File::create(f).unwrap()));
+    let (mut vis_err, mut vis_n, mut vis_far) = ([0.0f64; 2], [0usize; 2], [0usize; 2]);
     let mut tdiff = [nalgebra::Vector3::<f32>::zeros(); Joint::COUNT];
     let mut tn = [0f32; Joint::COUNT];
     for i in 0..n {
@@ -120,6 +121,14 @@ fn main() {
             *a += b;
         }
         let fe = ev.add(&r, &truth.skeleton);
+        for j in 0..Joint::COUNT {
+            let k = usize::from(!truth.visible[j]);
+            vis_err[k] += fe.joint[j] as f64;
+            vis_n[k] += 1;
+            if fe.joint[j] >= 0.1 {
+                vis_far[k] += 1;
+            }
+        }
         if let Some(f) = &mut series {
             use std::io::Write;
             let worst = (0..Joint::COUNT)
@@ -185,6 +194,13 @@ fn main() {
         if let Some(d) = &out {
             if i % every == 0 {
                 let mut im = overlay::depth_image(&img.view(), Some(est.mask()));
+                // CLEAN=1: the truth and the estimate only (for pictures in the docs).
+                if std::env::var("CLEAN").is_ok() {
+                    overlay::skeleton(&mut im, &k, &truth.skeleton, overlay::GREEN);
+                    overlay::skeleton(&mut im, &k, &r.skeleton, overlay::RED);
+                    im.save(format!("{d}/{i:04}.png")).unwrap();
+                    continue;
+                }
                 overlay::skeleton(&mut im, &k, &truth.skeleton, overlay::GREEN);
                 if let Some(g) = &est.debug().geodesic {
                     overlay::skeleton(&mut im, &k, g, [255, 160, 0]);
@@ -288,6 +304,15 @@ fn main() {
             d.z
         );
     }
+    eprintln!(
+        "visible joints: {} mean {:.2} cm, {:.1} % beyond 10 cm; hidden: {} mean {:.2} cm, {:.1} % beyond",
+        vis_n[0],
+        vis_err[0] / vis_n[0].max(1) as f64 * 100.0,
+        vis_far[0] as f64 / vis_n[0].max(1) as f64 * 100.0,
+        vis_n[1],
+        vis_err[1] / vis_n[1].max(1) as f64 * 100.0,
+        vis_far[1] as f64 / vis_n[1].max(1) as f64 * 100.0
+    );
     let s = ev.summary();
     println!("{}", serde_json::to_string(&s).unwrap());
     {

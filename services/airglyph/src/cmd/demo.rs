@@ -1,6 +1,7 @@
 //! `airglyph demo`: the synthetic person draws symbols in front of a virtual camera; the
 //! full three-process pipeline names them.
 
+use std::io::Write;
 use crate::cmd::run::{run_with, Args as RunArgs};
 use airglyph_capture::synthetic::{scene, DEMO_SYMBOLS};
 use airglyph_capture::SourceSpec;
@@ -67,38 +68,39 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut recognized: Vec<Option<(String, f32)>> = vec![None; truth.len()];
     let mut stray = 0usize;
     let json = args.json;
-    let mut on_event = |e: &GestureEventMsg| {
+    let mut on_event = |e: &GestureEventMsg| -> std::io::Result<()> {
+        let mut out = std::io::stdout().lock();
         let label = e.label().unwrap_or("?").to_owned();
         match drawn_for(&truth, e.start_sequence, e.end_sequence) {
             Some(i) if recognized[i].is_none() => {
                 let drawn = &truth[i].label;
                 if json {
-                    println!(
-                        "{}",
-                        serde_json::json!({"drawn": drawn, "recognized": label, "score": e.score,
-                            "start_frame": e.start_sequence, "end_frame": e.end_sequence})
-                    );
+                    let line = serde_json::json!({"drawn": drawn, "recognized": label,
+                        "score": e.score, "start_frame": e.start_sequence,
+                        "end_frame": e.end_sequence});
+                    writeln!(out, "{line}")?;
                 } else {
                     let mark = if *drawn == label { "✓" } else { "✗" };
-                    println!(
+                    writeln!(
+                        out,
                         "drew {drawn}  →  recognized {label}  {mark}  (score {:.2})",
                         e.score
-                    );
+                    )?;
                 }
                 recognized[i] = Some((label, e.score));
             }
             _ => {
                 stray += 1;
                 if json {
-                    println!(
-                        "{}",
-                        serde_json::json!({"drawn": null, "recognized": label, "score": e.score})
-                    );
+                    let line = serde_json::json!({"drawn": null, "recognized": label,
+                        "score": e.score});
+                    writeln!(out, "{line}")?;
                 } else {
-                    println!("(spotted {label} while no symbol was drawn)");
+                    writeln!(out, "(spotted {label} while no symbol was drawn)")?;
                 }
             }
         }
+        Ok(())
     };
     let mut stage_args = Vec::new();
     if let Some(m) = &args.model {

@@ -18,8 +18,10 @@ pub mod train;
 
 use airglyph_ipc::GestureEventMsg;
 
-/// Prints a gesture event as a line of text or of JSON.
-pub fn print_gesture(event: &GestureEventMsg, json: bool) {
+/// Prints a gesture event as a line of text or of JSON. An error is stdout gone (a
+/// reader such as `head` that has what it wanted): the caller stops, it does not panic.
+pub fn print_gesture(event: &GestureEventMsg, json: bool) -> std::io::Result<()> {
+    use std::io::Write;
     let label = event.label().unwrap_or("?");
     let latency_ms = (event
         .chain
@@ -38,11 +40,15 @@ pub fn print_gesture(event: &GestureEventMsg, json: bool) {
             "hand": if event.hand == 0 { "left" } else { "right" },
             "latency_ms": latency_ms,
         });
-        println!("{line}");
+        writeln!(std::io::stdout(), "{line}")
     } else {
-        println!(
+        writeln!(
+            std::io::stdout(),
             "{label}  (score {:.2}, frames {}–{}, {:.1} ms after capture)",
-            event.score, event.start_sequence, event.end_sequence, latency_ms
-        );
+            event.score,
+            event.start_sequence,
+            event.end_sequence,
+            latency_ms
+        )
     }
 }

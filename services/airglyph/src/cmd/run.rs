@@ -279,15 +279,20 @@ struct Gestures<F> {
     on_event: F,
 }
 
-impl<F: FnMut(&GestureEventMsg)> Listener for Gestures<F> {
+impl<F: FnMut(&GestureEventMsg) -> std::io::Result<()>> Listener for Gestures<F> {
     fn poll(&mut self, timeout: Duration) -> anyhow::Result<Poll> {
-        Ok(match self.rx.recv(timeout)? {
-            Some(event) => {
-                (self.on_event)(&event.msg);
-                Poll::Handled
+        let Some(event) = self.rx.recv(timeout)? else {
+            return Ok(Poll::Idle);
+        };
+        match (self.on_event)(&event.msg) {
+            Ok(()) => Ok(Poll::Handled),
+            // Whoever read the events has gone: stop the stages cleanly, not by a panic.
+            Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => {
+                tracing::info!("the reader of the events has gone; stopping");
+                Ok(Poll::Done)
             }
-            None => Poll::Idle,
-        })
+            Err(e) => Err(anyhow::Error::new(e).context("cannot hand on a gesture event")),
+        }
     }
 }
 
@@ -302,7 +307,10 @@ impl Listener for Nothing {
 }
 
 /// [`run`], handing each gesture event to `on_event` instead of printing it.
-pub fn run_with(args: Args, on_event: impl FnMut(&GestureEventMsg)) -> anyhow::Result<()> {
+pub fn run_with(
+    args: Args,
+    on_event: impl FnMut(&GestureEventMsg) -> std::io::Result<()>,
+) -> anyhow::Result<()> {
     let gesture_stage = args.stages.iter().any(|s| s == Stage::Gesture.name());
     if gesture_stage {
         run_listening(args, |p| {
