@@ -52,7 +52,7 @@
 //!    within d_e (5 cm arms, 10 cm legs and head) of the geodesic path (Eq. 16.10); a
 //!    two-joint chain fitted by weighted closed-form rotations (ω_succ = 0.05) until the
 //!    error stops falling.
-//! 6. [`register`] (beyond the seed): an articulated body ([`body`]: twelve rigid
+//! 6. [`register`] (beyond the seed): an articulated body ([`body`]: fourteen rigid
 //!    segments carrying tapered capsules, the shape measured on the MakeHuman body) is
 //!    fitted to the person's points by Gauss–Newton — points on the nearest capsule,
 //!    the body's front inside the silhouette and never before a surface the camera
