@@ -5,7 +5,7 @@
 use crate::config::PoseConfig;
 use crate::dijkstra::Graph;
 use airglyph_core::Intrinsics;
-use nalgebra::Point3;
+use nalgebra::{Point3, Vector3};
 
 /// No neighbour in this slot / no node at this pixel.
 pub const NONE: u32 = u32::MAX;
@@ -25,6 +25,45 @@ const DIRS: [(i32, i32); 8] = [
 #[inline]
 fn mm(d: f32) -> u32 {
     ((d * 1000.0).round() as u32).max(1)
+}
+
+/// Consecutive samples of a component (neighbours in raster order, so near each other)
+/// and their bounding box: the closest-pair search skips a run whose box lies farther
+/// than the best pair so far.
+struct SampleBox {
+    range: std::ops::Range<usize>,
+    lo: Vector3<f32>,
+    hi: Vector3<f32>,
+}
+
+impl SampleBox {
+    const RUN: usize = 32;
+
+    fn cover(pos: &[Point3<f32>], samples: &[u32]) -> Vec<Self> {
+        (0..samples.len())
+            .step_by(Self::RUN)
+            .map(|start| {
+                let range = start..(start + Self::RUN).min(samples.len());
+                let (mut lo, mut hi) = (Vector3::repeat(f32::MAX), Vector3::repeat(f32::MIN));
+                for &q in &samples[range.clone()] {
+                    lo = lo.inf(&pos[q as usize].coords);
+                    hi = hi.sup(&pos[q as usize].coords);
+                }
+                Self { range, lo, hi }
+            })
+            .collect()
+    }
+
+    /// Whether every sample of the run is at least `d2` (squared) from `p`. The margin
+    /// covers rounding: a run is skipped only when no sample in it can beat `d2`, so
+    /// the search finds the very pair the exhaustive one does.
+    #[inline]
+    fn beyond(&self, p: &Point3<f32>, d2: f32) -> bool {
+        let gap = (self.lo - p.coords)
+            .sup(&(p.coords - self.hi))
+            .sup(&Vector3::zeros());
+        gap.norm_squared() > d2 * (1.0 + 1e-4)
+    }
 }
 
 /// The graph of one frame; buffers are reused.
@@ -287,14 +326,22 @@ impl GeoGraph {
         let samples: Vec<Vec<u32>> = members.iter().map(|m| sample(m, 1500)).collect();
         let probes: Vec<Vec<u32>> = members.iter().map(|m| sample(m, 40)).collect();
         let pos = &self.pos;
-        let closest = |c: usize, target: usize| -> (f32, u32, u32) {
-            let mut best = (f32::INFINITY, NONE, NONE);
+        let boxes: Vec<Vec<SampleBox>> = samples.iter().map(|s| SampleBox::cover(pos, s)).collect();
+        // The closest (probe of `c`, sample of `target`) pair nearer than `bound`
+        // (squared), the first in probe and sample order of equally near ones.
+        let closest = |c: usize, target: usize, bound: f32| -> (f32, u32, u32) {
+            let mut best = (bound, NONE, NONE);
             for &p in &probes[c] {
                 let pp = pos[p as usize];
-                for &q in &samples[target] {
-                    let d = (pos[q as usize] - pp).norm_squared();
-                    if d < best.0 {
-                        best = (d, p, q);
+                for b in &boxes[target] {
+                    if b.beyond(&pp, best.0) {
+                        continue;
+                    }
+                    for &q in &samples[target][b.range.clone()] {
+                        let d = (pos[q as usize] - pp).norm_squared();
+                        if d < best.0 {
+                            best = (d, p, q);
+                        }
                     }
                 }
             }
@@ -303,7 +350,7 @@ impl GeoGraph {
         let k = comps.len();
         let mut joined = vec![false; k];
         joined[0] = true;
-        let mut best: Vec<(f32, u32, u32)> = (0..k).map(|c| closest(c, 0)).collect();
+        let mut best: Vec<(f32, u32, u32)> = (0..k).map(|c| closest(c, 0, f32::INFINITY)).collect();
         for _ in 1..k {
             let Some(c) = (0..k)
                 .filter(|&c| !joined[c])
@@ -319,8 +366,8 @@ impl GeoGraph {
             self.joins.push((p, q, mm(d2.sqrt())));
             for c2 in 0..k {
                 if !joined[c2] {
-                    let cand = closest(c2, c);
-                    if cand.0 < best[c2].0 {
+                    let cand = closest(c2, c, best[c2].0);
+                    if cand.1 != NONE {
                         best[c2] = cand;
                     }
                 }
