@@ -201,3 +201,42 @@ fn a_stage_that_cannot_start_ends_the_pipeline_with_a_clear_message() {
     );
     assert!(p.shm_files().is_empty(), "left behind: {:?}", p.shm_files());
 }
+
+/// `airglyph run --json | head -1`: when whoever reads the events goes, the supervisor
+/// stops its stages and leaves nothing behind instead of dying on a broken pipe.
+#[test]
+fn the_supervisor_stops_cleanly_when_the_reader_of_its_events_goes() {
+    let _one = one_at_a_time();
+    let p = Isolated::new();
+    let mut supervisor = p
+        .command("airglyph")
+        .args(["run", "--source", "synthetic:draw:0123", "--loop", "--json"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut events = std::io::BufReader::new(supervisor.stdout.take().unwrap());
+    let mut first = String::new();
+    std::io::BufRead::read_line(&mut events, &mut first).unwrap();
+    assert!(
+        first.contains(r#""event":"gesture""#),
+        "a first event: {first}"
+    );
+    drop(events);
+    let deadline = Instant::now() + Duration::from_secs(60);
+    let status = loop {
+        if let Some(status) = supervisor.try_wait().unwrap() {
+            break status;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "the supervisor kept running with nobody reading its events"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    let mut err = String::new();
+    std::io::Read::read_to_string(&mut supervisor.stderr.take().unwrap(), &mut err).unwrap();
+    assert!(status.success(), "{status}: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(p.shm_files().is_empty(), "left behind: {:?}", p.shm_files());
+}
