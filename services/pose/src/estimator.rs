@@ -401,13 +401,20 @@ impl PoseEstimator {
         self.debug.bridges = self.graph.bridges.len();
         self.debug.joins = self.graph.joins.len();
         let mut centre = kp[6];
-        let root = self
-            .graph
-            .nearest_node(&k, &Point3::from(torso.t), 24)
-            .or_else(|| {
-                let a = self.graph.node_of_pixel[fit.core_pixel];
-                (a != NONE && self.graph.comp[a as usize] != NONE).then_some(a)
-            })?;
+        let root = match self.graph.nearest_node(&k, &Point3::from(torso.t), 24) {
+            Some(a) => a,
+            None => {
+                // A known torso came without the distance transform's core pixel: the
+                // rare frame whose torso lies off the graph pays for it here.
+                let core = fit.core_pixel.or_else(|| {
+                    let (p, m) = (&self.points, &self.mask);
+                    let init = self.torso.initial_pose(p, m, w, h, cfg, up_hint);
+                    init.map(|(_, core)| core)
+                })?;
+                let a = self.graph.node_of_pixel[core];
+                (a != NONE && self.graph.comp[a as usize] != NONE).then_some(a)?
+            }
+        };
         let t3 = Instant::now();
         self.times.graph = (t3 - t2).as_secs_f64();
 
@@ -605,12 +612,15 @@ impl PoseEstimator {
         // The registered torso may have slid along its axis, which closest points do
         // not pin; the next frame starts no farther from the torso region's centre
         // than a torso can be, or the slide would be carried on for good.
-        let mut offset = reg_pose.r.inverse() * (reg_pose.t - fit.pca.t);
-        let lim = cfg.max_torso_offset;
-        if lim > 0.0 {
-            offset.y = offset.y.clamp(-lim, lim);
+        // A known torso measured no region this frame: the last offset measured stands.
+        if let Some(pca) = fit.pca {
+            let mut offset = reg_pose.r.inverse() * (reg_pose.t - pca.t);
+            let lim = cfg.max_torso_offset;
+            if lim > 0.0 {
+                offset.y = offset.y.clamp(-lim, lim);
+            }
+            self.prev_offset = Some(offset);
         }
-        self.prev_offset = Some(offset);
 
         // The limbs' tips, and whether the seed's chains are needed this frame: the
         // geodesic estimate races the tracked body when detecting, when nothing is
@@ -801,8 +811,7 @@ impl PoseEstimator {
                 height: h,
                 k: &k,
             };
-            self.reg
-                .prepare(&frame, Some(self.torso.distance_transform()), &cfg.register);
+            self.reg.prepare(&frame, &cfg.register);
             let geodesic = race.then(|| BodyPose::from_skeleton(&tpl, &skel)).flatten();
             // Besides the tracked body and the geodesic one: the tracked body with every
             // limb whose tip strayed taken from the geodesic estimate (an arm dropped

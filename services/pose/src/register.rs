@@ -326,9 +326,10 @@ impl Placed {
 /// Normal equations of one step, per segment: the segment's motion is a twist (v, ω)
 /// about its own joint o, and a residual r along `dir` at point x of it changes by
 /// dirᵀ(v + ω × (x − o)). Sums are in f32 (lever arms are a limb long, not the
-/// camera's distance), over the full 6×6 outer product so they vectorise.
+/// camera's distance), over the upper triangle of the symmetric 6×6 outer product only
+/// (row by row, [`UPPER`] entries): the lower one is mirrored once, in `assemble`.
 struct Accumulator {
-    h: [[f32; 36]; Segment::COUNT],
+    h: [[f32; UPPER]; Segment::COUNT],
     g: [[f32; 6]; Segment::COUNT],
     /// The twists' origins: each segment's joint.
     origin: [Point3<f32>; Segment::COUNT],
@@ -355,7 +356,7 @@ impl Accumulator {
             }
         }
         Self {
-            h: [[0.0; 36]; Segment::COUNT],
+            h: [[0.0; UPPER]; Segment::COUNT],
             g: [[0.0; 6]; Segment::COUNT],
             origin: posed.joint,
             energy: 0.0,
@@ -371,10 +372,12 @@ impl Accumulator {
         let m = (x - self.origin[si]).cross(dir);
         let j = [dir.x, dir.y, dir.z, m.x, m.y, m.z];
         let h = &mut self.h[si];
+        let mut k = 0;
         for a in 0..6 {
             let wa = w * j[a];
-            for b in 0..6 {
-                h[a * 6 + b] += wa * j[b];
+            for &jb in &j[a..] {
+                h[k] += wa * jb;
+                k += 1;
             }
         }
         let wr = w * r;
@@ -399,7 +402,7 @@ impl Accumulator {
         let mut gg = Gradient::zeros();
         for s in Segment::ALL {
             let si = s.index();
-            let h = Local::from_row_slice(&self.h[si].map(f64::from));
+            let h = symmetric(&self.h[si]);
             let g = Vector6::from_row_slice(&self.g[si].map(f64::from));
             // A: 6 × N, the twist of s from the unknowns, as (column, 6×3 block)s.
             let o = self.origin[si];
@@ -437,13 +440,36 @@ impl Accumulator {
     }
 }
 
+/// Entries of a symmetric 6×6 matrix's upper triangle.
+const UPPER: usize = 21;
+
+/// The full matrix of an upper triangle stored row by row.
+fn symmetric(upper: &[f32; UPPER]) -> Local {
+    let mut m = Local::zeros();
+    let mut k = 0;
+    for a in 0..6 {
+        for b in a..6 {
+            let x = f64::from(upper[k]);
+            m[(a, b)] = x;
+            m[(b, a)] = x;
+            k += 1;
+        }
+    }
+    m
+}
+
 /// The capsule whose surface is nearest `p`: its index, the axis point and the signed
-/// distance. Capsules whose bounding sphere lies farther than the best so far are
-/// skipped without a square root.
+/// distance. The search starts from capsule `guess` (the point's last one, which is
+/// mostly still the nearest): capsules whose bounding sphere lies farther than the best
+/// so far are skipped without a square root, and from a near start most are.
 #[inline]
-fn nearest_capsule(placed: &[Placed], p: &Point3<f32>) -> (usize, Point3<f32>, f32) {
-    let mut best = (0usize, Point3::origin(), f32::INFINITY);
+fn nearest_capsule(placed: &[Placed], p: &Point3<f32>, guess: usize) -> (usize, Point3<f32>, f32) {
+    let (q, _, d) = placed[guess].nearest(p);
+    let mut best = (guess, q, if d.is_nan() { f32::INFINITY } else { d });
     for (ci, c) in placed.iter().enumerate() {
+        if ci == guess {
+            continue;
+        }
         let reach = best.2 + c.bound;
         if reach > 0.0 && (p - c.centre).norm_squared() > reach * reach {
             continue;
@@ -601,19 +627,51 @@ struct Pass {
     energy: bool,
 }
 
+/// Whether a person pixel lies within a radius of the silhouette's edge: of a pixel
+/// outside the mask, or of the image's border. The exact answer of the squared distance
+/// transform's `d² ≤ r²`, from the few pixels within the radius, for the registration's
+/// sampling alone (which needs no more than that of the transform).
+struct EdgeTest {
+    /// The offsets (du, dv) within the radius, nearest first (most edge pixels have a
+    /// neighbour outside).
+    offsets: Vec<(i32, i32)>,
+}
+
+impl EdgeTest {
+    fn new(radius: f32) -> Self {
+        let r2 = radius * radius;
+        let reach = radius.max(0.0).floor() as i32;
+        let mut offsets: Vec<(i32, i32)> = (-reach..=reach)
+            .flat_map(|dv| (-reach..=reach).map(move |du| (du, dv)))
+            .filter(|&(du, dv)| (du, dv) != (0, 0) && (du * du + dv * dv) as f32 <= r2)
+            .collect();
+        offsets.sort_by_key(|&(du, dv)| du * du + dv * dv);
+        Self { offsets }
+    }
+
+    /// `(u, v)` is a person pixel of `f`.
+    #[inline]
+    fn near(&self, f: &Frame, u: usize, v: usize) -> bool {
+        let (w, h) = (f.width as i32, f.height as i32);
+        self.offsets.iter().any(|&(du, dv)| {
+            let (x, y) = (u as i32 + du, v as i32 + dv);
+            x < 0 || y < 0 || x >= w || y >= h || !f.mask[(y * w + x) as usize]
+        })
+    }
+}
+
 /// Passes between two nearest-capsule searches.
 const REASSIGN: usize = 2;
 
 impl Registration {
     /// Samples the person's points and builds the nearest-person-pixel map.
     ///
-    /// Thin parts (limbs, within [`RegisterConfig::thin_px`] of the silhouette's edge by
-    /// the distance transform `thickness`, squared pixels) keep every pixel: a forearm
-    /// is two or three pixels wide. The thick interior is taken on a grid of
-    /// [`RegisterConfig::interior_stride`].
-    pub fn prepare(&mut self, f: &Frame, thickness: Option<&[f32]>, cfg: &RegisterConfig) {
+    /// Thin parts (limbs, within [`RegisterConfig::thin_px`] of the silhouette's edge)
+    /// keep every pixel: a forearm is two or three pixels wide. The thick interior is
+    /// taken on a grid of [`RegisterConfig::interior_stride`].
+    pub fn prepare(&mut self, f: &Frame, cfg: &RegisterConfig) {
         let s = cfg.interior_stride.max(1);
-        let thin2 = cfg.thin_px * cfg.thin_px;
+        let edge = EdgeTest::new(cfg.thin_px);
         self.data.clear();
         let (mut u0, mut v0, mut u1, mut v1) = (usize::MAX, usize::MAX, 0, 0);
         for v in 0..f.height {
@@ -628,8 +686,7 @@ impl Registration {
                 if !m || f.points[i].z <= 0.0 {
                     continue;
                 }
-                let thin = thickness.is_none_or(|t| t.get(i).is_none_or(|&d| d <= thin2));
-                if thin {
+                if s == 1 || edge.near(f, u, v) {
                     self.data.push((f.points[i], 1.0));
                 } else if u % s == 0 && v % s == 0 {
                     self.data.push((f.points[i], (s * s) as f32));
@@ -776,7 +833,7 @@ impl Registration {
         // Data: each point on its nearest capsule's surface.
         for ((p, area), ci) in self.data.iter().zip(assign.iter_mut()) {
             let (q, d) = if pass.search {
-                let (c, q, d) = nearest_capsule(&placed, p);
+                let (c, q, d) = nearest_capsule(&placed, p, usize::from(*ci));
                 *ci = c as u16;
                 (q, d)
             } else {
@@ -987,8 +1044,10 @@ mod tests {
         w0[Segment::RightForearm.index()] = turn(Vector3::x(), -0.2);
         w0[Segment::LeftShin.index()] = turn(Vector3::x(), 0.4);
         start.step(&Vector3::zeros(), &w0);
+        // Every pixel a data point, of weight one.
         let cfg = RegisterConfig {
             iterations: 30,
+            interior_stride: 1,
             ..RegisterConfig::default()
         };
         let before = worst(&t, &start, &truth);
@@ -997,7 +1056,7 @@ mod tests {
         let posed = Posed::new(&t, &truth);
         let tips = t.tips.map(|(s, local)| Some(posed.point(s, &local)));
         let mut reg = Registration::default();
-        reg.prepare(&frame, None, &cfg);
+        reg.prepare(&frame, &cfg);
         assert!(reg.data_len() > 1000);
         let fit = reg.fit(&frame, &t, &[start], &tips, &cfg).expect("a start");
         let after = worst(&t, &fit.pose, &truth);
@@ -1036,9 +1095,12 @@ mod tests {
             &Vector3::new(0.04, -0.03, 0.02),
             &[Vector3::zeros(); Segment::COUNT],
         );
-        let cfg = RegisterConfig::default();
+        let cfg = RegisterConfig {
+            interior_stride: 1,
+            ..RegisterConfig::default()
+        };
         let mut reg = Registration::default();
-        reg.prepare(&frame, None, &cfg);
+        reg.prepare(&frame, &cfg);
         let posed = Posed::new(&t, &truth);
         let tips = t.tips.map(|(s, local)| Some(posed.point(s, &local)));
         for starts in [[away, near], [near, away]] {

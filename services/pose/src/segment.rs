@@ -73,6 +73,10 @@ pub struct Segmenter {
     /// The samples' x, y and z.
     coords: [Vec<f32>; 3],
     contacts: Vec<(u32, u32)>,
+    /// Per image column, x / z of its pixels' rays.
+    ray_x: Vec<f32>,
+    /// Per blob label, whether it is the person's.
+    keep: Vec<bool>,
 }
 
 struct Blob {
@@ -111,20 +115,7 @@ impl Segmenter {
         points.resize(n, Point3::origin());
         mask.clear();
         mask.resize(n, false);
-        let px = depth.pixels();
-        let (near_mm, far_mm) = (cfg.near * 1000.0, cfg.far * 1000.0);
-        for (v, (row, out)) in px
-            .chunks_exact(w)
-            .zip(points.chunks_exact_mut(w))
-            .enumerate()
-        {
-            for (u, (&d, p)) in row.iter().zip(out).enumerate() {
-                let d = d as f32;
-                if d > 0.0 && d >= near_mm && d <= far_mm {
-                    *p = k.back_project(u as f32, v as f32, d * 1e-3);
-                }
-            }
-        }
+        self.back_project(depth, k, cfg, points);
         let floor = if cfg.remove_floor {
             self.find_floor(points, w, h, cfg, prev_floor)
         } else {
@@ -146,14 +137,14 @@ impl Segmenter {
         self.labels.clear();
         self.labels.resize(n, u32::MAX);
         let mut blobs: Vec<Blob> = Vec::new();
-        let f = 0.5 * (k.fx + k.fy);
+        let inv_f = 2.0 / (k.fx + k.fy);
         for start in 0..n {
             if points[start].z <= 0.0 || self.labels[start] != u32::MAX {
                 continue;
             }
             let label = blobs.len() as u32;
             let jump = (cfg.blob_jump_px, cfg.blob_jump_min);
-            blobs.push(self.fill(points, w, h, start, label, floor, f, jump));
+            blobs.push(self.fill(points, w, h, start, label, floor, inv_f, jump));
         }
 
         // The largest blob that could be a person.
@@ -208,8 +199,14 @@ impl Segmenter {
                     bbox.3.max(lb.3),
                 );
             }
+            // Labels are blob indices; u32::MAX (no blob) is out of the table.
+            self.keep.clear();
+            self.keep.resize(blobs.len(), false);
+            for &bi in limbs.iter().chain([&bi]) {
+                self.keep[blobs[bi].label as usize] = true;
+            }
             for (m, &l) in mask.iter_mut().zip(&self.labels) {
-                *m = l == b.label || limbs.iter().any(|&li| blobs[li].label == l);
+                *m = self.keep.get(l as usize).copied().unwrap_or(false);
             }
             seg.found = true;
             seg.pixels = pixels;
@@ -217,6 +214,36 @@ impl Segmenter {
             seg.bbox = bbox;
         }
         seg
+    }
+
+    /// `points` (of the image's size, zeroed) from `depth`, left zero where there is no
+    /// data or the depth is outside the band.
+    fn back_project(
+        &mut self,
+        depth: &DepthView,
+        k: &Intrinsics,
+        cfg: &PoseConfig,
+        points: &mut [Point3<f32>],
+    ) {
+        let w = depth.width() as usize;
+        // x / z and y / z per column and row: no division a pixel.
+        self.ray_x.clear();
+        self.ray_x.extend((0..w).map(|u| (u as f32 - k.cx) / k.fx));
+        let (near_mm, far_mm) = (cfg.near * 1000.0, cfg.far * 1000.0);
+        let rows = depth
+            .pixels()
+            .chunks_exact(w)
+            .zip(points.chunks_exact_mut(w));
+        for (v, (row, out)) in rows.enumerate() {
+            let ray_y = (v as f32 - k.cy) / k.fy;
+            for ((&d, p), &ray_x) in row.iter().zip(out).zip(&self.ray_x) {
+                let d = d as f32;
+                if d > 0.0 && d >= near_mm && d <= far_mm {
+                    let z = d * 1e-3;
+                    *p = Point3::new(ray_x * z, ray_y * z, z);
+                }
+            }
+        }
     }
 
     /// The blob of pixel `start`: its pixels labelled `label` by a depth-first flood
@@ -234,7 +261,7 @@ impl Segmenter {
         start: usize,
         label: u32,
         floor: Option<Plane>,
-        f: f32,
+        inv_f: f32,
         jump: (f32, f32),
     ) -> Blob {
         let mut b = Blob {
@@ -260,7 +287,7 @@ impl Segmenter {
             let i = v as usize * w + u as usize;
             let p = points[i];
             b.pixels += 1;
-            let fp = p.z / f;
+            let fp = p.z * inv_f;
             b.area += fp * fp;
             // Moments on a sparse subset are enough for the shape test.
             if (u + v) % 3 == 0 {

@@ -19,10 +19,11 @@ pub struct TorsoFit {
     pub matches: usize,
     /// Whether the registration was started from PCA rather than the last frame.
     pub reinitialised: bool,
-    /// The pixel of the largest distance-transform value (inside the torso).
-    pub core_pixel: usize,
-    /// The PCA frame of the torso region this frame.
-    pub pca: TorsoPose,
+    /// The pixel of the largest distance-transform value (inside the torso), and the
+    /// PCA frame of the torso region this frame; `None` when the pose was known, which
+    /// needs neither.
+    pub core_pixel: Option<usize>,
+    pub pca: Option<TorsoPose>,
 }
 
 /// A point cloud of the torso model with outward normals, in the torso frame.
@@ -75,8 +76,8 @@ pub enum TorsoStart {
     /// The last frame's pose and its offset from the torso region's centre: registration
     /// from there, redone from PCA when the residual is too large.
     Track(TorsoPose, Vector3<f32>),
-    /// The pose is known (the last frame's registered body): the distance transform and
-    /// the torso region's PCA only.
+    /// The pose is known (the last frame's registered body): nothing to do (the
+    /// distance transform and the torso region's PCA, most of the step, are skipped).
     Known(TorsoPose),
 }
 
@@ -119,11 +120,6 @@ impl TorsoEstimator {
             sub_mask: Vec::new(),
             sub_dist: Vec::new(),
         }
-    }
-
-    /// The squared distance transform of the last `fit` (pixels²).
-    pub fn distance_transform(&self) -> &[f32] {
-        &self.dist
     }
 
     /// Distance transform of the mask, then the torso region (pixels with at least
@@ -355,7 +351,6 @@ impl TorsoEstimator {
         start: TorsoStart,
         up_hint: Vector3<f32>,
     ) -> Option<TorsoFit> {
-        let (init, core) = self.initial_pose(points, mask, width, height, cfg, up_hint)?;
         let prev = match start {
             TorsoStart::Known(pose) => {
                 return Some(TorsoFit {
@@ -363,13 +358,14 @@ impl TorsoEstimator {
                     residual: 0.0,
                     matches: 0,
                     reinitialised: false,
-                    core_pixel: core,
-                    pca: init,
+                    core_pixel: None,
+                    pca: None,
                 })
             }
             TorsoStart::Track(pose, offset) => Some((pose, offset)),
             TorsoStart::Fresh => None,
         };
+        let (init, core) = self.initial_pose(points, mask, width, height, cfg, up_hint)?;
         // Tracking starts from the last orientation, placed where the torso region is now
         // (the last frame's offset from its centre kept): a cylinder cannot be pulled
         // along its axis by closest points, so a jump would otherwise be lost.
@@ -385,8 +381,8 @@ impl TorsoEstimator {
                     residual,
                     matches,
                     reinitialised: false,
-                    core_pixel: core,
-                    pca: init,
+                    core_pixel: Some(core),
+                    pca: Some(init),
                 });
             }
         }
@@ -410,8 +406,8 @@ impl TorsoEstimator {
             residual,
             matches,
             reinitialised: true,
-            core_pixel: core,
-            pca: init,
+            core_pixel: Some(core),
+            pca: Some(init),
         })
     }
 }
