@@ -72,6 +72,9 @@
 //!   body gives the torso frame for the geodesic steps); every tenth frame, and whenever
 //!   a geodesic maximum lies 25 cm from the tracked body's limb tip, the seed's steps
 //!   run in full and race the tracked body, so a lost limb is found again.
+//! * Upper arms and thighs are pulled weakly towards hanging down
+//!   ([`config::RegisterConfig::limb_rest_prior`]): a limb behind the body has no data to hold
+//!   it, and "hanging" is a better guess for it than wherever a wrong start left it.
 //! * Joint confidence is the share of the joint's segment that the camera sees where
 //!   the fitted body puts it (a hand whose fingertips are seen: 0.9 at least).
 //! * Frames wider than [`PoseConfig::work_width`] (320) are reduced by an integer factor,
