@@ -7,8 +7,8 @@ use airglyph_system_tests::{
 };
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
-use std::path::{Path, PathBuf};
 use std::os::unix::process::CommandExt;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
@@ -70,7 +70,10 @@ fn state_soon(addr: SocketAddr) -> serde_json::Value {
         if let Some(s) = state(addr) {
             return s;
         }
-        assert!(Instant::now() < deadline, "the viewer gave no state for 10 s");
+        assert!(
+            Instant::now() < deadline,
+            "the viewer gave no state for 10 s"
+        );
         std::thread::sleep(Duration::from_millis(200));
     }
 }
@@ -243,9 +246,7 @@ fn the_page_shows_the_skeleton_and_a_recognized_gesture() {
     // capture and pose keep their rate, and the viewer catches up when it runs again.
     let viewer = children_named(supervisor.id(), "airglyph-viewer");
     assert_eq!(viewer.len(), 1, "one viewer child: {viewer:?}");
-    let before = state_soon(addr)["viewer"]["frames_in"]
-        .as_u64()
-        .unwrap();
+    let before = state_soon(addr)["viewer"]["frames_in"].as_u64().unwrap();
     // SAFETY: kill(2) on the viewer child we just found.
     unsafe { libc::kill(viewer[0] as i32, libc::SIGSTOP) };
     std::thread::sleep(Duration::from_secs(2));

@@ -1,13 +1,13 @@
 //! `airglyph demo`: the synthetic person draws symbols in front of a virtual camera; the
 //! full three-process pipeline names them.
 
-use std::io::Write;
 use crate::cmd::run::{run_with, Args as RunArgs};
 use airglyph_capture::synthetic::{scene, DEMO_SYMBOLS};
 use airglyph_capture::SourceSpec;
 use airglyph_ipc::GestureEventMsg;
 use airglyph_synth::{GestureTruth, Synthesizer};
 use anyhow::Context;
+use std::io::Write;
 
 /// A synthetic person draws symbols; the full pipeline names them (no camera needed).
 ///
