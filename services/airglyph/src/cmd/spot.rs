@@ -2,6 +2,7 @@
 
 use crate::cmd::demo::drawn_for;
 use airglyph_core::recording::Recording;
+use airglyph_core::{Joint, Skeleton};
 use airglyph_gesture::{Model, Spotter};
 use airglyph_pose::{PoseConfig, PoseEstimator};
 use airglyph_synth::GestureTruth;
@@ -17,8 +18,12 @@ pub struct Args {
     /// Recording directory.
     dir: PathBuf,
     /// Use the recording's joints.csv instead of estimating the pose.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "poses")]
     truth: bool,
+    /// Use skeletons estimated before (the output of `airglyph pose DIR --json`, one
+    /// frame a line) instead of estimating the pose again.
+    #[arg(long, value_name = "FILE")]
+    poses: Option<PathBuf>,
     /// The gesture model (default: the shipped 36-symbol model).
     #[arg(long)]
     model: Option<PathBuf>,
@@ -58,6 +63,39 @@ fn read_gestures_csv(path: &Path) -> anyhow::Result<Vec<GestureTruth>> {
             start_frame: f[1].trim().parse().map_err(|_| bad())?,
             end_frame: f[2].trim().parse().map_err(|_| bad())?,
         });
+    }
+    Ok(out)
+}
+
+/// The skeletons of `airglyph pose DIR --json` (None where no person was found).
+fn read_poses(path: &Path) -> anyhow::Result<Vec<Option<Skeleton>>> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("{}", path.display()))?;
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let bad = |what: &str| anyhow::anyhow!("{}:{}: {what}", path.display(), i + 1);
+        let v: serde_json::Value = serde_json::from_str(line).map_err(|e| bad(&e.to_string()))?;
+        let frame = v["frame"].as_u64().ok_or_else(|| bad("no frame"))? as usize;
+        if frame != out.len() {
+            return Err(bad("frames out of order"));
+        }
+        if !v["person_found"].as_bool().unwrap_or(false) {
+            out.push(None);
+            continue;
+        }
+        let mut joints = [nalgebra::Point3::origin(); Joint::COUNT];
+        let mut confidence = [0.0f32; Joint::COUNT];
+        for j in Joint::ALL {
+            let p = v["joints"][j.name()]
+                .as_array()
+                .filter(|a| a.len() == 3)
+                .ok_or_else(|| bad(&format!("no joint {}", j.name())))?;
+            let c = |k: usize| p[k].as_f64().unwrap_or(f64::NAN) as f32;
+            joints[j.index()] = nalgebra::Point3::new(c(0), c(1), c(2));
+            confidence[j.index()] = v["confidence"][j.name()].as_f64().unwrap_or(0.0) as f32;
+        }
+        let mut s = Skeleton::new(joints);
+        s.confidence = confidence;
+        out.push(Some(s));
     }
     Ok(out)
 }
@@ -105,8 +143,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut tracker = airglyph_gesture::HandTracker::new(scfg.tracker);
     let mut hand: Vec<Option<[f32; 2]>> = Vec::new();
     let mut found = Vec::new();
+    let poses = args.poses.as_deref().map(read_poses).transpose()?;
     for i in 0..rec.len() {
-        let skeleton = if args.truth {
+        let skeleton = if let Some(p) = &poses {
+            p.get(i).copied().flatten()
+        } else if args.truth {
             rec.joints(i).copied()
         } else {
             rec.read_frame_into(i, &mut px)?;
