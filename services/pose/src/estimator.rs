@@ -113,6 +113,8 @@ pub struct PoseEstimator {
     /// The last frame's registered body, and frames since the torso was last
     /// registered on its own.
     prev_body: Option<BodyPose>,
+    /// How hidden its limbs were ([`crate::register::hidden_limbs`]).
+    prev_hidden: [f32; crate::body::Segment::COUNT],
     frames_tracked: usize,
     /// The person's limb lengths, learned as they move; kept when the person is lost
     /// for a moment.
@@ -150,6 +152,7 @@ impl PoseEstimator {
             limbs: [None; 5],
             reg: Registration::default(),
             prev_body: None,
+            prev_hidden: [0.0; crate::body::Segment::COUNT],
             frames_tracked: 0,
             calib: BodyCalibration::default(),
             smooth: Vec::new(),
@@ -189,6 +192,7 @@ impl PoseEstimator {
         self.prev_centroid = None;
         self.limbs = [None; 5];
         self.prev_body = None;
+        self.prev_hidden = [0.0; crate::body::Segment::COUNT];
         self.frames_tracked = 0;
     }
 
@@ -836,7 +840,14 @@ impl PoseEstimator {
                 .into_iter()
                 .flatten()
                 .collect();
-            let best = self.reg.fit(&frame, &tpl, &starts, &tips, &cfg.register);
+            let best = self.reg.fit(
+                &frame,
+                &tpl,
+                &starts,
+                &tips,
+                &self.prev_hidden,
+                &cfg.register,
+            );
             if race {
                 self.debug.geodesic = Some(skel);
             }
@@ -902,6 +913,7 @@ impl PoseEstimator {
                         }
                     }
                     self.prev_body = Some(b.pose);
+                    self.prev_hidden = crate::register::hidden_limbs(&b.seen);
                     registered = true;
                     self.debug.body = Some((b.pose, tpl));
                     self.debug.register_passes = b.passes;

@@ -73,11 +73,11 @@
 //!   a geodesic maximum lies 25 cm from the tracked body's limb tip, the seed's steps
 //!   run in full and race the tracked body, so a lost limb is found again.
 //! * Optionally ([`config::RegisterConfig::limb_rest_prior`], off by default), upper
-//!   arms and thighs are pulled weakly towards hanging down: a limb behind the body has
-//!   no data to hold it, and "hanging" is a better guess for it than wherever a wrong
-//!   start left it. At 0.1 it brings CMU 01_01 / 01_03 with sensor noise from 95.0 /
-//!   92.4 % of joints within 10 cm to 96.8 / 95.6 %, but it also pulls on an arm raised
-//!   to draw, and the demo falls from 33 symbols of 36 to 29.
+//!   arms and thighs the camera did not see last frame are pulled weakly towards
+//!   hanging down: a limb behind the body has no data to hold it, and "hanging" is a
+//!   better guess for it than wherever a wrong start left it. At 0.3 it brings CMU
+//!   01_01 / 01_03 with sensor noise from 94.9 / 93.3 % of joints within 10 cm to
+//!   96.8 / 95.5 %, but the demo names 32 symbols of 36 instead of 33.
 //! * Joint confidence is the share of the joint's segment that the camera sees where
 //!   the fitted body puts it (a hand whose fingertips are seen: 0.9 at least).
 //! * Frames wider than [`PoseConfig::work_width`] (320) are reduced by an integer factor,
