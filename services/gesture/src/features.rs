@@ -16,7 +16,8 @@ pub struct Resampled {
     pub aspect: f32,
 }
 
-fn bbox(points: &[Point]) -> (f32, f32, f32, f32) {
+/// The bounding box (x0, y0, x1, y1) of 2D points.
+pub(crate) fn bbox<'a>(points: impl IntoIterator<Item = &'a Point>) -> (f32, f32, f32, f32) {
     let (mut x0, mut y0, mut x1, mut y1) = (f32::MAX, f32::MAX, f32::MIN, f32::MIN);
     for p in points {
         x0 = x0.min(p[0]);

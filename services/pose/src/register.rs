@@ -567,7 +567,7 @@ fn add_joint_priors(
     // (segment, weight per axis of φ, bending limit on φ.x: (sign, allowed))
     let hinge = |seg| (seg, [0.0, cfg.hinge_twist_prior, cfg.hinge_side_prior]);
     let rest = |seg: Segment| (seg, [cfg.limb_rest_prior * hidden[seg.index()] as f64; 3]);
-    let spine = [
+    let priors = [
         (Head, [cfg.head_prior; 3]),
         (Chest, [cfg.chest_prior; 3]),
         (Abdomen, [cfg.abdomen_prior; 3]),
@@ -589,7 +589,7 @@ fn add_joint_priors(
         hinge(LeftShin),
         hinge(RightShin),
     ];
-    for (seg, w) in spine {
+    for (seg, w) in priors {
         let Some(parent) = seg.parent() else { continue };
         let rp = pose.rotation[parent.index()];
         let mut phi = (rp.inverse() * pose.rotation[seg.index()]).scaled_axis();
@@ -1048,6 +1048,24 @@ mod tests {
         }
     }
 
+    /// The MakeHuman template at the default limb lengths, seen by a 320×240 camera.
+    fn scene() -> (BodyTemplate, Intrinsics) {
+        let cfg = PoseConfig::default();
+        let t =
+            BodyTemplate::from_shape(&Shape::makehuman(), &crate::body::Limbs::from_config(&cfg));
+        (t, Intrinsics::default().scaled_to(320, 240))
+    }
+
+    fn frame_of<'a>(points: &'a [Point3<f32>], mask: &'a [bool], k: &'a Intrinsics) -> Frame<'a> {
+        Frame {
+            points,
+            mask,
+            width: k.width as usize,
+            height: k.height as usize,
+            k,
+        }
+    }
+
     /// Nothing hidden last frame.
     const SEEN: [f32; Segment::COUNT] = [0.0; Segment::COUNT];
 
@@ -1062,10 +1080,7 @@ mod tests {
 
     #[test]
     fn registration_finds_the_pose_a_body_was_drawn_at() {
-        let cfg = PoseConfig::default();
-        let t =
-            BodyTemplate::from_shape(&Shape::makehuman(), &crate::body::Limbs::from_config(&cfg));
-        let k = Intrinsics::default().scaled_to(320, 240);
+        let (t, k) = scene();
         // The truth: turned 20° to its left, the right arm raised forward, the left
         // knee bent.
         let mut truth = facing(Point3::new(0.05, 0.1, 2.6));
@@ -1077,13 +1092,7 @@ mod tests {
         w[Segment::LeftShin.index()] = turn(Vector3::x(), 0.6);
         truth.step(&Vector3::zeros(), &w);
         let (points, mask) = render(&t, &truth, &k);
-        let frame = Frame {
-            points: &points,
-            mask: &mask,
-            width: 320,
-            height: 240,
-            k: &k,
-        };
+        let frame = frame_of(&points, &mask, &k);
         // The start: where a person moving fast was a frame before: 6 cm off, turned
         // 8° less, the arm 11° and 17° lower, the knee straighter.
         let mut start = facing(Point3::new(0.1, 0.13, 2.62));
@@ -1125,19 +1134,10 @@ mod tests {
 
     #[test]
     fn the_better_start_wins_the_race() {
-        let cfg = PoseConfig::default();
-        let t =
-            BodyTemplate::from_shape(&Shape::makehuman(), &crate::body::Limbs::from_config(&cfg));
-        let k = Intrinsics::default().scaled_to(320, 240);
+        let (t, k) = scene();
         let truth = facing(Point3::new(0.0, 0.1, 2.6));
         let (points, mask) = render(&t, &truth, &k);
-        let frame = Frame {
-            points: &points,
-            mask: &mask,
-            width: 320,
-            height: 240,
-            k: &k,
-        };
+        let frame = frame_of(&points, &mask, &k);
         // A start turned half round (back to the camera) cannot reach the truth in a
         // few steps; one a little off can.
         let mut away = truth;

@@ -48,13 +48,7 @@ pub struct SpottingModel {
 
 /// Whether a segment's size (larger side, gesture-size units) can be a gesture's.
 fn size_ok(pts: &[[f32; 2]], cfg: &SpotterConfig) -> bool {
-    let (mut x0, mut y0, mut x1, mut y1) = (f32::MAX, f32::MAX, f32::MIN, f32::MIN);
-    for p in pts {
-        x0 = x0.min(p[0]);
-        y0 = y0.min(p[1]);
-        x1 = x1.max(p[0]);
-        y1 = y1.max(p[1]);
-    }
+    let (x0, y0, x1, y1) = crate::features::bbox(pts);
     let size = (x1 - x0).max(y1 - y0);
     size >= cfg.min_size && size <= cfg.max_size
 }

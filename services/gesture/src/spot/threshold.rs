@@ -51,13 +51,7 @@ impl Quantizer {
 
 /// The stream codes of a whole trajectory scaled so that its larger side is 1.
 pub fn sample_codes(t: &Trajectory, step: f64) -> Vec<usize> {
-    let (mut x0, mut y0, mut x1, mut y1) = (f32::MAX, f32::MAX, f32::MIN, f32::MIN);
-    for p in &t.points {
-        x0 = x0.min(p[0]);
-        y0 = y0.min(p[1]);
-        x1 = x1.max(p[0]);
-        y1 = y1.max(p[1]);
-    }
+    let (x0, y0, x1, y1) = crate::features::bbox(&t.points);
     let s = (x1 - x0).max(y1 - y0).max(1e-6);
     let mut q = Quantizer::new(step as f32);
     let mut out = Vec::new();

@@ -200,13 +200,7 @@ impl Verifier {
 fn verifier_features(input: &VerifierInput, v: &Verifier, out: &mut Vec<f32>) {
     let t = Trajectory::from_points(input.segment.clone());
     feature_vector(&t, &v.features, out);
-    let (mut x0, mut y0, mut x1, mut y1) = (f32::MAX, f32::MAX, f32::MIN, f32::MIN);
-    for p in &input.segment {
-        x0 = x0.min(p[0]);
-        y0 = y0.min(p[1]);
-        x1 = x1.max(p[0]);
-        y1 = y1.max(p[1]);
-    }
+    let (x0, y0, x1, y1) = crate::features::bbox(&input.segment);
     let size = (x1 - x0).max(y1 - y0).max(1e-3);
     out.push(size.ln());
     // Context relative to the segment's box, in its sizes (clamped: far is far).
