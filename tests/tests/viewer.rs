@@ -78,19 +78,23 @@ fn state_soon(addr: SocketAddr) -> serde_json::Value {
     }
 }
 
+/// Runs a hung Chromium gets. Hangs come in streaks (three in a row were seen once on
+/// an idle machine, none in the four full runs before), so three were not enough.
+const ATTEMPTS: usize = 6;
+
 /// Runs headless Chromium on `url` with `action` (e.g. --dump-dom) and returns its
 /// stdout. Chromium with --virtual-time-budget now and then never lets the budget run
 /// out (about one run in fifteen here, before writing anything; a known Chromium
 /// behaviour): a run that takes more than 20 s (they take about 5) is killed and tried
-/// again, up to three times.
+/// again, up to [`ATTEMPTS`] times.
 fn run_chromium(bin: &Path, url: &str, action: &[&str]) -> Vec<u8> {
-    for attempt in 1..=3 {
+    for attempt in 1..=ATTEMPTS {
         if let Some(out) = try_chromium(bin, url, action, Duration::from_secs(20)) {
             return out;
         }
         println!("chromium {action:?} hung (attempt {attempt}); trying again");
     }
-    panic!("chromium {action:?} hung three times");
+    panic!("chromium {action:?} hung {ATTEMPTS} times");
 }
 
 fn try_chromium(bin: &Path, url: &str, action: &[&str], limit: Duration) -> Option<Vec<u8>> {
