@@ -16,14 +16,14 @@ use std::time::{Duration, Instant};
 /// The viewer's colours for a joint it is sure of (see airglyph-viewer's render.rs).
 const JOINT: [u8; 3] = [255, 0, 255];
 
-/// Debian's chromium (scripts/setup installs it), or AIRGLYPH_CHROMIUM.
-fn chromium() -> Option<PathBuf> {
-    if let Some(p) = std::env::var_os("AIRGLYPH_CHROMIUM") {
+/// A program on PATH (`names` in order), or the path in `env`.
+fn program(env: &str, names: &[&str]) -> Option<PathBuf> {
+    if let Some(p) = std::env::var_os(env) {
         return Some(PathBuf::from(p));
     }
     let path = std::env::var_os("PATH")?;
     std::env::split_paths(&path)
-        .flat_map(|d| ["chromium", "chromium-browser"].map(|n| d.join(n)))
+        .flat_map(|d| names.iter().map(move |n| d.join(n)))
         .find(|p| p.exists())
 }
 
@@ -32,27 +32,60 @@ fn free_addr() -> SocketAddr {
     l.local_addr().unwrap()
 }
 
-/// A plain HTTP/1.1 GET: status and body.
-fn get(addr: SocketAddr, path: &str) -> std::io::Result<(u16, Vec<u8>)> {
+/// A plain HTTP/1.1 request: status and body.
+fn request(
+    addr: SocketAddr,
+    method: &str,
+    path: &str,
+    body: Option<&str>,
+    timeout: Duration,
+) -> std::io::Result<(u16, Vec<u8>)> {
     let mut s = TcpStream::connect_timeout(&addr, Duration::from_secs(2))?;
-    s.set_read_timeout(Some(Duration::from_secs(5)))?;
+    s.set_read_timeout(Some(timeout))?;
+    let body = body.unwrap_or("");
     write!(
         s,
-        "GET {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n"
+        "{method} {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\
+         Content-Type: application/json\r\nContent-Length: {}\r\n\r\n{body}",
+        body.len()
     )?;
-    let mut raw = Vec::new();
-    s.read_to_end(&mut raw)?;
-    let split = raw
-        .windows(4)
-        .position(|w| w == b"\r\n\r\n")
-        .ok_or_else(|| std::io::Error::other("no end of headers"))?;
-    let head = String::from_utf8_lossy(&raw[..split]);
+    // Read the head, then the body by its Content-Length: ChromeDriver keeps the
+    // connection open whatever the request says.
+    let mut reader = BufReader::new(s);
+    let mut head = Vec::new();
+    loop {
+        let mut line = String::new();
+        if reader.read_line(&mut line)? == 0 || line == "\r\n" {
+            break;
+        }
+        head.push(line);
+    }
     let status = head
-        .split_whitespace()
-        .nth(1)
+        .first()
+        .and_then(|l| l.split_whitespace().nth(1))
         .and_then(|c| c.parse().ok())
-        .ok_or_else(|| std::io::Error::other(format!("bad status line: {head}")))?;
-    Ok((status, raw[split + 4..].to_vec()))
+        .ok_or_else(|| std::io::Error::other(format!("bad status line: {head:?}")))?;
+    let length = head.iter().find_map(|l| {
+        let (name, value) = l.split_once(':')?;
+        name.eq_ignore_ascii_case("content-length")
+            .then(|| value.trim().parse::<usize>().ok())
+            .flatten()
+    });
+    let mut body = Vec::new();
+    match length {
+        Some(n) => {
+            body.resize(n, 0);
+            reader.read_exact(&mut body)?;
+        }
+        None => {
+            reader.read_to_end(&mut body)?;
+        }
+    }
+    Ok((status, body))
+}
+
+fn get(addr: SocketAddr, path: &str) -> std::io::Result<(u16, Vec<u8>)> {
+    request(addr, "GET", path, None, Duration::from_secs(5))
 }
 
 fn state(addr: SocketAddr) -> Option<serde_json::Value> {
@@ -78,69 +111,118 @@ fn state_soon(addr: SocketAddr) -> serde_json::Value {
     }
 }
 
-/// Runs a hung Chromium gets. Hangs come in streaks (three in a row were seen once on
-/// an idle machine, none in the four full runs before), so three were not enough.
-const ATTEMPTS: usize = 6;
-
-/// Runs headless Chromium on `url` with `action` (e.g. --dump-dom) and returns its
-/// stdout. Chromium with --virtual-time-budget now and then never lets the budget run
-/// out (about one run in fifteen here, before writing anything; a known Chromium
-/// behaviour): a run that takes more than 20 s (they take about 5) is killed and tried
-/// again, up to [`ATTEMPTS`] times.
-fn run_chromium(bin: &Path, url: &str, action: &[&str]) -> Vec<u8> {
-    for attempt in 1..=ATTEMPTS {
-        if let Some(out) = try_chromium(bin, url, action, Duration::from_secs(20)) {
-            return out;
-        }
-        println!("chromium {action:?} hung (attempt {attempt}); trying again");
-    }
-    panic!("chromium {action:?} hung {ATTEMPTS} times");
+/// Headless Chromium driven by ChromeDriver (W3C WebDriver over HTTP), in real time.
+///
+/// Chromium's own `--dump-dom` / `--screenshot` need `--virtual-time-budget` to let the
+/// page's script run first, and virtual time stands still while a request is pending:
+/// with the page's endless polling of the viewer, about one run in fifteen never ended.
+/// Through WebDriver the test reads the live page when it is ready instead.
+struct Browser {
+    driver: std::process::Child,
+    addr: SocketAddr,
+    session: String,
+    _profile: tempfile::TempDir,
 }
 
-fn try_chromium(bin: &Path, url: &str, action: &[&str], limit: Duration) -> Option<Vec<u8>> {
-    let profile = tempfile::tempdir().unwrap();
-    let mut child = Command::new(bin)
-        .args([
-            "--headless",
-            "--no-sandbox",
-            "--disable-gpu",
-            "--hide-scrollbars",
-            "--no-first-run",
-            "--window-size=1200,700",
-            // The page pulls pictures and state for this long (it never stops by itself).
-            "--virtual-time-budget=3000",
-        ])
-        .arg(format!("--user-data-dir={}", profile.path().display()))
-        .args(action)
-        .arg(url)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        // Its own process group, so a hung run goes with all its renderers: one left
-        // behind keeps polling the viewer and takes its web threads.
-        .process_group(0)
-        .spawn()
-        .expect("start chromium");
-    // SAFETY: kill(2) on the process group of the child just started.
-    let kill_group = |pid: u32| unsafe { libc::kill(-(pid as i32), libc::SIGKILL) };
-    let mut out = child.stdout.take().unwrap();
-    let reader = std::thread::spawn(move || {
-        let mut buf = Vec::new();
-        let _ = out.read_to_end(&mut buf);
-        buf
-    });
-    let deadline = Instant::now() + limit;
-    loop {
-        if let Some(status) = child.try_wait().unwrap() {
-            kill_group(child.id());
-            assert!(status.success(), "chromium {action:?}: {status}");
-            return Some(reader.join().unwrap());
+impl Browser {
+    fn start(chromium: &Path, chromedriver: &Path) -> Browser {
+        let addr = free_addr();
+        let driver = Command::new(chromedriver)
+            .arg(format!("--port={}", addr.port()))
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            // Its own process group, so that Chromium and its renderers go with it.
+            .process_group(0)
+            .spawn()
+            .expect("start chromedriver");
+        let profile = tempfile::tempdir().unwrap();
+        let mut browser = Browser {
+            driver,
+            addr,
+            session: String::new(),
+            _profile: profile,
+        };
+        let deadline = Instant::now() + Duration::from_secs(20);
+        while !matches!(get(addr, "/status"), Ok((200, _))) {
+            assert!(Instant::now() < deadline, "chromedriver did not start");
+            std::thread::sleep(Duration::from_millis(100));
         }
-        if Instant::now() > deadline {
-            kill_group(child.id());
-            let _ = child.wait();
-            return None;
+        let capabilities = serde_json::json!({"capabilities": {"alwaysMatch": {
+            "goog:chromeOptions": {
+                "binary": chromium,
+                "args": [
+                    "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
+                    "--no-first-run", "--window-size=1200,700",
+                    format!("--user-data-dir={}", browser._profile.path().display()),
+                ],
+            },
+            "timeouts": {"pageLoad": 20_000},
+        }}});
+        let reply = browser.call("POST", "/session", Some(capabilities));
+        browser.session = reply["sessionId"].as_str().expect("a session").to_owned();
+        browser
+    }
+
+    /// One WebDriver command; its `value`.
+    fn call(&self, method: &str, path: &str, body: Option<serde_json::Value>) -> serde_json::Value {
+        let body = body.map(|b| b.to_string());
+        let (status, reply) = request(
+            self.addr,
+            method,
+            path,
+            body.as_deref(),
+            Duration::from_secs(30),
+        )
+        .unwrap_or_else(|e| panic!("chromedriver {method} {path}: {e}"));
+        let reply: serde_json::Value = serde_json::from_slice(&reply).unwrap();
+        assert_eq!(status, 200, "chromedriver {method} {path}: {reply}");
+        reply["value"].clone()
+    }
+
+    fn open(&self, url: &str) {
+        let path = format!("/session/{}/url", self.session);
+        self.call("POST", &path, Some(serde_json::json!({ "url": url })));
+    }
+
+    /// The page's DOM as it is now, serialized.
+    fn source(&self) -> String {
+        let path = format!("/session/{}/source", self.session);
+        self.call("GET", &path, None).as_str().unwrap().to_owned()
+    }
+
+    /// The page's DOM once `ready` holds for it (the page's script has filled it in from
+    /// the viewer); panics with the last DOM after 20 s.
+    fn source_when(&self, ready: impl Fn(&str) -> bool) -> String {
+        let deadline = Instant::now() + Duration::from_secs(20);
+        loop {
+            let dom = self.source();
+            if ready(&dom) {
+                return dom;
+            }
+            assert!(Instant::now() < deadline, "the page never got ready: {dom}");
+            std::thread::sleep(Duration::from_millis(200));
         }
-        std::thread::sleep(Duration::from_millis(50));
+    }
+
+    fn screenshot(&self) -> image::RgbImage {
+        use base64::Engine;
+        let path = format!("/session/{}/screenshot", self.session);
+        let png = base64::engine::general_purpose::STANDARD
+            .decode(self.call("GET", &path, None).as_str().unwrap())
+            .unwrap();
+        image::load_from_memory(&png).unwrap().to_rgb8()
+    }
+}
+
+impl Drop for Browser {
+    fn drop(&mut self) {
+        if !self.session.is_empty() {
+            let path = format!("/session/{}", self.session);
+            let _ = request(self.addr, "DELETE", &path, None, Duration::from_secs(5));
+        }
+        // SAFETY: kill(2) on the process group of the driver this browser started.
+        unsafe { libc::kill(-(self.driver.id() as i32), libc::SIGKILL) };
+        let _ = self.driver.wait();
     }
 }
 
@@ -153,8 +235,13 @@ fn count_near(img: &image::RgbImage, c: [u8; 3], tol: u8) -> usize {
 
 #[test]
 fn the_page_shows_the_skeleton_and_a_recognized_gesture() {
-    let Some(chromium) = chromium() else {
-        println!("SKIPPED: chromium is not installed (scripts/setup installs it)");
+    let (Some(chromium), Some(chromedriver)) = (
+        program("AIRGLYPH_CHROMIUM", &["chromium", "chromium-browser"]),
+        program("AIRGLYPH_CHROMEDRIVER", &["chromedriver"]),
+    ) else {
+        println!(
+            "SKIPPED: chromium or chromedriver is not installed (scripts/setup installs them)"
+        );
         return;
     };
     let _one = one_at_a_time();
@@ -196,36 +283,30 @@ fn the_page_shows_the_skeleton_and_a_recognized_gesture() {
     assert_eq!(seen["gestures"][0]["label"], label.as_str(), "{seen}");
 
     // The page as a browser renders it: its script filled in the panels from the viewer.
-    let url = format!("http://{addr}/");
-    let dom = String::from_utf8(run_chromium(&chromium, &url, &["--dump-dom"])).unwrap();
-    assert!(
-        dom.contains(r#"id="skeleton" data-person="true" data-joints="16""#)
-            && dom.contains("person found · 16 joints"),
-        "the skeleton panel: {dom}"
-    );
+    let browser = Browser::start(&chromium, &chromedriver);
+    browser.open(&format!("http://{addr}/"));
     let item = format!(
         r#"<li class="gesture" data-label="{label}"><span class="label">{label}</span> <span class="score">{score}</span> <span class="frames">{frames}</span>"#
     );
-    assert!(dom.contains(&item), "the gesture {item} in: {dom}");
+    let skeleton = r#"id="skeleton" data-person="true" data-joints="16""#;
+    let picture = r#"src="blob:"#;
+    let latency = r#"<tr data-stage="pose">"#;
+    let dom = browser.source_when(|dom| {
+        [skeleton, &item, picture, latency]
+            .iter()
+            .all(|s| dom.contains(s))
+    });
     assert!(
-        dom.contains(r#"id="picture""#) && dom.contains(r#"src="blob:"#),
-        "a picture from the viewer is shown: {dom}"
+        dom.contains("person found · 16 joints"),
+        "the skeleton panel: {dom}"
     );
-    assert!(
-        dom.contains(r#"<tr data-stage="pose">"#),
-        "latency table: {dom}"
-    );
+    assert!(dom.contains(r#"id="picture""#), "the picture: {dom}");
 
     // The picture itself, in the browser's screenshot: the skeleton's joints are there
     // (a colour the depth map never takes), over a colour-mapped depth image.
+    let page = browser.screenshot();
+    drop(browser);
     let shot = tempfile::tempdir().unwrap();
-    let png = shot.path().join("page.png");
-    run_chromium(
-        &chromium,
-        &url,
-        &[&format!("--screenshot={}", png.display())],
-    );
-    let page = image::open(&png).unwrap().to_rgb8();
     let joints = count_near(&page, JOINT, 60);
     println!("{joints} joint-coloured pixels in the page's screenshot");
     assert!(
