@@ -8,6 +8,12 @@
 //! limb is assigned a maximum measures the limb. Occlusion and bridges over occluding
 //! foreground only ever shorten such a path, and a wrong assignment to a nearer maximum
 //! too, so the estimate is a high percentile of recent measurements, not their mean.
+//!
+//! Once the articulated registration runs, it refines the lengths instead: one ratio a
+//! limb pair for the whole reach and, for the arms only and when
+//! [`crate::config::RegisterConfig::bone_evidence`] is set, the split between upper arm
+//! and forearm, from the frames whose bent elbow tells the two bones apart (a straight
+//! limb cannot; legs are rarely seen bent enough, so they keep one ratio).
 
 use crate::config::{Limb, PoseConfig};
 use std::collections::VecDeque;
@@ -23,6 +29,8 @@ const PERCENTILE: f32 = 0.8;
 /// when the measurements are poor.
 const MIN_RATIO: f32 = 0.75;
 const MAX_RATIO: f32 = 1.4;
+/// Bound on the log of the upper arm's ratio over the forearm's (about ±20 %).
+const MAX_SPLIT: f32 = 0.2;
 
 /// The ratio of one limb pair's length to the default body's.
 #[derive(Debug, Clone, Default)]
@@ -86,6 +94,9 @@ pub struct BodyCalibration {
     legs: PairRatio,
     /// The collarbones' rest turns against the chest (left, right), rotation vectors.
     collars: [[f32; 3]; 2],
+    /// What frames that tell an arm's bones apart asked for the log of the upper arm's
+    /// ratio over the forearm's ([`Self::refine_arm_bones`]).
+    arm_split: VecDeque<f32>,
 }
 
 impl BodyCalibration {
@@ -115,6 +126,37 @@ impl BodyCalibration {
         }
     }
 
+    /// Records the registration's steps of one arm's upper arm and forearm apart
+    /// ([`crate::register::Fit::arm_bone_steps`], from frames with the elbow bent): each
+    /// asks for the split it was fitted with, moved by the difference of its steps.
+    /// People's upper arms and forearms are not in one proportion (the synthetic
+    /// person's upper arm is 1.33 × the template's, the forearm 1.26 ×); one ratio for
+    /// the whole reach leaves the elbow short, and the arm then reaches its hand by
+    /// turning the chest. Legs keep one ratio: they are seen bent too rarely.
+    pub fn refine_arm_bones(&mut self, steps: [f32; 2]) {
+        if !steps.iter().all(|s| s.is_finite()) {
+            return;
+        }
+        let [s1, s2] = steps.map(|s| (1.0 + s.clamp(-0.2, 0.2)).ln());
+        let asked = self.arm_split().ln() + s1 - s2;
+        if self.arm_split.len() == WINDOW {
+            self.arm_split.pop_front();
+        }
+        self.arm_split.push_back(asked);
+    }
+
+    /// The ratio of the person's upper arm to forearm over the default body's; 1 until
+    /// enough has been seen.
+    pub fn arm_split(&self) -> f32 {
+        if self.arm_split.len() < MIN_SAMPLES {
+            return 1.0;
+        }
+        let mut v: Vec<f32> = self.arm_split.iter().copied().collect();
+        let k = v.len() / 2;
+        let (_, x, _) = v.select_nth_unstable_by(k, f32::total_cmp);
+        x.clamp(-MAX_SPLIT, MAX_SPLIT).exp()
+    }
+
     /// The ratio of the person's arms (and legs) to the default body's; 1 until enough
     /// has been seen.
     pub fn arm_ratio(&self) -> f32 {
@@ -142,9 +184,12 @@ impl BodyCalibration {
     /// `base` with the bone lengths scaled to this person and its collarbones' rest.
     pub fn apply(&self, base: &PoseConfig) -> PoseConfig {
         let (a, l) = (self.arm_ratio(), self.leg_ratio());
+        // The split moves the elbow along the arm and keeps the reach (to first order).
+        let (u, f) = (base.upper_arm, base.forearm);
+        let k = self.arm_split();
         let mut cfg = PoseConfig {
-            upper_arm: base.upper_arm * a,
-            forearm: base.forearm * a,
+            upper_arm: u * a * k.powf(f / (u + f)),
+            forearm: f * a * k.powf(-u / (u + f)),
             thigh: base.thigh * l,
             shin: base.shin * l,
             ..base.clone()
@@ -200,5 +245,27 @@ mod tests {
             c.measure(&base, Limb::LeftLeg, 0.5 * 0.95);
         }
         assert_eq!(c.leg_ratio(), MIN_RATIO);
+    }
+
+    #[test]
+    fn bent_arms_split_the_bones_and_keep_the_reach() {
+        let base = PoseConfig::default();
+        let mut c = BodyCalibration::default();
+        // Frames asking for a longer upper arm and a shorter forearm.
+        for _ in 0..MIN_SAMPLES - 1 {
+            c.refine_arm_bones([0.02, -0.02]);
+        }
+        assert_eq!(c.arm_split(), 1.0, "not before enough frames");
+        for _ in 0..200 {
+            c.refine_arm_bones([0.02, -0.02]);
+            c.refine_arm_bones([f32::NAN, 0.0]);
+        }
+        assert!(c.arm_split() > 1.1, "{}", c.arm_split());
+        assert!(c.arm_split() <= MAX_SPLIT.exp() + 1e-6);
+        let scaled = c.apply(&base);
+        assert!(scaled.upper_arm > base.upper_arm && scaled.forearm < base.forearm);
+        let reach = |p: &PoseConfig| p.upper_arm + p.forearm;
+        assert!((reach(&scaled) / reach(&base) - 1.0).abs() < 0.01);
+        assert_eq!((scaled.thigh, scaled.shin), (base.thigh, base.shin));
     }
 }

@@ -866,6 +866,15 @@ impl PoseEstimator {
                         b.length_step[0].filter(|_| arms >= gate),
                         b.length_step[1].filter(|_| legs >= gate),
                     ]);
+                    for (steps, upper, fore) in [
+                        (b.arm_bone_steps[0], LeftUpperArm, LeftForearm),
+                        (b.arm_bone_steps[1], RightUpperArm, RightForearm),
+                    ] {
+                        let seen = 0.5 * (b.seen[upper.index()] + b.seen[fore.index()]);
+                        if let Some(s) = steps.filter(|_| seen >= gate) {
+                            self.calib.refine_arm_bones(s);
+                        }
+                    }
                     if arms >= gate {
                         let rel = |s: crate::body::Segment| {
                             let r = b.pose.rotation[Chest.index()].inverse()

@@ -99,7 +99,13 @@
 //!   MakeHuman body of airglyph-synth standing still. Arm and leg lengths are then
 //!   learned for the person in view ([`calibrate`]): from the registration (each frame
 //!   that sees a limb pair well asks for a length; the median of recent frames' is
-//!   taken), or without it from the limbs' geodesic lengths.
+//!   taken), or without it from the limbs' geodesic lengths. Optionally
+//!   ([`config::RegisterConfig::bone_evidence`], off by default), the arms' upper arm
+//!   and forearm are learned apart, from frames whose bent elbow tells them apart: with
+//!   one ratio for the whole reach the elbow of the procedural body comes out 1.7 cm
+//!   short, and the registered chest turns with the drawing arm (2.8° per shoulder
+//!   width the hand goes down; 1.6° with the split), bending the strokes. It stays off
+//!   because the split it learns is biased and CMU 01_03 with noise loses a leg with it.
 //! * Segmentation keeps the person's own parts that meet the body only across depth
 //!   jumps (an arm raised before the chest hides its shoulder); points of a limb before
 //!   the chest stay out of the torso's PCA; the geodesic root is a torso node even when
