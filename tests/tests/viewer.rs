@@ -120,8 +120,11 @@ fn state_soon(addr: SocketAddr) -> serde_json::Value {
 struct Browser {
     driver: std::process::Child,
     addr: SocketAddr,
+    /// Empty until the driver has given one (the struct exists first, so that Drop
+    /// stops the driver whatever fails while starting).
     session: String,
-    _profile: tempfile::TempDir,
+    /// Chromium's profile, removed with the browser.
+    profile: tempfile::TempDir,
 }
 
 impl Browser {
@@ -140,7 +143,7 @@ impl Browser {
             driver,
             addr,
             session: String::new(),
-            _profile: profile,
+            profile,
         };
         let deadline = Instant::now() + Duration::from_secs(20);
         while !matches!(get(addr, "/status"), Ok((200, _))) {
@@ -153,7 +156,7 @@ impl Browser {
                 "args": [
                     "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
                     "--no-first-run", "--window-size=1200,700",
-                    format!("--user-data-dir={}", browser._profile.path().display()),
+                    format!("--user-data-dir={}", browser.profile.path().display()),
                 ],
             },
             "timeouts": {"pageLoad": 20_000},

@@ -32,57 +32,68 @@ const MAX_RATIO: f32 = 1.4;
 /// Bound on the log of the upper arm's ratio over the forearm's (about ±20 %).
 const MAX_SPLIT: f32 = 0.2;
 
+/// The last [`WINDOW`] values a frame asked for.
+#[derive(Debug, Clone, Default)]
+struct Recent(VecDeque<f32>);
+
+impl Recent {
+    fn push(&mut self, x: f32) {
+        if self.0.len() == WINDOW {
+            self.0.pop_front();
+        }
+        self.0.push_back(x);
+    }
+
+    fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+
+    /// The `q` quantile (0.5: the median), or None before [`MIN_SAMPLES`] values.
+    fn quantile(&self, q: f32) -> Option<f32> {
+        if self.0.len() < MIN_SAMPLES {
+            return None;
+        }
+        let mut v: Vec<f32> = self.0.iter().copied().collect();
+        let k = ((v.len() - 1) as f32 * q).round() as usize;
+        let (_, x, _) = v.select_nth_unstable_by(k, f32::total_cmp);
+        Some(*x)
+    }
+}
+
 /// The ratio of one limb pair's length to the default body's.
 #[derive(Debug, Clone, Default)]
 struct PairRatio {
-    samples: VecDeque<f32>,
+    samples: Recent,
     /// The registration's estimates (the ratio each frame's fit asks for); once there
     /// are any, the geodesic samples are not used.
-    fitted: VecDeque<f32>,
+    fitted: Recent,
 }
 
 impl PairRatio {
     fn add(&mut self, ratio: f32) {
-        if !ratio.is_finite() || !(0.3..3.0).contains(&ratio) {
-            return;
+        if ratio.is_finite() && (0.3..3.0).contains(&ratio) {
+            self.samples.push(ratio);
         }
-        if self.samples.len() == WINDOW {
-            self.samples.pop_front();
-        }
-        self.samples.push_back(ratio);
     }
 
     fn refine(&mut self, step: f32) {
-        if !step.is_finite() {
-            return;
+        if step.is_finite() {
+            // The ratio this frame asks for: the one it was fitted with, moved by its
+            // step.
+            self.fitted
+                .push(self.ratio() * (1.0 + step.clamp(-0.2, 0.2)));
         }
-        // The ratio this frame asks for: the one it was fitted with, moved by its step.
-        let asked = self.ratio() * (1.0 + step.clamp(-0.2, 0.2));
-        if self.fitted.len() == WINDOW {
-            self.fitted.pop_front();
-        }
-        self.fitted.push_back(asked);
     }
 
     fn ratio(&self) -> f32 {
-        if !self.fitted.is_empty() {
-            if self.fitted.len() < MIN_SAMPLES {
-                return 1.0;
-            }
+        let learned = if self.fitted.is_empty() {
+            self.samples.quantile(PERCENTILE)
+        } else {
             // The median: a bad stretch of frames (a limb mistaken for another, a
             // person half out of view) cannot drag it.
-            let mut v: Vec<f32> = self.fitted.iter().copied().collect();
-            let k = v.len() / 2;
-            let (_, x, _) = v.select_nth_unstable_by(k, f32::total_cmp);
-            return x.clamp(MIN_RATIO, MAX_RATIO);
-        }
-        if self.samples.len() < MIN_SAMPLES {
-            return 1.0;
-        }
-        let mut v: Vec<f32> = self.samples.iter().copied().collect();
-        let k = ((v.len() - 1) as f32 * PERCENTILE).round() as usize;
-        let (_, x, _) = v.select_nth_unstable_by(k, f32::total_cmp);
-        x.clamp(MIN_RATIO, MAX_RATIO)
+            self.fitted.quantile(0.5)
+        };
+        learned.map_or(1.0, |x| x.clamp(MIN_RATIO, MAX_RATIO))
     }
 }
 
@@ -96,7 +107,7 @@ pub struct BodyCalibration {
     collars: [[f32; 3]; 2],
     /// What frames that tell an arm's bones apart asked for the log of the upper arm's
     /// ratio over the forearm's ([`Self::refine_arm_bones`]).
-    arm_split: VecDeque<f32>,
+    arm_split: Recent,
 }
 
 impl BodyCalibration {
@@ -138,23 +149,15 @@ impl BodyCalibration {
             return;
         }
         let [s1, s2] = steps.map(|s| (1.0 + s.clamp(-0.2, 0.2)).ln());
-        let asked = self.arm_split().ln() + s1 - s2;
-        if self.arm_split.len() == WINDOW {
-            self.arm_split.pop_front();
-        }
-        self.arm_split.push_back(asked);
+        self.arm_split.push(self.arm_split().ln() + s1 - s2);
     }
 
     /// The ratio of the person's upper arm to forearm over the default body's; 1 until
     /// enough has been seen.
     pub fn arm_split(&self) -> f32 {
-        if self.arm_split.len() < MIN_SAMPLES {
-            return 1.0;
-        }
-        let mut v: Vec<f32> = self.arm_split.iter().copied().collect();
-        let k = v.len() / 2;
-        let (_, x, _) = v.select_nth_unstable_by(k, f32::total_cmp);
-        x.clamp(-MAX_SPLIT, MAX_SPLIT).exp()
+        self.arm_split
+            .quantile(0.5)
+            .map_or(1.0, |x| x.clamp(-MAX_SPLIT, MAX_SPLIT).exp())
     }
 
     /// The ratio of the person's arms (and legs) to the default body's; 1 until enough

@@ -363,8 +363,10 @@ struct Accumulator {
     /// Per arm (left, right), the normal equations of the residuals' derivatives by the
     /// upper arm's and the forearm's length ratios apart (an upper arm's points move
     /// away from the shoulder as it grows, a forearm's with the elbow and away from
-    /// it): Σ w j₁ r, Σ w j₂ r, Σ w j₁², Σ w j₁ j₂, Σ w j₂².
-    arm_bones: [[f64; 5]; 2],
+    /// it): Σ w j₁ r, Σ w j₂ r, Σ w j₁², Σ w j₁ j₂, Σ w j₂². None unless
+    /// [`RegisterConfig::bone_evidence`] asks for them: every arm point of every pass
+    /// would pay for sums nobody reads.
+    arm_bones: Option<[[f64; 5]; 2]>,
 }
 
 /// The upper arm's and the forearm's length-ratio steps of one arm from its normal
@@ -387,7 +389,7 @@ fn bone_steps(l: &[f64; 5], evidence: f64) -> Option<[f32; 2]> {
 }
 
 impl Accumulator {
-    fn new(posed: &Posed) -> Self {
+    fn new(posed: &Posed, split_arms: bool) -> Self {
         use Segment::*;
         let mut roots = [None; Segment::COUNT];
         for (root, segs) in [
@@ -407,7 +409,7 @@ impl Accumulator {
             energy: 0.0,
             roots,
             length: [(0.0, 0.0); 2],
-            arm_bones: [[0.0; 5]; 2],
+            arm_bones: split_arms.then_some([[0.0; 5]; 2]),
         }
     }
 
@@ -438,12 +440,15 @@ impl Accumulator {
             let js = dir.dot(&(x - root)) as f64;
             self.length[pair].0 += w as f64 * js * r as f64;
             self.length[pair].1 += w as f64 * js * js;
-            let arm = match s {
+            let Some(arm_bones) = &mut self.arm_bones else {
+                return;
+            };
+            let side = match s {
                 Segment::LeftUpperArm | Segment::LeftForearm => Some(0),
                 Segment::RightUpperArm | Segment::RightForearm => Some(1),
                 _ => None,
             };
-            if let Some(side) = arm {
+            if let Some(side) = side {
                 // A forearm's joint (the elbow) is its twist origin.
                 let (j1, j2) = if matches!(s, Segment::LeftForearm | Segment::RightForearm) {
                     let o = self.origin[si];
@@ -452,7 +457,7 @@ impl Accumulator {
                     (js, 0.0)
                 };
                 let (w, r) = (w as f64, r as f64);
-                let l = &mut self.arm_bones[side];
+                let l = &mut arm_bones[side];
                 l[0] += w * j1 * r;
                 l[1] += w * j2 * r;
                 l[2] += w * j1 * j1;
@@ -858,7 +863,7 @@ impl Registration {
         let mut energy = f32::INFINITY;
         let mut seen = [0.0; Segment::COUNT];
         let mut length = [(0.0, 0.0); 2];
-        let mut arm_bones = [[0.0; 5]; 2];
+        let mut arm_bones = None;
         let mut passes = 0;
         // Each point's capsule, searched afresh every `REASSIGN` passes: in between the
         // body moves by millimetres, and the search is most of a pass's work.
@@ -919,7 +924,10 @@ impl Registration {
         // A step only where the limbs carry enough evidence (about a hundred points'
         // worth of a limb's reach).
         let length_step = length.map(|(g, h)| (h > cfg.length_evidence).then(|| (-g / h) as f32));
-        let arm_bone_steps = arm_bones.map(|l| cfg.bone_evidence.and_then(|e| bone_steps(&l, e)));
+        let arm_bone_steps = match (arm_bones, cfg.bone_evidence) {
+            (Some(sums), Some(e)) => sums.map(|l| bone_steps(&l, e)),
+            _ => [None; 2],
+        };
         Fit {
             pose,
             energy,
@@ -939,7 +947,7 @@ impl Registration {
     ) -> (Accumulator, [f32; Segment::COUNT]) {
         let (f, t, tips, cfg) = (p.frame, p.body, p.tips, p.cfg);
         let placed = place(t, posed);
-        let mut acc = Accumulator::new(posed);
+        let mut acc = Accumulator::new(posed, cfg.bone_evidence.is_some());
 
         // Data: each point on its nearest capsule's surface.
         for ((p, area), ci) in self.data.iter().zip(assign.iter_mut()) {
