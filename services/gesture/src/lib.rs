@@ -21,6 +21,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod bezier;
+pub mod body_frame;
 pub mod collect;
 pub mod crf;
 pub mod data;

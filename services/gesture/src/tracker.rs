@@ -1,8 +1,10 @@
 //! From skeletons to the drawing hand's trajectory in a body frame: origin between the
 //! shoulders, scaled by the shoulder width, projected on the body's frontal plane, so a
-//! gesture does not depend on where the person stands or how tall they are; smoothed by
-//! the One Euro filter (Casiez, Roussel, Vogel, CHI 2012).
+//! gesture does not depend on where the person stands or how tall they are. The frame is
+//! held steady while the person draws (`body_frame`); the hand's path in it is smoothed
+//! by the One Euro filter (Casiez, Roussel, Vogel, CHI 2012).
 
+use crate::body_frame::{BodyFrame, FrameSmoother, FrameSmoothing};
 pub use airglyph_core::filter::OneEuro;
 use airglyph_core::{Joint, Skeleton};
 use nalgebra::Vector3;
@@ -27,6 +29,7 @@ impl Hand {
 
 /// Hand tracker settings.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct TrackerConfig {
     /// One Euro parameters for body-frame coordinates (shoulder widths).
     pub min_cutoff: f64,
@@ -39,6 +42,8 @@ pub struct TrackerConfig {
     /// The other hand must lead by this much (metres) for this many frames to switch.
     pub switch_margin: f32,
     pub switch_frames: u32,
+    /// How the body frame is held steady while the person draws.
+    pub frame: FrameSmoothing,
 }
 
 impl Default for TrackerConfig {
@@ -57,6 +62,7 @@ impl Default for TrackerConfig {
             hand: None,
             switch_margin: 0.05,
             switch_frames: 5,
+            frame: FrameSmoothing::default(),
         }
     }
 }
@@ -80,6 +86,7 @@ pub struct HandTracker {
     lead: u32,
     fx: OneEuro,
     fy: OneEuro,
+    frame: FrameSmoother,
 }
 
 impl HandTracker {
@@ -90,6 +97,7 @@ impl HandTracker {
             lead: 0,
             fx: OneEuro::new(cfg.min_cutoff, cfg.beta, cfg.d_cutoff),
             fy: OneEuro::new(cfg.min_cutoff, cfg.beta, cfg.d_cutoff),
+            frame: FrameSmoother::new(cfg.frame),
         }
     }
 
@@ -101,6 +109,7 @@ impl HandTracker {
         self.fx.reset();
         self.fy.reset();
         self.lead = 0;
+        self.frame.reset();
     }
 
     /// The body-frame hand point of one skeleton at `time_ns`, or None when the
@@ -119,20 +128,13 @@ impl HandTracker {
         {
             return None;
         }
-        let ls = s[Joint::LeftShoulder].coords;
-        let rs = s[Joint::RightShoulder].coords;
-        let width = (rs - ls).norm();
-        if width < 0.05 {
-            return None;
-        }
-        let origin = (ls + rs) * 0.5;
-        let ex: Vector3<f32> = (rs - ls) / width;
-        let down = s[Joint::Pelvis].coords - s[Joint::Neck].coords;
-        let ey = down - ex * ex.dot(&down);
-        if ey.norm() < 1e-3 {
-            return None;
-        }
-        let ey = ey.normalize();
+        let t = time_ns as f64 * 1e-9;
+        let frame = self.frame.update(BodyFrame::of(s)?, t);
+        let (origin, ey) = (frame.origin, frame.ey);
+        let (ls, rs) = (
+            s[Joint::LeftShoulder].coords,
+            s[Joint::RightShoulder].coords,
+        );
         // Pick the drawing hand: the one further forward (towards the camera) and higher.
         if self.cfg.hand.is_none() {
             let lead = |h: Joint, sh: Vector3<f32>| {
@@ -166,12 +168,7 @@ impl HandTracker {
         if s.confidence[hj.index()] < self.cfg.min_confidence {
             return None;
         }
-        let d = s[hj].coords - origin;
-        let x = ex.dot(&d) / width;
-        let y = ey.dot(&d) / width;
-        // Right × down is the way the person faces (the camera frame is right-handed).
-        let forward = ex.cross(&ey).dot(&d) / width;
-        let t = time_ns as f64 * 1e-9;
+        let [x, y, forward] = frame.project(s[hj].coords);
         Some(HandPoint {
             x: self.fx.filter(x as f64, t) as f32,
             y: self.fy.filter(y as f64, t) as f32,
@@ -255,6 +252,56 @@ mod tests {
         let mut s = skeleton_with_hand(0.0, 0.0, 2.0);
         s.confidence[Joint::RightShoulder.index()] = 0.0;
         assert!(t.update(&s, 0).is_none());
+    }
+
+    /// The width of a square (1 shoulder width a side, drawn in 2 s after a rest at its
+    /// corner) as tracked, when the chest turns `degrees` per shoulder width the hand
+    /// is to the right, as an estimated chest does with the drawing arm.
+    fn tracked_width(cfg: TrackerConfig, degrees: f32) -> f32 {
+        use nalgebra::{Rotation3, Vector3};
+        let mut t = HandTracker::new(cfg);
+        let corners = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [0.0, 0.0]];
+        let (mut lo, mut hi) = (f32::MAX, f32::MIN);
+        for i in 0..90u64 {
+            let k = i.saturating_sub(30) as f32 / 15.0;
+            let (leg, f) = ((k as usize).min(3), (k - k.floor()).min(1.0));
+            let (a, b) = (corners[leg], corners[leg + 1]);
+            let (x, y) = if k >= 4.0 {
+                (0.0, 0.0)
+            } else {
+                (a[0] + (b[0] - a[0]) * f, a[1] + (b[1] - a[1]) * f)
+            };
+            let mut s = skeleton_with_hand(x - 0.5, y - 0.5, 2.5);
+            let turn = Rotation3::from_axis_angle(&Vector3::y_axis(), (degrees * x).to_radians());
+            let centre = (s[Joint::LeftShoulder].coords + s[Joint::RightShoulder].coords) / 2.0;
+            for j in [Joint::LeftShoulder, Joint::RightShoulder] {
+                s.joints[j.index()].coords = turn * (s[j].coords - centre) + centre;
+            }
+            let p = t.update(&s, i * 33_333_333).unwrap();
+            if i >= 30 {
+                (lo, hi) = (lo.min(p.x), hi.max(p.x));
+            }
+        }
+        hi - lo
+    }
+
+    #[test]
+    fn a_chest_turning_with_the_hand_does_not_squeeze_the_path() {
+        let cfg = TrackerConfig::default();
+        let truth = tracked_width(cfg, 0.0);
+        let held = tracked_width(cfg, 2.0);
+        let raw = tracked_width(
+            TrackerConfig {
+                frame: FrameSmoothing {
+                    seconds: 0.0,
+                    ..cfg.frame
+                },
+                ..cfg
+            },
+            2.0,
+        );
+        assert!((held / truth - 1.0).abs() < 0.01, "{held} against {truth}");
+        assert!((raw / truth - 1.0).abs() > 0.025, "{raw} against {truth}");
     }
 
     #[test]
