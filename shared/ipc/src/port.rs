@@ -538,7 +538,11 @@ impl<T: Message> Publisher<T> {
 /// Blocks until the publisher signals or `ns` pass. A signal (SIGINT/SIGTERM) only
 /// wakes the caller early, so it can look at [`crate::shutdown::requested`].
 fn wait(listener: &Listener<Ipc>, ns: u64) -> Result<(), IpcError> {
-    match listener.timed_wait(|_| {}, Duration::from_nanos(ns)) {
+    // iceoryx2 0.10 waits on a Unix socket with SO_RCVTIMEO, in whole microseconds, and
+    // a timeout of zero there means "for ever": a deadline less than a microsecond away
+    // hung the supervisor for good once (its stages idle, SIGTERM restarting the call).
+    let timeout = Duration::from_micros(ns.div_ceil(1_000).max(1));
+    match listener.timed_wait(|_| {}, timeout) {
         Ok(_) | Err(iceoryx2::port::listener::ListenerWaitError::InterruptSignal) => Ok(()),
         Err(e) => Err(IpcError::service("wait", e)),
     }
@@ -748,5 +752,34 @@ impl Inbox for DepthReceiver {
     }
     fn dropped(item: &mut DepthFrame) -> &mut u64 {
         &mut item.dropped
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::mpsc;
+
+    #[test]
+    fn a_deadline_under_a_microsecond_away_does_not_wait_for_ever() {
+        let (done, finished) = mpsc::channel();
+        // In a thread of its own: were the wait to block for good, the test fails
+        // instead of hanging.
+        std::thread::spawn(move || {
+            let cfg = IpcConfig {
+                root: format!("/tmp/airglyph-test-{}-wait/", std::process::id()),
+                prefix: format!("agt{}wait_", std::process::id()),
+            };
+            let pipeline = Pipeline::join_with(cfg, "waiter").unwrap();
+            let receiver = pipeline.skeleton_receiver().unwrap();
+            for ns in [1, 500, 999, 1_000, 1_001] {
+                wait(&receiver.listener, ns).unwrap();
+            }
+            done.send(()).unwrap();
+        });
+        assert!(
+            finished.recv_timeout(Duration::from_secs(20)).is_ok(),
+            "a wait of under a microsecond blocked"
+        );
     }
 }
