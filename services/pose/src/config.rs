@@ -129,10 +129,11 @@ pub struct PoseConfig {
     pub occluded_decay: f32,
 
     // --- smoothing over time ---
-    /// One Euro filter of every joint coordinate: cut-off at rest (Hz; 0 = off) and its
-    /// rise with speed (per m/s).
+    /// One Euro filter of every joint coordinate: cut-off at rest (Hz; 0 = off), its
+    /// rise with speed (per m/s), and the cut-off of the speed estimate that opens it.
     pub smoothing_min_cutoff: f64,
     pub smoothing_beta: f64,
+    pub smoothing_d_cutoff: f64,
     /// Frame rate [`crate::PoseEstimator::estimate`] assumes between calls.
     pub nominal_fps: f64,
 
@@ -221,6 +222,12 @@ impl Default for PoseConfig {
             occluded_decay: 0.7,
             smoothing_min_cutoff: 3.0,
             smoothing_beta: 5.0,
+            // The One Euro paper's 1 Hz lets the speed estimate trail a jump's onset by
+            // several frames, the filter still closed while the body moves at 2 m/s:
+            // CMU 01_01 with sensor noise 4.43 → 4.20 cm, 96.8 → 97.5 % within 10 cm,
+            // 01_03 with noise 4.54 → 4.50 cm. A still joint jitters no more (median
+            // second difference 0.39 mm a frame either way; 0.77 mm unsmoothed).
+            smoothing_d_cutoff: 5.0,
             nominal_fps: 30.0,
             calibrate_body: true,
             geodesic_reach_ratio: [1.32, 1.21],

@@ -970,7 +970,7 @@ impl PoseEstimator {
             return s;
         }
         if self.smooth.len() != Joint::COUNT {
-            let f = OneEuro::new(fc, beta, 1.0);
+            let f = OneEuro::new(fc, beta, self.cfg.smoothing_d_cutoff);
             self.smooth = vec![[f.clone(), f.clone(), f]; Joint::COUNT];
         }
         for (p, f) in s.joints.iter_mut().zip(&mut self.smooth) {

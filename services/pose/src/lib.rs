@@ -116,7 +116,8 @@
 //!   the chain's end (nor the registered forearm's, which cannot bend at the wrist), so
 //!   an arm length a little off does not shrink the strokes drawn.
 //! * Joints are smoothed over time by the One Euro filter (airglyph-core): still joints
-//!   stop jittering with the sensor's noise, moving ones keep up.
+//!   stop jittering with the sensor's noise, moving ones keep up (its speed estimate
+//!   follows at 5 Hz, so the filter opens within a frame or two of a jump's start).
 //!
 //! [`metrics`] holds the evaluation against ground truth (Eq. 16.20–16.22, share within
 //! 10 cm, mAP at 10 cm), [`overlay`] draws skeletons on depth images.
