@@ -143,6 +143,7 @@ fn explain(
                 let steps = (CONTEXT_SECONDS * cfg.fps as f64).round() as usize;
                 let input = VerifierInput {
                     segment: seg.to_vec(),
+                    times: (0..seg.len()).map(|i| i as f32 / cfg.fps).collect(),
                     before: context(&filtered, t.start as usize, true, steps),
                     after: context(&filtered, t.end as usize, false, steps),
                     posterior: model

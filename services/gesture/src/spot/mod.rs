@@ -11,9 +11,9 @@
 //!    model approach for gesture recognition", PAMI 1999: one left-right HMM per label
 //!    over the stretch's direction codes, against an ergodic non-gesture HMM made of all
 //!    the gesture HMMs' states, [`LeeKim`]), and the [`Verifier`], a network that weighs
-//!    those with the stretch's coarse shape, size, place and the hand's path just before
-//!    and after it, and tells a whole gesture from movement, part of a gesture or a
-//!    gesture with movement around it.
+//!    those with the stretch's coarse shape, size, place, timing and the hand's path
+//!    just before and after it, and tells a whole gesture from movement, part of a
+//!    gesture or a gesture with movement around it.
 //! 3. Overlapping accepted candidates compete (verifier × classifier); the winner is
 //!    published once nothing better has come for `hold_seconds` or the hand rests.
 
@@ -144,8 +144,9 @@ pub struct SpotterConfig {
     pub margin: Option<f64>,
     /// Smallest classifier confidence to publish a gesture.
     pub min_score: f64,
-    /// Smallest verifier probability that the segment is a whole gesture.
-    pub min_gesture_prob: f64,
+    /// Smallest verifier probability that the segment is a whole gesture (None: the
+    /// verifier's own, [`Verifier::min_gesture_prob`]).
+    pub min_gesture_prob: Option<f64>,
     /// How long after a candidate's end to wait for a longer, better one (seconds);
     /// a rest of `rest_seconds` after it decides at once.
     pub hold_seconds: f64,
@@ -167,7 +168,7 @@ impl Default for SpotterConfig {
             max_size: 2.5,
             margin: None,
             min_score: 0.5,
-            min_gesture_prob: 0.2,
+            min_gesture_prob: None,
             // Held-out writers in synthetic streams, seeds 1–3, at 1.5 s and at 2.5 s:
             // digits 89.7, 91.1, 88.5 and 90.1, 91.1, 89.7 %; uppercase 81.6, 82.4, 83.2
             // and 84.7, 85.8, 85.9 %; all 36 78.0, 78.9, 76.8 and 81.5, 80.8, 80.8 %
@@ -389,17 +390,17 @@ impl Spotter {
         input.ratio = ratio;
         // Without a verifier (a model trained without one), every segment the
         // classifier is sure of passes: boundaries then rest on the breaks alone.
-        let p_gesture = sm
-            .verifier
-            .as_ref()
-            .map_or(1.0, |v| 1.0 - v.probs(&input)[0]);
+        let (p_gesture, min_gesture_prob) = sm.verifier.as_ref().map_or((1.0, 0.0), |v| {
+            let min = self.cfg.min_gesture_prob.unwrap_or(v.min_gesture_prob());
+            (1.0 - v.probs(&input)[0], min)
+        });
         let class = (0..post.len())
             .max_by(|&a, &b| post[a].total_cmp(&post[b]))
             .unwrap_or(0);
         let score = post.get(class).copied().unwrap_or(0.0);
         let accepted = self.cfg.margin.is_none_or(|m| ratio > m)
             && score >= self.cfg.min_score
-            && p_gesture >= self.cfg.min_gesture_prob;
+            && p_gesture >= min_gesture_prob;
         Some(Candidate {
             start: s,
             end: e,

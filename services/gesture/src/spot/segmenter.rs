@@ -169,8 +169,14 @@ impl Segmenter {
         let steps = (CONTEXT_SECONDS * fps).round() as usize;
         let before = context(&all, i0, true, steps);
         let after = context(&all, i1, false, steps);
+        let t0 = self.pts[i0].2;
+        let times = self.pts[i0..=i1]
+            .iter()
+            .map(|p| (p.2.saturating_sub(t0) as f64 * 1e-9) as f32)
+            .collect();
         Some(VerifierInput {
             segment,
+            times,
             before,
             after,
             posterior: Vec::new(),
