@@ -28,6 +28,36 @@ pub(crate) fn bbox<'a>(points: impl IntoIterator<Item = &'a Point>) -> (f32, f32
     (x0, y0, x1, y1)
 }
 
+/// The path's length from its first point to each of its points.
+pub(crate) fn arc_lengths(pts: &[[f32; 2]]) -> Vec<f32> {
+    let mut cum = Vec::with_capacity(pts.len());
+    let mut total = 0.0f32;
+    for (i, p) in pts.iter().enumerate() {
+        if i > 0 {
+            let q = pts[i - 1];
+            total += ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt();
+        }
+        cum.push(total);
+    }
+    cum
+}
+
+/// Where arc length `target` falls on a path of at least two points whose
+/// [`arc_lengths`] are `cum`: `seg` becomes the point after it, and the result is how
+/// far along the span from the point before (0 to 1; 0 on a span of no length). The
+/// search starts at `seg` (at least 1), so increasing targets walk the path once.
+pub(crate) fn locate(cum: &[f32], target: f32, seg: &mut usize) -> f32 {
+    while *seg < cum.len() - 1 && cum[*seg] < target {
+        *seg += 1;
+    }
+    let len = cum[*seg] - cum[*seg - 1];
+    if len > 0.0 {
+        ((target - cum[*seg - 1]) / len).clamp(0.0, 1.0)
+    } else {
+        0.0
+    }
+}
+
 /// Resamples to `n` points at equal arc length (pen-up travel included) and normalizes.
 pub fn resample(t: &Trajectory, n: usize) -> Resampled {
     let n = n.max(2);
@@ -47,12 +77,7 @@ pub fn resample(t: &Trajectory, n: usize) -> Resampled {
         .iter()
         .map(|p| [(p[0] - cx) / s, (p[1] - cy) / s])
         .collect();
-    let mut cum = Vec::with_capacity(pts.len());
-    cum.push(0.0f32);
-    for i in 1..pts.len() {
-        let d = ((pts[i][0] - pts[i - 1][0]).powi(2) + (pts[i][1] - pts[i - 1][1]).powi(2)).sqrt();
-        cum.push(cum[i - 1] + d);
-    }
+    let cum = arc_lengths(&pts);
     let total = *cum.last().unwrap_or(&0.0);
     let mut out = Vec::with_capacity(n);
     let mut up = Vec::with_capacity(n);
@@ -64,16 +89,8 @@ pub fn resample(t: &Trajectory, n: usize) -> Resampled {
             up.push(false);
             continue;
         }
-        while seg < pts.len() - 1 && cum[seg] < target {
-            seg += 1;
-        }
+        let f = locate(&cum, target, &mut seg);
         let (a, b) = (pts[seg - 1], pts[seg]);
-        let len = cum[seg] - cum[seg - 1];
-        let f = if len > 0.0 {
-            ((target - cum[seg - 1]) / len).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
         out.push([a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])]);
         up.push(t.pen_up.get(seg).copied().unwrap_or(false));
     }

@@ -856,12 +856,12 @@ impl PoseEstimator {
                 // Lengths are learned from frames whose limbs the camera sees well.
                 if self.cfg.calibrate_body {
                     use crate::body::Segment::*;
-                    let seen = |segs: [crate::body::Segment; 4]| {
-                        segs.iter().map(|s| b.seen[s.index()]).sum::<f32>() / 4.0
+                    let seen = |segs: &[crate::body::Segment]| {
+                        segs.iter().map(|s| b.seen[s.index()]).sum::<f32>() / segs.len() as f32
                     };
                     let gate = cfg.register.length_seen;
-                    let arms = seen([LeftUpperArm, LeftForearm, RightUpperArm, RightForearm]);
-                    let legs = seen([LeftThigh, LeftShin, RightThigh, RightShin]);
+                    let arms = seen(&[LeftUpperArm, LeftForearm, RightUpperArm, RightForearm]);
+                    let legs = seen(&[LeftThigh, LeftShin, RightThigh, RightShin]);
                     self.calib.refine([
                         b.length_step[0].filter(|_| arms >= gate),
                         b.length_step[1].filter(|_| legs >= gate),
@@ -870,8 +870,7 @@ impl PoseEstimator {
                         (b.arm_bone_steps[0], LeftUpperArm, LeftForearm),
                         (b.arm_bone_steps[1], RightUpperArm, RightForearm),
                     ] {
-                        let seen = 0.5 * (b.seen[upper.index()] + b.seen[fore.index()]);
-                        if let Some(s) = steps.filter(|_| seen >= gate) {
+                        if let Some(s) = steps.filter(|_| seen(&[upper, fore]) >= gate) {
                             self.calib.refine_arm_bones(s);
                         }
                     }

@@ -217,10 +217,11 @@ pub struct RegisterConfig {
     pub length_seen: f32,
     /// When set, an arm's upper arm and forearm are learned apart ([`bone_steps`]) from
     /// frames whose normal equations of the two bones' length ratios have no eigenvalue
-    /// below this (Σ w j², as `length_evidence`). Off (None) by default: at 1.5 the demo
-    /// names 34 symbols of 36 instead of 33 (the chest no longer turns as much with the
-    /// drawing arm), but CMU 01_03 with sensor noise loses a leg for about 100 frames
-    /// (93.3 → 91.1 % of joints within 10 cm), and the split it learns is biased
+    /// below this (Σ w j², as `length_evidence`). Off (None) by default: at 1.5, before
+    /// the gesture stage held its body frame steady, the demo named 34 symbols of 36
+    /// instead of 33 (the chest turns less with the drawing arm), but CMU 01_03 with
+    /// sensor noise loses a leg for about 100 frames (93.3 → 91.1 % of joints within
+    /// 10 cm), and the split it learns is biased
     /// (0.92–0.97 on the MakeHuman body, whose truth is 1; 1.16 on the procedural body,
     /// whose truth is 1.055). At 3.0 01_03 is as before and the demo back at 33.
     pub bone_evidence: Option<f64>,
@@ -634,7 +635,6 @@ fn add_joint_priors(
     // (segment, weight per axis of φ, bending limit on φ.x: (sign, allowed))
     let hinge = |seg| (seg, [0.0, cfg.hinge_twist_prior, cfg.hinge_side_prior]);
     let rest = |seg: Segment| (seg, [cfg.limb_rest_prior * hidden[seg.index()] as f64; 3]);
-
     let priors = [
         (Head, [cfg.head_prior; 3]),
         (Chest, [cfg.chest_prior; 3]),
@@ -1223,7 +1223,7 @@ mod tests {
         };
         // A straight arm: every residual moves alike whichever bone grows.
         let straight: Vec<_> = (0..40).map(|i| (0.5, 0.4, 0.01 * i as f64)).collect();
-        assert_eq!(bone_steps(&normal(&straight), 1.5,), None);
+        assert_eq!(bone_steps(&normal(&straight), 1.5), None);
         // Bent: some residuals move with one bone only; the steps solve for both.
         let (s1, s2) = (0.03, -0.02);
         let bent: Vec<_> = (0..40)

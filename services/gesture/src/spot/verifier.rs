@@ -7,7 +7,7 @@
 use super::threshold::LeeKim;
 use super::{size_ok, Segmenter, SpotterConfig, SpottingModel};
 use crate::data::{Sample, Trajectory};
-use crate::features::{feature_vector, FeatureConfig};
+use crate::features::{arc_lengths, feature_vector, locate, FeatureConfig};
 use crate::mlp::{Mlp, MlpTrainConfig};
 use crate::model::Model;
 use crate::tracker::HandTracker;
@@ -263,12 +263,7 @@ fn timing_profile(segment: &[[f32; 2]], times: &[f32], n: usize) -> Vec<f32> {
     if segment.len() < 2 || times.len() != segment.len() || duration <= 0.0 {
         return (0..n).map(uniform).collect();
     }
-    let mut arc = Vec::with_capacity(segment.len());
-    arc.push(0.0f32);
-    for w in segment.windows(2) {
-        let d = ((w[1][0] - w[0][0]).powi(2) + (w[1][1] - w[0][1]).powi(2)).sqrt();
-        arc.push(arc.last().copied().unwrap_or(0.0) + d);
-    }
+    let arc = arc_lengths(segment);
     let total = arc.last().copied().unwrap_or(0.0);
     if total <= 0.0 {
         return (0..n).map(uniform).collect();
@@ -276,13 +271,7 @@ fn timing_profile(segment: &[[f32; 2]], times: &[f32], n: usize) -> Vec<f32> {
     let mut i = 1;
     (0..n)
         .map(|k| {
-            let target = total * uniform(k);
-            while i + 1 < arc.len() && arc[i] < target {
-                i += 1;
-            }
-            // Linear between the two points around the target arc length.
-            let span = (arc[i] - arc[i - 1]).max(1e-9);
-            let f = ((target - arc[i - 1]) / span).clamp(0.0, 1.0);
+            let f = locate(&arc, total * uniform(k), &mut i);
             (times[i - 1] + f * (times[i] - times[i - 1])) / duration
         })
         .collect()
