@@ -250,7 +250,7 @@ impl Default for RegisterConfig {
             race_iterations: 3,
             converged: 1e-4,
             sigma: 0.03,
-            silhouette_weight: 4.0,
+            silhouette_weight: 3.0,
             free_space_weight: 4.0,
             silhouette_scale: 0.05,
             free_space_margin: 0.03,
@@ -1023,6 +1023,10 @@ impl Registration {
                     let (wc, cost) = huber(e.norm(), cfg.silhouette_scale);
                     acc.energy += (cfg.silhouette_weight * cost) as f64;
                     let ws = cfg.silhouette_weight * wc;
+                    // Both image axes: pulled only up or down, an arm held out beside
+                    // the silhouette (a T-pose's arm, the person since turned side-on)
+                    // stayed in the air.
+                    acc.add(c.segment, &s, &Vector3::x(), e.x, ws);
                     acc.add(c.segment, &s, &Vector3::y(), e.y, ws);
                 }
             }
@@ -1205,6 +1209,54 @@ mod tests {
         assert!(seen[Segment::Chest.index()] > 0.8, "{seen:?}");
         assert!(seen[Segment::LeftForearm.index()] > 0.8, "{seen:?}");
         assert!(seen[Segment::RightUpperArm.index()] < 0.3, "{seen:?}");
+    }
+
+    #[test]
+    fn an_arm_held_out_beside_the_silhouette_is_pulled_back_onto_it() {
+        let (t, k) = scene();
+        // The truth: standing, arms hanging. The start: the right arm held straight out
+        // sideways at shoulder height, over the background, with no geodesic maximum
+        // to follow (a T-pose's arm, the person since turned side-on and the arm
+        // hidden). Only the silhouette tells it is not there, and the arm lies beside
+        // the person's pixels, not above or below them.
+        let truth = facing(Point3::new(0.0, 0.1, 2.6));
+        let (points, mask) = render(&t, &truth, &k);
+        let frame = frame_of(&points, &mask, &k);
+        let mut start = truth;
+        let mut w = [Vector3::zeros(); Segment::COUNT];
+        w[Segment::RightUpperArm.index()] = Vector3::z() * 1.5;
+        start.step(&Vector3::zeros(), &w);
+        let cfg = RegisterConfig {
+            interior_stride: 1,
+            limb_rest_prior: 0.0,
+            ..RegisterConfig::default()
+        };
+        let posed = Posed::new(&t, &truth);
+        let mut tips = t.tips.map(|(s, local)| Some(posed.point(s, &local)));
+        tips[crate::config::Limb::RightArm.index()] = None;
+        // How far the arm's joints project from the nearest person pixel.
+        let off_silhouette = |pose: &BodyPose| {
+            let skel = Posed::new(&t, pose).skeleton(&t);
+            [Joint::RightElbow, Joint::RightHand].map(|j| {
+                let (u, v) = k.project(&skel[j]).expect("in front of the camera");
+                (0..mask.len())
+                    .filter(|&i| mask[i])
+                    .map(|i| {
+                        let (pu, pv) = ((i % 320) as f32, (i / 320) as f32);
+                        ((pu - u).powi(2) + (pv - v).powi(2)).sqrt()
+                    })
+                    .fold(f32::INFINITY, f32::min)
+            })
+        };
+        let before = off_silhouette(&start);
+        assert!(before[1] > 20.0, "{before:?} pixels off");
+        let mut reg = Registration::default();
+        reg.prepare(&frame, &cfg);
+        let fit = reg
+            .fit(&frame, &t, &[start], &tips, &SEEN, &cfg)
+            .expect("a start");
+        let after = off_silhouette(&fit.pose);
+        assert!(after.iter().all(|&d| d < 2.0), "{after:?} pixels off");
     }
 
     #[test]
