@@ -240,3 +240,30 @@ fn the_supervisor_stops_cleanly_when_the_reader_of_its_events_goes() {
     assert!(!err.contains("panicked"), "{err}");
     assert!(p.shm_files().is_empty(), "left behind: {:?}", p.shm_files());
 }
+
+/// `airglyph synth … --json | true`: an offline tool whose reader has gone ends quietly,
+/// as `cat` or `grep` do, instead of panicking in the middle of its output.
+#[test]
+fn an_offline_tool_ends_quietly_when_the_reader_of_its_output_goes() {
+    let p = Isolated::new();
+    let dir = tempfile::tempdir().unwrap();
+    let mut synth = p
+        .command("airglyph")
+        .args(["synth", "--motion", "pose:neutral", "--frames", "2"])
+        .args(["--resolution", "320x240", "--json", "--out"])
+        .arg(dir.path().join("rec"))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The reader goes before the summary is written.
+    drop(synth.stdout.take());
+    let status = synth.wait().unwrap();
+    let mut err = String::new();
+    std::io::Read::read_to_string(&mut synth.stderr.take().unwrap(), &mut err).unwrap();
+    assert!(!err.contains("panicked"), "{status}: {err}");
+    use std::os::unix::process::ExitStatusExt;
+    assert_eq!(status.signal(), Some(libc::SIGPIPE), "{status}: {err}");
+    // What was written before is whole.
+    assert!(dir.path().join("rec/recording.toml").exists());
+}

@@ -47,7 +47,39 @@ enum Command {
 }
 
 fn main() -> std::process::ExitCode {
-    airglyph_ipc::process::main("airglyph", || dispatch(Cli::parse()))
+    let cli = Cli::parse();
+    if cli.command.is_filter() {
+        die_quietly_on_a_closed_pipe();
+    }
+    airglyph_ipc::process::main("airglyph", || dispatch(cli))
+}
+
+impl Command {
+    /// An offline tool that only reads files and writes stdout, used in pipes
+    /// (`airglyph pose DIR --json | head`). The commands that run stages are not:
+    /// when their reader goes they stop their stages and clean up first.
+    fn is_filter(&self) -> bool {
+        matches!(
+            self,
+            Command::Spot(_)
+                | Command::Devices(_)
+                | Command::Synth(_)
+                | Command::Train(_)
+                | Command::EvalGestures(_)
+                | Command::EvalSpotting(_)
+                | Command::Pose(_)
+                | Command::EvalPose(_)
+        )
+    }
+}
+
+/// Rust ignores SIGPIPE, so `println!` to a pipe whose reader has gone panics. A filter
+/// should end the way `cat` or `grep` do: quietly, by the signal.
+fn die_quietly_on_a_closed_pipe() {
+    // SAFETY: called before any other thread exists; SIG_DFL is a valid disposition.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
 }
 
 fn dispatch(cli: Cli) -> anyhow::Result<()> {
