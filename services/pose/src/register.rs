@@ -1242,7 +1242,8 @@ mod tests {
                 (0..mask.len())
                     .filter(|&i| mask[i])
                     .map(|i| {
-                        let (pu, pv) = ((i % 320) as f32, (i / 320) as f32);
+                        let w = k.width as usize;
+                        let (pu, pv) = ((i % w) as f32, (i / w) as f32);
                         ((pu - u).powi(2) + (pv - v).powi(2)).sqrt()
                     })
                     .fold(f32::INFINITY, f32::min)
