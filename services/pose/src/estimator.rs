@@ -637,6 +637,9 @@ impl PoseEstimator {
                 tips[l.index()] = Some(self.graph.pos[maxima[mi] as usize]);
             }
         }
+        if let (Some(prev), true) = (self.prev_body, cfg.register.enabled) {
+            crate::register::drop_borrowed_tips(&tpl, &prev, &mut tips, &cfg.register);
+        }
         let race = !cfg.register.enabled
             || detecting
             || self.prev_body.is_none_or(|prev| {

@@ -183,6 +183,9 @@ pub struct RegisterConfig {
     /// A hand is placed behind the fingertips seen (as the seed's chains place it) when
     /// they lie this near the fitted body's fingertips; farther, the fit's hand stays.
     pub tip_trust: f32,
+    /// A limb's tip that lies on another limb of the tracked body and at least this much
+    /// (metres) farther from its own is dropped ([`drop_borrowed_tips`]). 0 = off.
+    pub borrowed_tip_gap: f32,
     /// Weight of the head's and the chest's turn from their rest against their parent
     /// (per radian²): the head's turn about its own axis is not in the data at all.
     pub head_prior: f64,
@@ -215,7 +218,7 @@ pub struct RegisterConfig {
     /// The share of a limb pair's front surface the camera must see where the fit puts
     /// it for the frame to count towards the pair's length.
     pub length_seen: f32,
-    /// When set, an arm's upper arm and forearm are learned apart ([`bone_steps`]) from
+    /// When set, an arm's upper arm and forearm are learned apart (`bone_steps`) from
     /// frames whose normal equations of the two bones' length ratios have no eigenvalue
     /// below this (Σ w j², as `length_evidence`). Off (None) by default: at 1.5, before
     /// the gesture stage held its body frame steady, the demo named 34 symbols of 36
@@ -257,6 +260,7 @@ impl Default for RegisterConfig {
             tip_weight: 10.0,
             tip_sigma: 0.1,
             tip_trust: 0.12,
+            borrowed_tip_gap: 0.1,
             head_prior: 1.0,
             chest_prior: 3.0,
             abdomen_prior: 3.0,
@@ -306,7 +310,7 @@ pub struct Fit {
     pub length_step: [Option<f32>; 2],
     /// Per arm (left, right): the change of the upper arm's and the forearm's length
     /// ratios apart that would explain the frame best, only when the frame tells the
-    /// two bones apart (a bent elbow; see [`bone_steps`]).
+    /// two bones apart (a bent elbow; see `bone_steps`).
     pub arm_bone_steps: [Option<[f32; 2]>; 2],
     /// Passes over the data this fit took (all starts).
     pub passes: usize,
@@ -578,6 +582,47 @@ fn place(t: &BodyTemplate, posed: &Posed) -> Vec<Placed> {
             }
         })
         .collect()
+}
+
+/// How near (metres) a tip must lie to another limb's surface to be taken for its point.
+const ON_SURFACE: f32 = 0.03;
+
+/// Drops each limb's tip (its geodesic maximum) that lies on another limb of `tracked`,
+/// the last frame's body, and well away from its own. The geodesic assignment can give
+/// an arm hidden behind the body a maximum of the other arm (a bent elbow before the
+/// chest); its tip term then pulled the hidden arm out to that point, and the race kept
+/// the arm there for frames (CMU 01_01: a hand 45–80 cm off for 5–10 frames at a time).
+pub fn drop_borrowed_tips(
+    t: &BodyTemplate,
+    tracked: &BodyPose,
+    tips: &mut [Option<Point3<f32>>; 5],
+    cfg: &RegisterConfig,
+) {
+    if cfg.borrowed_tip_gap <= 0.0 || tips.iter().all(Option::is_none) {
+        return;
+    }
+    let placed = place(t, &Posed::new(t, tracked));
+    let distance = |limb: crate::Limb, p: &Point3<f32>| {
+        let segments = crate::body::limb_segments(limb);
+        placed
+            .iter()
+            .filter(|c| segments.contains(&c.segment))
+            .map(|c| c.nearest(p).2)
+            .fold(f32::INFINITY, f32::min)
+    };
+    for l in crate::Limb::ALL {
+        let Some(m) = tips[l.index()] else { continue };
+        let own = distance(l, &m);
+        let borrowed = crate::Limb::ALL.iter().any(|&o| {
+            o != l && {
+                let d = distance(o, &m);
+                d < ON_SURFACE && own > d + cfg.borrowed_tip_gap
+            }
+        });
+        if borrowed {
+            tips[l.index()] = None;
+        }
+    }
 }
 
 /// Cauchy's weight and cost for residual `r` at scale `s`.
@@ -1258,6 +1303,40 @@ mod tests {
             .expect("a start");
         let after = off_silhouette(&fit.pose);
         assert!(after.iter().all(|&d| d < 2.0), "{after:?} pixels off");
+    }
+
+    #[test]
+    fn a_tip_on_another_limb_of_the_tracked_body_is_dropped() {
+        use crate::Limb;
+        let (t, _) = scene();
+        let tracked = facing(Point3::new(0.0, 0.1, 2.6));
+        let posed = Posed::new(&t, &tracked);
+        let own = t.tips.map(|(s, local)| Some(posed.point(s, &local)));
+        let cfg = RegisterConfig::default();
+        // Every limb's own tip stays, a hanging hand beside its thigh too.
+        let mut tips = own;
+        drop_borrowed_tips(&t, &tracked, &mut tips, &cfg);
+        assert_eq!(tips, own);
+        // The right arm given a point of the left forearm (its front, halfway down).
+        let c = t
+            .capsules
+            .iter()
+            .find(|c| c.segment == Segment::LeftForearm)
+            .expect("a left forearm");
+        let mid = Point3::from((c.a.coords + c.b.coords) * 0.5);
+        let on_left_forearm = posed.point(c.segment, &mid) - Vector3::z() * c.ra.min(c.rb);
+        tips[Limb::RightArm.index()] = Some(on_left_forearm);
+        drop_borrowed_tips(&t, &tracked, &mut tips, &cfg);
+        assert_eq!(tips[Limb::RightArm.index()], None);
+        assert_eq!(tips[Limb::LeftArm.index()], own[Limb::LeftArm.index()]);
+        // Off, it stays.
+        tips[Limb::RightArm.index()] = Some(on_left_forearm);
+        let off = RegisterConfig {
+            borrowed_tip_gap: 0.0,
+            ..cfg
+        };
+        drop_borrowed_tips(&t, &tracked, &mut tips, &off);
+        assert_eq!(tips[Limb::RightArm.index()], Some(on_left_forearm));
     }
 
     #[test]
