@@ -215,8 +215,10 @@ pub struct Candidate {
     pub class: usize,
     /// Classifier confidence.
     pub score: f64,
-    /// Verifier probability of a whole gesture.
+    /// Verifier probability of a whole gesture…
     pub p_gesture: f64,
+    /// …and of a whole gesture of the classifier's label.
+    pub p_label: f64,
     /// Lee & Kim: best gesture HMM minus threshold model, log-likelihood.
     pub ratio: f64,
     /// What candidates are ranked by.
@@ -390,13 +392,19 @@ impl Spotter {
         input.ratio = ratio;
         // Without a verifier (a model trained without one), every segment the
         // classifier is sure of passes: boundaries then rest on the breaks alone.
-        let (p_gesture, min_gesture_prob) = sm.verifier.as_ref().map_or((1.0, 0.0), |v| {
-            let min = self.cfg.min_gesture_prob.unwrap_or(v.min_gesture_prob());
-            (1.0 - v.probs(&input)[0], min)
-        });
         let class = (0..post.len())
             .max_by(|&a, &b| post[a].total_cmp(&post[b]))
             .unwrap_or(0);
+        let (p_gesture, p_label, min_gesture_prob) =
+            sm.verifier.as_ref().map_or((1.0, 1.0, 0.0), |v| {
+                let min = self.cfg.min_gesture_prob.unwrap_or(v.min_gesture_prob());
+                let probs = v.probs(&input);
+                (
+                    1.0 - probs[0],
+                    probs.get(class + 1).copied().unwrap_or(0.0),
+                    min,
+                )
+            });
         let score = post.get(class).copied().unwrap_or(0.0);
         let accepted = self.cfg.margin.is_none_or(|m| ratio > m)
             && score >= self.cfg.min_score
@@ -409,6 +417,7 @@ impl Spotter {
             class,
             score,
             p_gesture,
+            p_label,
             ratio,
             rank: p_gesture.max(1e-9).ln() + score.max(1e-9).ln(),
             accepted,
