@@ -120,21 +120,6 @@ impl SpottingModel {
     }
 }
 
-/// How overlapping accepted candidates compete.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Competition {
-    /// Per break the best accepted candidate ending there; it replaces the one pending
-    /// if they overlap and it ranks higher, and is dropped if it ranks lower.
-    #[default]
-    Greedy,
-    /// The best `per_break` accepted candidates of each break wait together; the
-    /// non-overlapping set of the largest total utility ([`SpotterConfig::utility_floor`],
-    /// [`SpotterConfig::utility_length`]) is published, earliest first, once its first
-    /// member has waited `hold_seconds` (weighted interval scheduling).
-    Schedule,
-}
-
 /// What overlapping accepted candidates are ranked by: the classifier's confidence
 /// times the verifier's probability of…
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -194,14 +179,6 @@ pub struct SpotterConfig {
     pub hold_seconds: f64,
     pub rest_seconds: f64,
     pub rank_by: RankBy,
-    pub competition: Competition,
-    /// With [`Competition::Schedule`]: how many accepted candidates of each break wait…
-    pub per_break: usize,
-    /// …and each one's utility, ln(rank evidence / utility_floor) (so a candidate
-    /// below the floor is never published), times 1 + utility_length × its seconds (so
-    /// a longer stretch wins over a part of it of nearly the same evidence).
-    pub utility_floor: f64,
-    pub utility_length: f64,
     pub tracker: TrackerConfig,
 }
 
@@ -229,10 +206,6 @@ impl Default for SpotterConfig {
             hold_seconds: 2.5,
             rest_seconds: 0.4,
             rank_by: RankBy::default(),
-            competition: Competition::Greedy,
-            per_break: 1,
-            utility_floor: 0.15,
-            utility_length: 0.0,
             tracker: TrackerConfig::default(),
         }
     }
@@ -300,8 +273,6 @@ pub struct Spotter {
     /// Breaks (gesture ends) waiting for the context after them.
     waiting: std::collections::VecDeque<usize>,
     pending: Option<Candidate>,
-    /// With [`Competition::Schedule`]: the accepted candidates waiting, by end.
-    pool: Vec<Candidate>,
     /// Points before this may not start a gesture (the end of the last one published).
     barrier: usize,
     hand: Hand,
@@ -320,7 +291,6 @@ impl Spotter {
             cfg,
             waiting: Default::default(),
             pending: None,
-            pool: Vec::new(),
             barrier: 0,
             hand: Hand::Right,
             trace: None,
@@ -351,7 +321,6 @@ impl Spotter {
         self.seg.reset();
         self.waiting.clear();
         self.pending = None;
-        self.pool.clear();
         self.barrier = self.seg.next_index();
     }
 
@@ -364,10 +333,6 @@ impl Spotter {
         }
         if let Some(p) = self.pending.take() {
             out.extend(self.publish(p));
-        }
-        let pool = std::mem::take(&mut self.pool);
-        for i in best_schedule(&pool, |c| self.utility(c)) {
-            out.extend(self.publish(pool[i]));
         }
         out
     }
@@ -413,36 +378,22 @@ impl Spotter {
         out
     }
 
-    /// Scores the segments from every earlier break to `e`; the accepted ones compete
-    /// ([`Competition`]).
+    /// Scores the segments from every earlier break to `e`, keeps the best accepted one
+    /// pending, and publishes a pending gesture that this one does not overlap.
     fn candidates_ending(&mut self, e: usize) -> Option<SpottedGesture> {
         let fps = self.seg.fps();
         let min_len = (self.cfg.min_seconds * fps) as usize;
         let max_len = (self.cfg.max_seconds * fps) as usize;
-        let mut accepted = Vec::new();
+        let mut best: Option<Candidate> = None;
         for s in self.seg.starts(e, self.barrier, min_len, max_len) {
             let Some(c) = self.score(s, e) else { continue };
             if let Some(t) = self.trace.as_mut() {
                 t.push(c);
             }
-            if c.accepted {
-                accepted.push(c);
+            if c.accepted && best.is_none_or(|b| c.rank > b.rank) {
+                best = Some(c);
             }
         }
-        accepted.sort_by(|a, b| b.rank.total_cmp(&a.rank));
-        match self.cfg.competition {
-            Competition::Greedy => self.compete_greedy(accepted.first().copied()),
-            Competition::Schedule => {
-                accepted.truncate(self.cfg.per_break.max(1));
-                self.pool.extend(accepted);
-                None
-            }
-        }
-    }
-
-    /// Keeps the best accepted candidate of a break pending, and publishes a pending
-    /// gesture that it does not overlap.
-    fn compete_greedy(&mut self, best: Option<Candidate>) -> Option<SpottedGesture> {
         let c = best?;
         let mut out = None;
         match self.pending {
@@ -502,40 +453,15 @@ impl Spotter {
         })
     }
 
-    /// What a candidate adds to a set of non-overlapping ones ([`Competition::Schedule`]).
-    fn utility(&self, c: &Candidate) -> f64 {
-        let seconds = (c.end - c.start) as f64 / self.seg.fps();
-        (c.rank - self.cfg.utility_floor.max(1e-9).ln()) * (1.0 + self.cfg.utility_length * seconds)
-    }
-
-    /// Publishes the pending gesture (or the first of the best schedule) when it has
-    /// waited long enough.
+    /// Publishes the pending gesture when it has waited long enough.
     fn decide(&mut self, now: usize) -> Option<SpottedGesture> {
-        let p = match self.cfg.competition {
-            Competition::Greedy => self.pending?,
-            Competition::Schedule => {
-                let first = *best_schedule(&self.pool, |c| self.utility(c)).first()?;
-                self.pool[first]
-            }
-        };
-        if !self.waited(p, now) {
-            return None;
-        }
-        self.pending = None;
-        // What started before its end can no longer be published.
-        self.pool.retain(|c| c.start >= p.end);
-        self.publish(p)
-    }
-
-    /// Whether no better candidate overlapping `p` can still come: nothing has come
-    /// for `hold_seconds` after its end, or the hand rests after it.
-    fn waited(&self, p: Candidate, now: usize) -> bool {
+        let p = self.pending?;
         let fps = self.seg.fps();
         let hold = (self.cfg.hold_seconds * fps) as usize;
         // A break within the hold still waits for its context: it may end a longer,
         // better gesture.
         if self.waiting.iter().any(|&e| e <= p.end + hold) {
-            return false;
+            return None;
         }
         // Breaks are judged this many points late.
         let after = (CONTEXT_SECONDS * fps).round() as usize;
@@ -544,7 +470,11 @@ impl Spotter {
             .seg
             .resting_since()
             .is_some_and(|r| r >= p.end && (now - r) as f64 / fps >= self.cfg.rest_seconds);
-        judged >= p.end + hold || rested
+        if judged >= p.end + hold || rested {
+            self.pending = None;
+            return self.publish(p);
+        }
+        None
     }
 
     fn publish(&mut self, c: Candidate) -> Option<SpottedGesture> {
@@ -573,39 +503,8 @@ impl Spotter {
         if let Some(p) = self.pending {
             from = from.min(p.start);
         }
-        if let Some(s) = self.pool.iter().map(|c| c.start).min() {
-            from = from.min(s);
-        }
         self.seg.forget_before(from);
     }
-}
-
-/// Weighted interval scheduling: the indices (in order of end) of the candidates of
-/// `pool`, sorted by end, that do not overlap (one may start where another ends) and
-/// have the largest total utility; candidates of no positive utility are never chosen.
-fn best_schedule(pool: &[Candidate], utility: impl Fn(&Candidate) -> f64) -> Vec<usize> {
-    // best[i]: the largest total of the first i candidates; took[i]: whether that total
-    // includes candidate i - 1.
-    let mut best = vec![0.0; pool.len() + 1];
-    let mut took = vec![false; pool.len() + 1];
-    let before = |i: usize| pool[..i].partition_point(|c| c.end <= pool[i].start);
-    for (i, c) in pool.iter().enumerate() {
-        let with = best[before(i)] + utility(c);
-        took[i + 1] = with > best[i];
-        best[i + 1] = if took[i + 1] { with } else { best[i] };
-    }
-    let mut out = Vec::new();
-    let mut i = pool.len();
-    while i > 0 {
-        if took[i] {
-            out.push(i - 1);
-            i = before(i - 1);
-        } else {
-            i -= 1;
-        }
-    }
-    out.reverse();
-    out
 }
 
 #[cfg(test)]
