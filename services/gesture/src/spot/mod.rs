@@ -14,8 +14,10 @@
 //!    those with the stretch's coarse shape, size, place, timing and the hand's path
 //!    just before and after it, and tells a whole gesture from movement, part of a
 //!    gesture or a gesture with movement around it.
-//! 3. Overlapping accepted candidates compete (verifier × classifier); the winner is
-//!    published once nothing better has come for `hold_seconds` or the hand rests.
+//! 3. Overlapping accepted candidates compete, ranked by the verifier's probability of
+//!    a whole gesture of the classifier's label times the classifier's confidence
+//!    ([`RankBy`]); the winner is published once nothing better has come for
+//!    `hold_seconds` or the hand rests.
 
 mod segmenter;
 mod threshold;
