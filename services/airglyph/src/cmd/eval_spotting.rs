@@ -70,6 +70,11 @@ pub struct Args {
     /// Print every drawn and spotted gesture (to stderr).
     #[arg(long)]
     pub verbose: bool,
+    /// Write every stream's drawn symbols (with the classifier's label of each alone),
+    /// scored candidates and spotted gestures to this file, one JSON object a line (for
+    /// analysis tools such as scripts/spot-competitions).
+    #[arg(long)]
+    pub dump: Option<PathBuf>,
     /// Spotter settings as JSON (fields of SpotterConfig), e.g. '{"min_score":0.6}'.
     #[arg(long)]
     pub spotter: Option<String>,
@@ -256,27 +261,38 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             )
         })
         .collect();
-    let scores: Vec<anyhow::Result<(SpottingScore, usize)>> = chunks
+    let scores: Vec<anyhow::Result<(SpottingScore, usize, Vec<String>)>> = chunks
         .par_iter()
         .map(|(index, seed, c)| {
             let mut r = ChaCha8Rng::seed_from_u64(*seed);
             let s = build_stream(c, &cfg, &mut r);
-            let (spotted, cands) = run_traced(&model, &scfg, &s, &cfg, args.verbose)?;
+            let traced = args.verbose || args.dump.is_some();
+            let (spotted, cands) = run_traced(&model, &scfg, &s, &cfg, traced)?;
             if args.verbose {
                 explain(*index, &model, &s, &cfg, &spotted, &cands);
             }
+            let dumped = if args.dump.is_some() {
+                dump_lines(*index, &model, &s, &cfg, &spotted, &cands)
+            } else {
+                Vec::new()
+            };
             if let Some(path) = args.plot.as_ref().filter(|_| *index == args.plot_stream) {
                 plot(path, &s, &spotted, &cfg, args.plot_from, args.plot_seconds)?;
             }
-            Ok((score(&s.truth, &spotted), s.points.len()))
+            Ok((score(&s.truth, &spotted), s.points.len(), dumped))
         })
         .collect();
     let mut total = SpottingScore::default();
     let mut frames = 0;
+    let mut dump = Vec::new();
     for s in scores {
-        let (s, f) = s?;
+        let (s, f, d) = s?;
         total.add(&s);
         frames += f;
+        dump.extend(d);
+    }
+    if let Some(path) = &args.dump {
+        std::fs::write(path, dump.join("\n") + "\n")?;
     }
     // Pure random movement.
     let mut r = ChaCha8Rng::seed_from_u64(args.seed ^ 0xABCD);
@@ -315,6 +331,40 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// One stream as JSON lines: each drawn symbol (and the classifier's label of its own
+/// frames), each scored candidate, each spotted gesture.
+fn dump_lines(
+    stream: usize,
+    model: &Model,
+    s: &SyntheticStream,
+    cfg: &StreamConfig,
+    spotted: &[SpottedGesture],
+    cands: &[Candidate],
+) -> Vec<String> {
+    let filtered = filtered(s, cfg);
+    let truth = s.truth.iter().map(|t| {
+        let seg = &filtered[t.start as usize..=t.end as usize];
+        let alone = model.classify(&airglyph_gesture::stream::trajectory(seg));
+        json!({"stream": stream, "kind": "drawn", "label": t.label, "start": t.start,
+               "end": t.end, "alone": model.labels[alone.class], "alone_score": alone.score})
+    });
+    let cands = cands.iter().map(|c| {
+        json!({"stream": stream, "kind": "candidate", "label": model.labels[c.class],
+               "start": c.start_seq, "end": c.end_seq, "score": c.score,
+               "p_gesture": c.p_gesture, "p_label": c.p_label, "ratio": c.ratio, "rank": c.rank,
+               "accepted": c.accepted})
+    });
+    let spotted = spotted.iter().map(|g| {
+        json!({"stream": stream, "kind": "spotted", "label": g.label, "start": g.start_seq,
+               "end": g.end_seq, "score": g.score})
+    });
+    truth
+        .chain(cands)
+        .chain(spotted)
+        .map(|v| v.to_string())
+        .collect()
 }
 
 /// The hand as the spotter sees it (after the tracker's filter).

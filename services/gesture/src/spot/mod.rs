@@ -14,8 +14,10 @@
 //!    those with the stretch's coarse shape, size, place, timing and the hand's path
 //!    just before and after it, and tells a whole gesture from movement, part of a
 //!    gesture or a gesture with movement around it.
-//! 3. Overlapping accepted candidates compete (verifier × classifier); the winner is
-//!    published once nothing better has come for `hold_seconds` or the hand rests.
+//! 3. Overlapping accepted candidates compete, ranked by the verifier's probability of
+//!    a whole gesture of the classifier's label times the classifier's confidence
+//!    ([`RankBy`]); the winner is published once nothing better has come for
+//!    `hold_seconds` or the hand rests.
 
 mod segmenter;
 mod threshold;
@@ -120,8 +122,35 @@ impl SpottingModel {
     }
 }
 
+/// What overlapping accepted candidates are ranked by: the classifier's confidence
+/// times the verifier's probability of…
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RankBy {
+    /// …a whole gesture of any label (what acceptance tests).
+    Gesture,
+    /// …a whole gesture of the classifier's label: a stretch the verifier takes for a
+    /// whole gesture, but less surely for the one the classifier names, ranks lower
+    /// (an approach and a "1" that the classifier calls a "7"). The held-out digits
+    /// lose fewer competitions (gesture README, "Spotting").
+    #[default]
+    Label,
+}
+
+impl RankBy {
+    /// The log of the evidence that ranks a candidate among overlapping ones.
+    pub fn rank(self, p_gesture: f64, p_label: f64, score: f64) -> f64 {
+        let verifier = match self {
+            RankBy::Gesture => p_gesture,
+            RankBy::Label => p_label,
+        };
+        verifier.max(1e-9).ln() + score.max(1e-9).ln()
+    }
+}
+
 /// Run-time settings of the spotter.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct SpotterConfig {
     /// Expected size of a drawn gesture (its larger side) in shoulder widths.
     pub gesture_size: f32,
@@ -151,6 +180,7 @@ pub struct SpotterConfig {
     /// a rest of `rest_seconds` after it decides at once.
     pub hold_seconds: f64,
     pub rest_seconds: f64,
+    pub rank_by: RankBy,
     pub tracker: TrackerConfig,
 }
 
@@ -177,6 +207,7 @@ impl Default for SpotterConfig {
             // uppercase).
             hold_seconds: 2.5,
             rest_seconds: 0.4,
+            rank_by: RankBy::default(),
             tracker: TrackerConfig::default(),
         }
     }
@@ -215,8 +246,10 @@ pub struct Candidate {
     pub class: usize,
     /// Classifier confidence.
     pub score: f64,
-    /// Verifier probability of a whole gesture.
+    /// Verifier probability of a whole gesture…
     pub p_gesture: f64,
+    /// …and of a whole gesture of the classifier's label.
+    pub p_label: f64,
     /// Lee & Kim: best gesture HMM minus threshold model, log-likelihood.
     pub ratio: f64,
     /// What candidates are ranked by.
@@ -390,13 +423,19 @@ impl Spotter {
         input.ratio = ratio;
         // Without a verifier (a model trained without one), every segment the
         // classifier is sure of passes: boundaries then rest on the breaks alone.
-        let (p_gesture, min_gesture_prob) = sm.verifier.as_ref().map_or((1.0, 0.0), |v| {
-            let min = self.cfg.min_gesture_prob.unwrap_or(v.min_gesture_prob());
-            (1.0 - v.probs(&input)[0], min)
-        });
         let class = (0..post.len())
             .max_by(|&a, &b| post[a].total_cmp(&post[b]))
             .unwrap_or(0);
+        let (p_gesture, p_label, min_gesture_prob) =
+            sm.verifier.as_ref().map_or((1.0, 1.0, 0.0), |v| {
+                let min = self.cfg.min_gesture_prob.unwrap_or(v.min_gesture_prob());
+                let probs = v.probs(&input);
+                (
+                    1.0 - probs[0],
+                    probs.get(class + 1).copied().unwrap_or(0.0),
+                    min,
+                )
+            });
         let score = post.get(class).copied().unwrap_or(0.0);
         let accepted = self.cfg.margin.is_none_or(|m| ratio > m)
             && score >= self.cfg.min_score
@@ -409,8 +448,9 @@ impl Spotter {
             class,
             score,
             p_gesture,
+            p_label,
             ratio,
-            rank: p_gesture.max(1e-9).ln() + score.max(1e-9).ln(),
+            rank: self.cfg.rank_by.rank(p_gesture, p_label, score),
             accepted,
         })
     }
@@ -466,5 +506,30 @@ impl Spotter {
             from = from.min(p.start);
         }
         self.seg.forget_before(from);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ranking_by_label_prefers_the_stretch_the_verifier_names_as_the_classifier_does() {
+        // Both whole gestures to the verifier, equally sure to the classifier; the first
+        // the verifier reads as the classifier's label, the second mostly as another.
+        let (named, other) = ((0.9, 0.88, 0.99), (0.95, 0.6, 0.99));
+        let rank = |by: RankBy, (g, l, s): (f64, f64, f64)| by.rank(g, l, s);
+        assert!(rank(RankBy::Gesture, other) > rank(RankBy::Gesture, named));
+        assert!(rank(RankBy::Label, named) > rank(RankBy::Label, other));
+        // Nothing is -inf.
+        assert!(RankBy::Label.rank(1.0, 0.0, 0.0).is_finite());
+    }
+
+    #[test]
+    fn settings_without_the_ranking_field_still_load() {
+        let mut v = serde_json::to_value(SpotterConfig::default()).unwrap();
+        v.as_object_mut().unwrap().remove("rank_by");
+        let cfg: SpotterConfig = serde_json::from_value(v).unwrap();
+        assert_eq!(cfg.rank_by, RankBy::Label);
     }
 }
