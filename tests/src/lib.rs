@@ -16,6 +16,14 @@ pub struct Isolated {
     pub prefix: String,
 }
 
+/// The pipeline's iceoryx2 root folder goes with it (its /dev/shm files are the
+/// processes' to remove, and tests check that they did).
+impl Drop for Isolated {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.root);
+    }
+}
+
 impl Isolated {
     pub fn new() -> Self {
         static N: AtomicU32 = AtomicU32::new(0);

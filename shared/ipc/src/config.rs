@@ -162,5 +162,6 @@ mod tests {
             err.contains("airglyph.toml") && err.contains("prefx"),
             "{err}"
         );
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -770,11 +770,16 @@ mod tests {
                 root: format!("/tmp/airglyph-test-{}-wait/", std::process::id()),
                 prefix: format!("agt{}wait_", std::process::id()),
             };
+            let root = cfg.root.clone();
             let pipeline = Pipeline::join_with(cfg, "waiter").unwrap();
             let receiver = pipeline.skeleton_receiver().unwrap();
             for ns in [1, 500, 999, 1_000, 1_001] {
                 wait(&receiver.listener, ns).unwrap();
             }
+            // Gone before the test's process may end, so its shared memory is removed.
+            drop(receiver);
+            drop(pipeline);
+            let _ = std::fs::remove_dir_all(root);
             done.send(()).unwrap();
         });
         assert!(

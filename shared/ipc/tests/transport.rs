@@ -5,16 +5,27 @@ use airglyph_core::Intrinsics;
 use airglyph_ipc::{DepthHeader, IpcConfig, Pipeline, SkeletonMsg};
 use std::time::Duration;
 
-fn isolated(tag: &str) -> IpcConfig {
-    IpcConfig {
+/// A test's own IPC root and prefix; the root's folder is removed when this is dropped,
+/// so bind it before the pipelines, which then go first.
+struct Isolated(IpcConfig);
+
+impl Drop for Isolated {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0.root);
+    }
+}
+
+fn isolated(tag: &str) -> Isolated {
+    Isolated(IpcConfig {
         root: format!("/tmp/airglyph-test-{}-{tag}/", std::process::id()),
         prefix: format!("agt{}{tag}_", std::process::id()),
-    }
+    })
 }
 
 #[test]
 fn depth_frames_arrive_in_order_and_bad_headers_are_counted() {
-    let cfg = isolated("d");
+    let isolated = isolated("d");
+    let cfg = isolated.0.clone();
     let publisher_side = Pipeline::join_with(cfg.clone(), "pub").unwrap();
     let subscriber_side = Pipeline::join_with(cfg, "sub").unwrap();
     let k = Intrinsics::new(4, 3, 10.0, 10.0, 1.5, 1.0);
@@ -70,7 +81,8 @@ fn depth_frames_arrive_in_order_and_bad_headers_are_counted() {
 
 #[test]
 fn a_slow_subscriber_loses_the_oldest_frames_and_counts_them() {
-    let cfg = isolated("s");
+    let isolated = isolated("s");
+    let cfg = isolated.0.clone();
     let side = Pipeline::join_with(cfg, "both").unwrap();
     // Subscribed before the capture session began: all its frames were meant for us.
     let mut receiver = side.depth_receiver().unwrap();
@@ -91,7 +103,8 @@ fn a_slow_subscriber_loses_the_oldest_frames_and_counts_them() {
 
 #[test]
 fn skeletons_with_nan_are_refused() {
-    let side = Pipeline::join_with(isolated("k"), "both").unwrap();
+    let isolated = isolated("k");
+    let side = Pipeline::join_with(isolated.0.clone(), "both").unwrap();
     let publisher = side.skeleton_publisher().unwrap();
     let mut receiver = side.skeleton_receiver().unwrap();
     let mut msg = SkeletonMsg {
