@@ -84,6 +84,11 @@ fn main() {
     let mut series = std::env::var("SERIES")
         .ok()
         .map(|f| std::io::BufWriter::new(std::fs::File::create(f).unwrap()));
+    // DUMP_JOINT=NAME: the joint DUMP's rows start with (default the right hand).
+    let dump_first = std::env::var("DUMP_JOINT")
+        .ok()
+        .and_then(|n| Joint::ALL.into_iter().find(|j| j.name() == n))
+        .unwrap_or(Joint::RightHand);
     let mut dump = std::env::var("DUMP")
         .ok()
         .map(|f| std::io::BufWriter::new(std::fs::File::create(f).unwrap()));
@@ -149,14 +154,9 @@ fn main() {
             use std::io::Write;
             let g = est.debug().geodesic.unwrap_or(r.skeleton);
             let mut row = format!("{i}");
-            // DUMP_JOINT=NAME: that joint first instead of the right hand.
-            let first = std::env::var("DUMP_JOINT")
-                .ok()
-                .and_then(|n| Joint::ALL.into_iter().find(|j| j.name() == n))
-                .unwrap_or(Joint::RightHand);
             for s in [&truth.skeleton, &r.skeleton, &g] {
                 for j in [
-                    first,
+                    dump_first,
                     Joint::LeftShoulder,
                     Joint::RightShoulder,
                     Joint::RightElbow,
@@ -166,7 +166,7 @@ fn main() {
                     row += &format!(",{:.4},{:.4},{:.4}", s[j].x, s[j].y, s[j].z);
                 }
             }
-            for j in [first, Joint::LeftShoulder, Joint::Neck, Joint::Pelvis] {
+            for j in [dump_first, Joint::LeftShoulder, Joint::Neck, Joint::Pelvis] {
                 row += &format!(",{:.3}", r.skeleton.confidence[j.index()]);
             }
             writeln!(d, "{row}").unwrap();

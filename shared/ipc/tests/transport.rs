@@ -15,6 +15,12 @@ impl Drop for Isolated {
     }
 }
 
+impl Isolated {
+    fn config(&self) -> IpcConfig {
+        self.0.clone()
+    }
+}
+
 fn isolated(tag: &str) -> Isolated {
     Isolated(IpcConfig {
         root: format!("/tmp/airglyph-test-{}-{tag}/", std::process::id()),
@@ -24,8 +30,8 @@ fn isolated(tag: &str) -> Isolated {
 
 #[test]
 fn depth_frames_arrive_in_order_and_bad_headers_are_counted() {
-    let isolated = isolated("d");
-    let cfg = isolated.0.clone();
+    let ipc = isolated("d");
+    let cfg = ipc.config();
     let publisher_side = Pipeline::join_with(cfg.clone(), "pub").unwrap();
     let subscriber_side = Pipeline::join_with(cfg, "sub").unwrap();
     let k = Intrinsics::new(4, 3, 10.0, 10.0, 1.5, 1.0);
@@ -81,8 +87,8 @@ fn depth_frames_arrive_in_order_and_bad_headers_are_counted() {
 
 #[test]
 fn a_slow_subscriber_loses_the_oldest_frames_and_counts_them() {
-    let isolated = isolated("s");
-    let cfg = isolated.0.clone();
+    let ipc = isolated("s");
+    let cfg = ipc.config();
     let side = Pipeline::join_with(cfg, "both").unwrap();
     // Subscribed before the capture session began: all its frames were meant for us.
     let mut receiver = side.depth_receiver().unwrap();
@@ -103,8 +109,8 @@ fn a_slow_subscriber_loses_the_oldest_frames_and_counts_them() {
 
 #[test]
 fn skeletons_with_nan_are_refused() {
-    let isolated = isolated("k");
-    let side = Pipeline::join_with(isolated.0.clone(), "both").unwrap();
+    let ipc = isolated("k");
+    let side = Pipeline::join_with(ipc.config(), "both").unwrap();
     let publisher = side.skeleton_publisher().unwrap();
     let mut receiver = side.skeleton_receiver().unwrap();
     let mut msg = SkeletonMsg {
