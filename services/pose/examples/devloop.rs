@@ -56,10 +56,16 @@ fn main() {
     let mut pcfg = PoseConfig::default();
     for a in &args {
         // set:FIELD=VALUE sets any PoseConfig field (VALUE as JSON), e.g.
-        // set:calibrate_body=false, set:work_width=0, set:geodesic_reach_ratio=[1.3,1.2].
+        // set:calibrate_body=false, set:work_width=0, set:geodesic_reach_ratio=[1.3,1.2],
+        // set:register.collar_gain=0.1.
         if let Some((k, v)) = a.strip_prefix("set:").and_then(|kv| kv.split_once('=')) {
+            // A dotted FIELD reaches into nested settings (register.collar_gain); an
+            // unknown one is refused rather than silently ignored.
             let mut j = serde_json::to_value(&pcfg).unwrap();
-            j[k] = serde_json::from_str(v).expect("a JSON value");
+            let slot = j
+                .pointer_mut(&format!("/{}", k.replace('.', "/")))
+                .unwrap_or_else(|| panic!("no PoseConfig field {k}"));
+            *slot = serde_json::from_str(v).expect("a JSON value");
             pcfg = serde_json::from_value(j).expect("a PoseConfig field");
         }
     }
