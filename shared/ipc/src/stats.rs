@@ -156,6 +156,23 @@ impl Telemetry {
     }
 }
 
+/// A stage's totals, logged when it stops: a run that went wrong (a stage that fell
+/// behind and dropped frames, inputs refused as malformed) leaves a trace in the log
+/// even when nobody watched its stats.
+impl Drop for Telemetry {
+    fn drop(&mut self) {
+        let t = &self.totals;
+        tracing::info!(
+            stage = self.stage.name(),
+            frames_in = t.frames_in,
+            dropped = t.frames_dropped,
+            rejected = t.frames_rejected,
+            frames_out = t.frames_out,
+            "stage totals"
+        );
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
