@@ -21,7 +21,7 @@
 use crate::data::{Sample, Trajectory};
 use crate::features::resample;
 use crate::spot::SpottedGesture;
-use crate::tracker::skeleton_with_hand;
+use crate::tracker::{skeleton_with_hand, OneEuro, OneEuroPlane, TrackerConfig};
 use airglyph_core::Skeleton;
 use rand::Rng;
 use serde::Serialize;
@@ -508,6 +508,54 @@ fn add_noise<R: Rng>(points: &mut [[f32; 2]], noise: f32, rng: &mut R) {
     }
 }
 
+/// A trajectory as the spotter sees it when it is drawn in a stream: approached from a
+/// resting hand, drawn with the stream's timing (`cfg`), with tracking noise, through
+/// the hand tracker's One Euro filter (`tracker`'s settings), and cut at the frames it
+/// was drawn in. For training the classifier on what the stream does to a symbol: the
+/// filter lags and rounds its corners (gesture README, "What the stream does to a
+/// symbol").
+pub fn drawn_in_stream<R: Rng>(
+    t: &Trajectory,
+    cfg: &StreamConfig,
+    tracker: &TrackerConfig,
+    rng: &mut R,
+) -> Trajectory {
+    let sample = Sample {
+        label: String::new(),
+        subject: String::new(),
+        strokes: vec![t.points.clone()],
+    };
+    // No ordinary movement before the approach: the filter forgets within a few frames.
+    let cfg = StreamConfig {
+        moves: (0, 0),
+        ..*cfg
+    };
+    let s = build_stream(&[&sample], &cfg, rng);
+    let Some(truth) = s.truth.first() else {
+        return t.clone();
+    };
+    let mut fx = OneEuro::new(tracker.min_cutoff, tracker.beta, tracker.d_cutoff);
+    let mut fy = OneEuro::new(tracker.min_cutoff, tracker.beta, tracker.d_cutoff);
+    let mut plane = OneEuroPlane::new(tracker.min_cutoff, tracker.beta, tracker.d_cutoff);
+    let filtered: Vec<[f32; 2]> = s
+        .points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let time = i as f64 / cfg.fps as f64;
+            let (x, y) = (p[0] as f64, p[1] as f64);
+            if tracker.plane_filter {
+                let q = plane.filter([x, y], time);
+                [q[0] as f32, q[1] as f32]
+            } else {
+                [fx.filter(x, time) as f32, fy.filter(y, time) as f32]
+            }
+        })
+        .collect();
+    let (a, b) = (truth.start as usize, truth.end as usize);
+    Trajectory::from_points(filtered[a..=b].to_vec())
+}
+
 /// A stream of ordinary movement only (`seconds` long).
 pub fn random_movement<R: Rng>(seconds: f32, cfg: &StreamConfig, rng: &mut R) -> SyntheticStream {
     let frames = (seconds * cfg.fps) as usize;
@@ -597,4 +645,39 @@ pub fn score(truth: &[TruthGesture], spotted: &[SpottedGesture]) -> SpottingScor
 /// Convenience for a trajectory of body-frame points.
 pub fn trajectory(points: &[[f32; 2]]) -> Trajectory {
     Trajectory::from_points(points.to_vec())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    /// Mean distance between two paths resampled and normalized alike.
+    fn shape_distance(a: &Trajectory, b: &Trajectory) -> f32 {
+        let (ra, rb) = (resample(a, 64), resample(b, 64));
+        ra.points
+            .iter()
+            .zip(&rb.points)
+            .map(|(p, q)| ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt())
+            .sum::<f32>()
+            / 64.0
+    }
+
+    #[test]
+    fn a_symbol_drawn_in_a_stream_keeps_its_shape() {
+        // An "L" 0.4 × 0.6 units large: down, then right.
+        let l = Trajectory::from_points(vec![[0.0, 0.0], [0.0, 0.6], [0.4, 0.6]]);
+        let cfg = StreamConfig::default();
+        let tracker = TrackerConfig::default();
+        for seed in 0..8 {
+            let drawn = drawn_in_stream(&l, &cfg, &tracker, &mut ChaCha8Rng::seed_from_u64(seed));
+            // Drawn 0.8–1.2 shoulder widths large (path 1.3–2 long) at about 1.5 a
+            // second, 30 frames a second: 15–80 frames.
+            assert!((15..=80).contains(&drawn.len()), "{} frames", drawn.len());
+            // The filter rounds the corner a little; the symbol stays an "L".
+            let d = shape_distance(&l, &drawn);
+            assert!(d < 0.05, "seed {seed}: shape moved by {d}");
+        }
+    }
 }

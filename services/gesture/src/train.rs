@@ -11,7 +11,9 @@ use crate::model::{
     Classifier, LabelledHmm, Model, TrainingInfo, MAX_LABEL_BYTES, MODEL_FORMAT, MODEL_VERSION,
 };
 use crate::spot::SpottingModel;
-use rand::SeedableRng;
+use crate::stream::{drawn_in_stream, StreamConfig};
+use crate::tracker::TrackerConfig;
+use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -63,6 +65,11 @@ pub struct TrainConfig {
     pub ensemble: usize,
     /// Augmentation strength (0 = none).
     pub augment: f32,
+    /// Fraction of the augmented training samples (network classifier) that are also
+    /// drawn in a synthetic stream and seen as the spotter sees them, through the hand
+    /// tracker's filter ([`drawn_in_stream`]). 0 in models trained before it.
+    #[serde(default)]
+    pub stream_augment: f32,
     /// Add spotting HMMs.
     pub spotting: bool,
     pub spotting_step: f64,
@@ -84,12 +91,28 @@ impl Default for TrainConfig {
             features: FeatureConfig::default(),
             ensemble: 3,
             augment: 1.0,
+            stream_augment: 0.0,
             spotting: true,
             spotting_step: 0.1,
             spotting_states: 10,
             seed: 1,
             data: Vec::new(),
         }
+    }
+}
+
+/// Streams as varied as the verifier's training streams, so that the classifier does
+/// not learn one pace: mean drawing speed 1.2–1.8 shoulder widths a second, a third of
+/// the symbols in one smooth movement, entering and leaving at up to 0.3–0.7 × the
+/// drawing speed.
+fn training_stream<R: Rng>(rng: &mut R) -> StreamConfig {
+    StreamConfig {
+        speed: rng.gen_range(1.2..1.8),
+        pause_prob: rng.gen_range(0.1..0.6),
+        flow: rng.gen_range(0.3..0.7),
+        one_movement: 0.3,
+        reach_speed: (0.8, 4.0),
+        ..StreamConfig::default()
     }
 }
 
@@ -186,6 +209,7 @@ pub fn train(
         ClassifierKind::Mlp => {
             let trajs: Vec<_> = samples.iter().map(|s| s.trajectory()).collect();
             let fcfg = cfg.features;
+            let tracker = TrackerConfig::default();
             let total = (cfg.mlp.epochs * cfg.ensemble.max(1)) as u64;
             let mut nets = Vec::new();
             for e in 0..cfg.ensemble.max(1) {
@@ -199,7 +223,12 @@ pub fn train(
                         let mut rng = ChaCha8Rng::seed_from_u64(
                             seed ^ ((epoch as u64) << 32) ^ (i as u64).wrapping_mul(0x9E37_79B9),
                         );
-                        feature_vector(&augment(&trajs[i], &mut rng, strength), &fcfg, &mut f);
+                        let mut t = augment(&trajs[i], &mut rng, strength);
+                        if cfg.stream_augment > 0.0 && rng.gen::<f32>() < cfg.stream_augment {
+                            let scfg = training_stream(&mut rng);
+                            t = drawn_in_stream(&t, &scfg, &tracker, &mut rng);
+                        }
+                        feature_vector(&t, &fcfg, &mut f);
                     }
                     f
                 };

@@ -36,6 +36,15 @@ pub struct Args {
     pub pen_up: bool,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Fraction of the network's augmented training samples that are also drawn in a
+    /// synthetic stream and seen through the hand tracker's filter, as the spotter sees
+    /// them (mlp; 0 = never).
+    #[arg(long, default_value_t = TrainConfig::default().stream_augment)]
+    pub stream_augment: f32,
+    /// Train the classifier only, without the spotting part (HMMs and verifier): quick,
+    /// for comparing classifiers; such a model classifies but cannot spot.
+    #[arg(long, conflicts_with = "reuse_classifier")]
+    pub no_spotting: bool,
     /// Keep the classifier of this model (same labels) and retrain only the spotting
     /// part (HMMs and verifier).
     #[arg(long)]
@@ -69,6 +78,11 @@ pub fn config(args: &Args) -> anyhow::Result<TrainConfig> {
     cfg.mlp.epochs = args.epochs.max(1);
     cfg.mlp.hidden = args.hidden.max(2);
     cfg.features.pen_up = args.pen_up;
+    if !(0.0..=1.0).contains(&args.stream_augment) {
+        anyhow::bail!("--stream-augment {} is not in [0, 1]", args.stream_augment);
+    }
+    cfg.stream_augment = args.stream_augment;
+    cfg.spotting = !args.no_spotting;
     Ok(cfg)
 }
 
