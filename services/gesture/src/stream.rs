@@ -21,7 +21,7 @@
 use crate::data::{Sample, Trajectory};
 use crate::features::resample;
 use crate::spot::SpottedGesture;
-use crate::tracker::{skeleton_with_hand, OneEuro, OneEuroPlane, TrackerConfig};
+use crate::tracker::{skeleton_with_hand, HandFilter, TrackerConfig};
 use airglyph_core::Skeleton;
 use rand::Rng;
 use serde::Serialize;
@@ -534,22 +534,15 @@ pub fn drawn_in_stream<R: Rng>(
     let Some(truth) = s.truth.first() else {
         return t.clone();
     };
-    let mut fx = OneEuro::new(tracker.min_cutoff, tracker.beta, tracker.d_cutoff);
-    let mut fy = OneEuro::new(tracker.min_cutoff, tracker.beta, tracker.d_cutoff);
-    let mut plane = OneEuroPlane::new(tracker.min_cutoff, tracker.beta, tracker.d_cutoff);
+    let mut hand = HandFilter::new(tracker);
     let filtered: Vec<[f32; 2]> = s
         .points
         .iter()
         .enumerate()
         .map(|(i, p)| {
             let time = i as f64 / cfg.fps as f64;
-            let (x, y) = (p[0] as f64, p[1] as f64);
-            if tracker.plane_filter {
-                let q = plane.filter([x, y], time);
-                [q[0] as f32, q[1] as f32]
-            } else {
-                [fx.filter(x, time) as f32, fy.filter(y, time) as f32]
-            }
+            hand.filter([p[0] as f64, p[1] as f64], time)
+                .map(|c| c as f32)
         })
         .collect();
     let (a, b) = (truth.start as usize, truth.end as usize);

@@ -5,7 +5,7 @@
 //! by the One Euro filter (Casiez, Roussel, Vogel, CHI 2012).
 
 use crate::body_frame::{BodyFrame, FrameSmoother, FrameSmoothing};
-pub use airglyph_core::filter::OneEuro;
+pub use airglyph_core::filter::{OneEuro, OneEuroPlane};
 use airglyph_core::{Joint, Skeleton};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
@@ -90,9 +90,7 @@ pub struct HandTracker {
     cfg: TrackerConfig,
     hand: Hand,
     lead: u32,
-    fx: OneEuro,
-    fy: OneEuro,
-    plane: OneEuroPlane,
+    filter: HandFilter,
     frame: FrameSmoother,
 }
 
@@ -102,9 +100,7 @@ impl HandTracker {
             hand: cfg.hand.unwrap_or(Hand::Right),
             cfg,
             lead: 0,
-            fx: OneEuro::new(cfg.min_cutoff, cfg.beta, cfg.d_cutoff),
-            fy: OneEuro::new(cfg.min_cutoff, cfg.beta, cfg.d_cutoff),
-            plane: OneEuroPlane::new(cfg.min_cutoff, cfg.beta, cfg.d_cutoff),
+            filter: HandFilter::new(&cfg),
             frame: FrameSmoother::new(cfg.frame),
         }
     }
@@ -114,9 +110,7 @@ impl HandTracker {
     }
 
     pub fn reset(&mut self) {
-        self.fx.reset();
-        self.fy.reset();
-        self.plane.reset();
+        self.filter.reset();
         self.lead = 0;
         self.frame.reset();
     }
@@ -163,9 +157,7 @@ impl HandTracker {
                         Hand::Right => Hand::Left,
                     };
                     self.lead = 0;
-                    self.fx.reset();
-                    self.fy.reset();
-                    self.plane.reset();
+                    self.filter.reset();
                 }
             } else {
                 self.lead = 0;
@@ -179,11 +171,7 @@ impl HandTracker {
             return None;
         }
         let [x, y, forward] = frame.project(s[hj].coords);
-        let [x, y] = if self.cfg.plane_filter {
-            self.plane.filter([x as f64, y as f64], t)
-        } else {
-            [self.fx.filter(x as f64, t), self.fy.filter(y as f64, t)]
-        };
+        let [x, y] = self.filter.filter([x as f64, y as f64], t);
         Some(HandPoint {
             x: x as f32,
             y: y as f32,
@@ -193,63 +181,38 @@ impl HandTracker {
     }
 }
 
-/// The One Euro filter (Casiez, Roussel & Vogel 2012) for a point in the plane: both
-/// coordinates share one cut-off, raised by the point's speed (the length of its
-/// smoothed velocity), so a moving hand is followed alike in every direction.
-#[derive(Debug, Clone, PartialEq)]
-pub struct OneEuroPlane {
-    pub min_cutoff: f64,
-    pub beta: f64,
-    pub d_cutoff: f64,
-    x: Option<[f64; 2]>,
-    dx: [f64; 2],
-    t: f64,
+/// The hand's One Euro filter in the body frame, as [`TrackerConfig::plane_filter`]
+/// chooses: one cut-off for both coordinates, or one a coordinate (as before).
+#[derive(Debug, Clone)]
+pub enum HandFilter {
+    Plane(OneEuroPlane),
+    Axes([OneEuro; 2]),
 }
 
-fn euro_alpha(cutoff: f64, dt: f64) -> f64 {
-    let tau = 1.0 / (2.0 * std::f64::consts::PI * cutoff);
-    1.0 / (1.0 + tau / dt)
-}
-
-impl OneEuroPlane {
-    pub fn new(min_cutoff: f64, beta: f64, d_cutoff: f64) -> Self {
-        Self {
-            min_cutoff,
-            beta,
-            d_cutoff,
-            x: None,
-            dx: [0.0; 2],
-            t: 0.0,
+impl HandFilter {
+    pub fn new(cfg: &TrackerConfig) -> Self {
+        let (fc, beta, dc) = (cfg.min_cutoff, cfg.beta, cfg.d_cutoff);
+        if cfg.plane_filter {
+            Self::Plane(OneEuroPlane::new(fc, beta, dc))
+        } else {
+            Self::Axes([OneEuro::new(fc, beta, dc), OneEuro::new(fc, beta, dc)])
         }
     }
 
-    /// Filters point `p` observed at time `t` seconds (as [`OneEuro::filter`]).
+    /// Filters point `p` observed at time `t` seconds.
     pub fn filter(&mut self, p: [f64; 2], t: f64) -> [f64; 2] {
-        let Some(prev) = self.x else {
-            self.x = Some(p);
-            self.t = t;
-            return p;
-        };
-        let dt = (t - self.t).max(1e-4);
-        self.t = t;
-        let a = euro_alpha(self.d_cutoff, dt);
-        for k in 0..2 {
-            self.dx[k] += a * ((p[k] - prev[k]) / dt - self.dx[k]);
+        match self {
+            Self::Plane(f) => f.filter(p, t),
+            Self::Axes([fx, fy]) => [fx.filter(p[0], t), fy.filter(p[1], t)],
         }
-        let speed = self.dx[0].hypot(self.dx[1]);
-        let a = euro_alpha(self.min_cutoff + self.beta * speed, dt);
-        let v = [
-            prev[0] + a * (p[0] - prev[0]),
-            prev[1] + a * (p[1] - prev[1]),
-        ];
-        self.x = Some(v);
-        v
     }
 
-    /// Forgets the signal: the next point passes unchanged.
+    /// Forgets the hand: the next point passes unchanged.
     pub fn reset(&mut self) {
-        self.x = None;
-        self.dx = [0.0; 2];
+        match self {
+            Self::Plane(f) => f.reset(),
+            Self::Axes(fs) => fs.iter_mut().for_each(OneEuro::reset),
+        }
     }
 }
 
@@ -383,19 +346,11 @@ mod tests {
     /// shoulder widths, drawn at 1.5 a second, 30 frames a second) as filtered over its
     /// second turn, and the jitter left of ±0.01 noise on a resting hand.
     fn circle_and_jitter(plane_filter: bool) -> (f64, f64, f64) {
-        let cfg = TrackerConfig::default();
-        let mut axes = [
-            OneEuro::new(cfg.min_cutoff, cfg.beta, cfg.d_cutoff),
-            OneEuro::new(cfg.min_cutoff, cfg.beta, cfg.d_cutoff),
-        ];
-        let mut plane = OneEuroPlane::new(cfg.min_cutoff, cfg.beta, cfg.d_cutoff);
-        let mut filter = |p: [f64; 2], t: f64| {
-            if plane_filter {
-                plane.filter(p, t)
-            } else {
-                [axes[0].filter(p[0], t), axes[1].filter(p[1], t)]
-            }
-        };
+        let mut hand = HandFilter::new(&TrackerConfig {
+            plane_filter,
+            ..TrackerConfig::default()
+        });
+        let mut filter = |p: [f64; 2], t: f64| hand.filter(p, t);
         let (mut lo, mut hi) = (f64::MAX, 0.0f64);
         // 1.5 shoulder widths a second on a circle of radius 0.5: 3 radians a second.
         for i in 0..126 {

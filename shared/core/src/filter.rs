@@ -1,6 +1,7 @@
 //! The One Euro filter (Casiez, Roussel & Vogel, CHI 2012): a low-pass filter whose
 //! cut-off rises with speed, so a still joint stops jittering and a moving one does not
-//! lag. The pose stage smooths joints with it, the gesture stage the drawing hand.
+//! lag. The pose stage smooths joints with it, the gesture stage the drawing hand
+//! ([`OneEuroPlane`]: one cut-off for both coordinates).
 
 /// One Euro filter for one coordinate.
 #[derive(Debug, Clone, PartialEq)]
@@ -55,6 +56,63 @@ impl OneEuro {
     pub fn reset(&mut self) {
         self.x = None;
         self.dx = 0.0;
+    }
+}
+
+/// One Euro filter for a point in the plane: both
+/// coordinates share one cut-off, raised by the point's speed (the length of its
+/// smoothed velocity), so a moving hand is followed alike in every direction. Two
+/// [`OneEuro`]s, one a coordinate, smooth each coordinate hardest where it turns, at
+/// another moment than the other: a circle comes out an ellipse.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OneEuroPlane {
+    pub min_cutoff: f64,
+    pub beta: f64,
+    pub d_cutoff: f64,
+    x: Option<[f64; 2]>,
+    dx: [f64; 2],
+    t: f64,
+}
+
+impl OneEuroPlane {
+    pub fn new(min_cutoff: f64, beta: f64, d_cutoff: f64) -> Self {
+        Self {
+            min_cutoff,
+            beta,
+            d_cutoff,
+            x: None,
+            dx: [0.0; 2],
+            t: 0.0,
+        }
+    }
+
+    /// Filters point `p` observed at time `t` seconds (as [`OneEuro::filter`]).
+    pub fn filter(&mut self, p: [f64; 2], t: f64) -> [f64; 2] {
+        let Some(prev) = self.x else {
+            self.x = Some(p);
+            self.t = t;
+            return p;
+        };
+        let dt = (t - self.t).max(1e-4);
+        self.t = t;
+        let a = alpha(self.d_cutoff, dt);
+        for k in 0..2 {
+            self.dx[k] += a * ((p[k] - prev[k]) / dt - self.dx[k]);
+        }
+        let speed = self.dx[0].hypot(self.dx[1]);
+        let a = alpha(self.min_cutoff + self.beta * speed, dt);
+        let v = [
+            prev[0] + a * (p[0] - prev[0]),
+            prev[1] + a * (p[1] - prev[1]),
+        ];
+        self.x = Some(v);
+        v
+    }
+
+    /// Forgets the signal: the next point passes unchanged.
+    pub fn reset(&mut self) {
+        self.x = None;
+        self.dx = [0.0; 2];
     }
 }
 
