@@ -508,6 +508,22 @@ fn add_noise<R: Rng>(points: &mut [[f32; 2]], noise: f32, rng: &mut R) {
     }
 }
 
+/// Streams more varied than the evaluation's defaults, for training (the verifier, and
+/// the classifier with `stream_augment`), so that what is trained does not learn one way
+/// of moving: mean drawing speed 1.2–1.8 shoulder widths a second, a third of the symbols
+/// drawn in one smooth movement, entering and leaving at 0.3–0.7 × the drawing speed,
+/// reaches up to twice as fast.
+pub fn training_stream<R: Rng>(rng: &mut R) -> StreamConfig {
+    StreamConfig {
+        speed: rng.gen_range(1.2..1.8),
+        pause_prob: rng.gen_range(0.1..0.6),
+        flow: rng.gen_range(0.3..0.7),
+        one_movement: 0.3,
+        reach_speed: (0.8, 4.0),
+        ..StreamConfig::default()
+    }
+}
+
 /// A trajectory as the spotter sees it when it is drawn in a stream: approached from a
 /// resting hand, drawn with the stream's timing (`cfg`), with tracking noise, through
 /// the hand tracker's One Euro filter (`tracker`'s settings), and cut at the frames it

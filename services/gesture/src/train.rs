@@ -11,7 +11,7 @@ use crate::model::{
     Classifier, LabelledHmm, Model, TrainingInfo, MAX_LABEL_BYTES, MODEL_FORMAT, MODEL_VERSION,
 };
 use crate::spot::SpottingModel;
-use crate::stream::{drawn_in_stream, StreamConfig};
+use crate::stream::{drawn_in_stream, training_stream};
 use crate::tracker::TrackerConfig;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -98,21 +98,6 @@ impl Default for TrainConfig {
             seed: 1,
             data: Vec::new(),
         }
-    }
-}
-
-/// Streams as varied as the verifier's training streams, so that the classifier does
-/// not learn one pace: mean drawing speed 1.2–1.8 shoulder widths a second, a third of
-/// the symbols in one smooth movement, entering and leaving at up to 0.3–0.7 × the
-/// drawing speed.
-fn training_stream<R: Rng>(rng: &mut R) -> StreamConfig {
-    StreamConfig {
-        speed: rng.gen_range(1.2..1.8),
-        pause_prob: rng.gen_range(0.1..0.6),
-        flow: rng.gen_range(0.3..0.7),
-        one_movement: 0.3,
-        reach_speed: (0.8, 4.0),
-        ..StreamConfig::default()
     }
 }
 

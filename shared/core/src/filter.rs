@@ -1,93 +1,49 @@
 //! The One Euro filter (Casiez, Roussel & Vogel, CHI 2012): a low-pass filter whose
 //! cut-off rises with speed, so a still joint stops jittering and a moving one does not
 //! lag. The pose stage smooths joints with it, the gesture stage the drawing hand
-//! ([`OneEuroPlane`]: one cut-off for both coordinates).
+//! ([`OneEuroPlane`]: one cut-off for both coordinates, [`OneEuroPoint`]).
 
-/// One Euro filter for one coordinate.
+/// One Euro filter for a point of `N` coordinates that share one cut-off, raised by the
+/// point's speed (the length of its smoothed velocity), so a moving point is followed
+/// alike in every direction. `N` filters of one coordinate each would smooth each
+/// coordinate hardest where it turns, at another moment than the others: a circle drawn
+/// by the hand comes out an ellipse.
 #[derive(Debug, Clone, PartialEq)]
-pub struct OneEuro {
+pub struct OneEuroPoint<const N: usize> {
     /// Cut-off (Hz) at rest: lower is smoother.
     pub min_cutoff: f64,
     /// How fast the cut-off rises with speed (per unit of speed): higher lags less.
     pub beta: f64,
     /// Cut-off (Hz) of the speed estimate.
     pub d_cutoff: f64,
-    x: Option<f64>,
-    dx: f64,
+    x: Option<[f64; N]>,
+    dx: [f64; N],
     t: f64,
 }
+
+/// The hand's filter in the plane (the gesture stage).
+pub type OneEuroPlane = OneEuroPoint<2>;
 
 fn alpha(cutoff: f64, dt: f64) -> f64 {
     let tau = 1.0 / (2.0 * std::f64::consts::PI * cutoff);
     1.0 / (1.0 + tau / dt)
 }
 
-impl OneEuro {
+impl<const N: usize> OneEuroPoint<N> {
     pub fn new(min_cutoff: f64, beta: f64, d_cutoff: f64) -> Self {
         Self {
             min_cutoff,
             beta,
             d_cutoff,
             x: None,
-            dx: 0.0,
+            dx: [0.0; N],
             t: 0.0,
         }
     }
 
-    /// Filters `x` observed at time `t` seconds (times must not decrease; equal times
-    /// count as a tenth of a millisecond apart).
-    pub fn filter(&mut self, x: f64, t: f64) -> f64 {
-        let Some(prev) = self.x else {
-            self.x = Some(x);
-            self.t = t;
-            return x;
-        };
-        let dt = (t - self.t).max(1e-4);
-        self.t = t;
-        let dx = (x - prev) / dt;
-        self.dx += alpha(self.d_cutoff, dt) * (dx - self.dx);
-        let cutoff = self.min_cutoff + self.beta * self.dx.abs();
-        let v = prev + alpha(cutoff, dt) * (x - prev);
-        self.x = Some(v);
-        v
-    }
-
-    /// Forgets the signal: the next value passes unchanged.
-    pub fn reset(&mut self) {
-        self.x = None;
-        self.dx = 0.0;
-    }
-}
-
-/// One Euro filter for a point in the plane: both
-/// coordinates share one cut-off, raised by the point's speed (the length of its
-/// smoothed velocity), so a moving hand is followed alike in every direction. Two
-/// [`OneEuro`]s, one a coordinate, smooth each coordinate hardest where it turns, at
-/// another moment than the other: a circle comes out an ellipse.
-#[derive(Debug, Clone, PartialEq)]
-pub struct OneEuroPlane {
-    pub min_cutoff: f64,
-    pub beta: f64,
-    pub d_cutoff: f64,
-    x: Option<[f64; 2]>,
-    dx: [f64; 2],
-    t: f64,
-}
-
-impl OneEuroPlane {
-    pub fn new(min_cutoff: f64, beta: f64, d_cutoff: f64) -> Self {
-        Self {
-            min_cutoff,
-            beta,
-            d_cutoff,
-            x: None,
-            dx: [0.0; 2],
-            t: 0.0,
-        }
-    }
-
-    /// Filters point `p` observed at time `t` seconds (as [`OneEuro::filter`]).
-    pub fn filter(&mut self, p: [f64; 2], t: f64) -> [f64; 2] {
+    /// Filters point `p` observed at time `t` seconds (times must not decrease; equal
+    /// times count as a tenth of a millisecond apart).
+    pub fn filter(&mut self, p: [f64; N], t: f64) -> [f64; N] {
         let Some(prev) = self.x else {
             self.x = Some(p);
             self.t = t;
@@ -96,15 +52,14 @@ impl OneEuroPlane {
         let dt = (t - self.t).max(1e-4);
         self.t = t;
         let a = alpha(self.d_cutoff, dt);
-        for k in 0..2 {
+        for k in 0..N {
             self.dx[k] += a * ((p[k] - prev[k]) / dt - self.dx[k]);
         }
-        let speed = self.dx[0].hypot(self.dx[1]);
+        // hypot from 0 is the absolute value: one coordinate is filtered exactly as
+        // the paper's scalar filter.
+        let speed = self.dx.iter().fold(0.0f64, |s, d| s.hypot(*d));
         let a = alpha(self.min_cutoff + self.beta * speed, dt);
-        let v = [
-            prev[0] + a * (p[0] - prev[0]),
-            prev[1] + a * (p[1] - prev[1]),
-        ];
+        let v = std::array::from_fn(|k| prev[k] + a * (p[k] - prev[k]));
         self.x = Some(v);
         v
     }
@@ -112,7 +67,27 @@ impl OneEuroPlane {
     /// Forgets the signal: the next point passes unchanged.
     pub fn reset(&mut self) {
         self.x = None;
-        self.dx = [0.0; 2];
+        self.dx = [0.0; N];
+    }
+}
+
+/// One Euro filter for one coordinate (the pose stage's joints, each coordinate apart).
+#[derive(Debug, Clone, PartialEq)]
+pub struct OneEuro(OneEuroPoint<1>);
+
+impl OneEuro {
+    pub fn new(min_cutoff: f64, beta: f64, d_cutoff: f64) -> Self {
+        Self(OneEuroPoint::new(min_cutoff, beta, d_cutoff))
+    }
+
+    /// Filters `x` observed at time `t` seconds (as [`OneEuroPoint::filter`]).
+    pub fn filter(&mut self, x: f64, t: f64) -> f64 {
+        self.0.filter([x], t)[0]
+    }
+
+    /// Forgets the signal: the next value passes unchanged.
+    pub fn reset(&mut self) {
+        self.0.reset();
     }
 }
 

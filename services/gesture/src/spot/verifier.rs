@@ -286,7 +286,7 @@ pub fn stream_examples(
     lee_kim: &LeeKim,
     seed: u64,
 ) -> Vec<(VerifierInput, usize)> {
-    use crate::stream::{build_stream, StreamConfig};
+    use crate::stream::{build_stream, training_stream};
     use rand::seq::SliceRandom;
     let labels = &classifier.labels;
     let mut order: Vec<&Sample> = (0..VERIFIER_REPEATS).flat_map(|_| samples.iter()).collect();
@@ -298,17 +298,7 @@ pub fn stream_examples(
         .par_iter()
         .flat_map_iter(|(k, chunk)| {
             let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_mul(31).wrapping_add(*k as u64));
-            // Streams more varied than the evaluation's defaults, so that the verifier
-            // does not learn one way of moving: a third of the symbols drawn in one
-            // smooth movement, reaches up to twice as fast.
-            let cfg = StreamConfig {
-                speed: rng.gen_range(1.2..1.8),
-                pause_prob: rng.gen_range(0.1..0.6),
-                flow: rng.gen_range(0.3..0.7),
-                one_movement: 0.3,
-                reach_speed: (0.8, 4.0),
-                ..StreamConfig::default()
-            };
+            let cfg = training_stream(&mut rng);
             // Writer variation (as the classifier is trained with): every sample a
             // little rotated, sheared and stretched.
             let varied: Vec<Sample> = chunk
