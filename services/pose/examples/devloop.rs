@@ -2,7 +2,7 @@
 //! figures and writes overlays (green = truth, red = estimate).
 //!
 //! `cargo run --release -p airglyph-pose --example devloop -- [pose:NAME|bvh:FILE|draw:SYMBOLS]
-//!  [mh] [follow] [noise] [floor] [qvga] [frames] [overlays:DIR] [every:N] [set:FIELD=VALUE]`
+//!  [mh] [follow] [noise] [floor] [qvga] [frames] [overlays:DIR] [from:N] [every:N] [set:FIELD=VALUE]`
 #![allow(clippy::needless_range_loop)]
 
 use airglyph_core::{Intrinsics, Joint};
@@ -17,6 +17,7 @@ fn main() {
     let mut frames = 60usize;
     let mut out: Option<String> = None;
     let mut every = 10usize;
+    let mut from = 0usize;
     for a in &args {
         if let Some(f) = a.strip_prefix("bvh:") {
             cfg.motion = MotionSpec::Bvh(f.into());
@@ -44,6 +45,8 @@ fn main() {
             cfg.placement.yaw_deg = y.parse().unwrap();
         } else if let Some(y) = a.strip_prefix("dist:") {
             cfg.placement.distance_m = y.parse().unwrap();
+        } else if let Some(n) = a.strip_prefix("from:") {
+            from = n.parse().unwrap();
         } else if let Some(n) = a.strip_prefix("every:") {
             every = n.parse().unwrap();
         } else if let Ok(n) = a.parse() {
@@ -198,7 +201,7 @@ fn main() {
             }
         }
         if let Some(d) = &out {
-            if i % every == 0 {
+            if i >= from && i % every == 0 {
                 let mut im = overlay::depth_image(&img.view(), Some(est.mask()));
                 // CLEAN=1: the truth and the estimate only (for pictures in the docs).
                 if std::env::var("CLEAN").is_ok() {
