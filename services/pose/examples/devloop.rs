@@ -2,12 +2,12 @@
 //! figures and writes overlays (green = truth, red = estimate).
 //!
 //! `cargo run --release -p airglyph-pose --example devloop -- [pose:NAME|bvh:FILE|draw:SYMBOLS]
-//!  [mh] [follow] [noise] [floor] [qvga] [frames] [overlays:DIR] [from:N] [every:N] [set:FIELD=VALUE]`
+//!  [mh] [follow] [noise] [floor] [qvga] [frames] [oracle|oracle-only] [overlays:DIR] [from:N] [every:N] [set:FIELD=VALUE]`
 #![allow(clippy::needless_range_loop)]
 
 use airglyph_core::{Intrinsics, Joint};
 use airglyph_pose::metrics::PoseEval;
-use airglyph_pose::{overlay, PoseConfig, PoseEstimator};
+use airglyph_pose::{overlay, OfferedStart, PoseConfig, PoseEstimator};
 use airglyph_synth::{Background, MotionSpec, SceneConfig, ScriptedPose, Synthesizer};
 use std::time::Instant;
 
@@ -18,6 +18,8 @@ fn main() {
     let mut out: Option<String> = None;
     let mut every = 10usize;
     let mut from = 0usize;
+    // oracle: the true pose also raced each frame; oracle-only: the only start.
+    let mut oracle: Option<bool> = None;
     for a in &args {
         if let Some(f) = a.strip_prefix("bvh:") {
             cfg.motion = MotionSpec::Bvh(f.into());
@@ -45,6 +47,8 @@ fn main() {
             cfg.placement.yaw_deg = y.parse().unwrap();
         } else if let Some(y) = a.strip_prefix("dist:") {
             cfg.placement.distance_m = y.parse().unwrap();
+        } else if a == "oracle" || a == "oracle-only" {
+            oracle = Some(a == "oracle-only");
         } else if let Some(n) = a.strip_prefix("from:") {
             from = n.parse().unwrap();
         } else if let Some(n) = a.strip_prefix("every:") {
@@ -112,6 +116,14 @@ fn main() {
         }
         let t = Instant::now();
         let c0 = cpu_seconds();
+        if let Some(only) = oracle {
+            let s = truth.skeleton;
+            est.offer_start(if only {
+                OfferedStart::Only(s)
+            } else {
+                OfferedStart::Also(s)
+            });
+        }
         let r = est.estimate(img.view());
         let c1 = cpu_seconds();
         if !airglyph_pose::metrics::in_view(&truth.skeleton, &k) {

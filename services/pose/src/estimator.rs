@@ -124,6 +124,18 @@ pub struct PoseEstimator {
     clock: Option<f64>,
     times: StepTimes,
     debug: Debug,
+    offered: Option<OfferedStart>,
+}
+
+/// A pose offered to the next frame's registration from outside, for experiments
+/// that ask whether finding the pose or the energy limits the error (the truth of a
+/// synthetic frame, say: `examples/devloop.rs oracle`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum OfferedStart {
+    /// Raced beside the estimator's own starts.
+    Also(Skeleton),
+    /// The only start.
+    Only(Skeleton),
 }
 
 impl PoseEstimator {
@@ -159,7 +171,14 @@ impl PoseEstimator {
             clock: None,
             times: StepTimes::default(),
             debug: Debug::default(),
+            offered: None,
         }
+    }
+
+    /// Offers the next frame's registration a start of its own (see [`OfferedStart`]).
+    /// A skeleton the body cannot be posed from (hips on top of each other) is ignored.
+    pub fn offer_start(&mut self, start: OfferedStart) {
+        self.offered = Some(start);
     }
 
     pub fn config(&self) -> &PoseConfig {
@@ -839,10 +858,19 @@ impl PoseEstimator {
                 }
                 changed.then_some(h)
             });
-            let starts: Vec<BodyPose> = [self.prev_body, hybrid, geodesic]
+            let mut starts: Vec<BodyPose> = [self.prev_body, hybrid, geodesic]
                 .into_iter()
                 .flatten()
                 .collect();
+            match self.offered.take() {
+                Some(OfferedStart::Also(s)) => starts.extend(BodyPose::from_skeleton(&tpl, &s)),
+                Some(OfferedStart::Only(s)) => {
+                    if let Some(b) = BodyPose::from_skeleton(&tpl, &s) {
+                        starts = vec![b];
+                    }
+                }
+                None => {}
+            }
             let best = self.reg.fit(
                 &frame,
                 &tpl,

@@ -143,4 +143,4 @@ pub mod segment;
 pub mod torso;
 
 pub use config::{Limb, PoseConfig};
-pub use estimator::{Debug, PoseEstimator, PoseResult, StepTimes};
+pub use estimator::{Debug, OfferedStart, PoseEstimator, PoseResult, StepTimes};
