@@ -19,7 +19,7 @@ fn main() {
     let mut every = 10usize;
     let mut from = 0usize;
     // oracle: the true pose also raced each frame; oracle-only: the only start.
-    let mut oracle: Option<bool> = None;
+    let mut oracle: Option<fn(airglyph_core::Skeleton) -> OfferedStart> = None;
     for a in &args {
         if let Some(f) = a.strip_prefix("bvh:") {
             cfg.motion = MotionSpec::Bvh(f.into());
@@ -47,8 +47,10 @@ fn main() {
             cfg.placement.yaw_deg = y.parse().unwrap();
         } else if let Some(y) = a.strip_prefix("dist:") {
             cfg.placement.distance_m = y.parse().unwrap();
-        } else if a == "oracle" || a == "oracle-only" {
-            oracle = Some(a == "oracle-only");
+        } else if a == "oracle" {
+            oracle = Some(OfferedStart::Also);
+        } else if a == "oracle-only" {
+            oracle = Some(OfferedStart::Only);
         } else if let Some(n) = a.strip_prefix("from:") {
             from = n.parse().unwrap();
         } else if let Some(n) = a.strip_prefix("every:") {
@@ -116,13 +118,8 @@ fn main() {
         }
         let t = Instant::now();
         let c0 = cpu_seconds();
-        if let Some(only) = oracle {
-            let s = truth.skeleton;
-            est.offer_start(if only {
-                OfferedStart::Only(s)
-            } else {
-                OfferedStart::Also(s)
-            });
+        if let Some(offer) = oracle {
+            est.offer_start(offer(truth.skeleton));
         }
         let r = est.estimate(img.view());
         let c1 = cpu_seconds();

@@ -277,7 +277,11 @@ impl PoseEstimator {
                 confidence: [0.0; Joint::COUNT],
             },
         };
-        match self.estimate_inner(depth) {
+        let estimated = self.estimate_inner(depth);
+        // An offer is for one frame, taken or not (a frame without a person never
+        // reaches the registration).
+        self.offered = None;
+        match estimated {
             Some(s) if s.is_finite() => PoseResult {
                 person_found: true,
                 skeleton: self.smoothed(s, time_s),
