@@ -171,6 +171,19 @@ fn bad_labels_and_models_fail_with_a_clear_message() {
         }
     }
 
+    // A spotting verifier of no networks at all is refused before any work.
+    let out = p
+        .command("airglyph")
+        .args(["train", "--verifiers", "0", "--data"])
+        .arg(tmp.path().join("bad.jsonl"))
+        .arg("--out")
+        .arg(tmp.path().join("m.json"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--verifiers must be at least 1"), "{err}");
+
     // A model of another version: the stage says which file and what to do.
     let model = tmp.path().join("old.json");
     std::fs::write(

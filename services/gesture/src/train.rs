@@ -74,9 +74,17 @@ pub struct TrainConfig {
     pub spotting: bool,
     pub spotting_step: f64,
     pub spotting_states: usize,
+    /// Networks in the spotting verifier, each trained on streams of its own.
+    #[serde(default = "one")]
+    pub verifiers: usize,
     pub seed: u64,
     /// Data file names, recorded in the model.
     pub data: Vec<String>,
+}
+
+/// What models trained before a field existed had.
+fn one() -> usize {
+    1
 }
 
 impl Default for TrainConfig {
@@ -95,6 +103,7 @@ impl Default for TrainConfig {
             spotting: true,
             spotting_step: 0.1,
             spotting_states: 10,
+            verifiers: 3,
             seed: 1,
             data: Vec::new(),
         }
@@ -259,6 +268,7 @@ pub fn train(
             &model,
             cfg.spotting_step,
             cfg.spotting_states,
+            cfg.verifiers,
         ));
     }
     Ok(model)

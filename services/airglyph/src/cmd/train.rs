@@ -31,6 +31,11 @@ pub struct Args {
     /// Hidden units (mlp).
     #[arg(long, default_value_t = 192)]
     pub hidden: usize,
+    /// Networks in the spotting verifier, each trained on synthetic streams of its own
+    /// (their probabilities are averaged; each takes about as long as the rest of the
+    /// spotting part).
+    #[arg(long, default_value_t = TrainConfig::default().verifiers)]
+    pub verifiers: usize,
     /// Use the pen-up flag of the data (off: treat every sample as one air-drawn path).
     #[arg(long)]
     pub pen_up: bool,
@@ -82,6 +87,10 @@ pub fn config(args: &Args) -> anyhow::Result<TrainConfig> {
         anyhow::bail!("--stream-augment {} is not in [0, 1]", args.stream_augment);
     }
     cfg.stream_augment = args.stream_augment;
+    if args.verifiers == 0 {
+        anyhow::bail!("--verifiers must be at least 1");
+    }
+    cfg.verifiers = args.verifiers;
     cfg.spotting = !args.no_spotting;
     Ok(cfg)
 }
@@ -122,7 +131,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 &old,
                 cfg.spotting_step,
                 cfg.spotting_states,
+                cfg.verifiers,
             ));
+            // The recorded parameters are the classifier's; say what the spotting
+            // part was trained with now.
+            if let Some(p) = old.training.parameters.as_object_mut() {
+                p.insert("spotting_step".into(), cfg.spotting_step.into());
+                p.insert("spotting_states".into(), cfg.spotting_states.into());
+                p.insert("verifiers".into(), cfg.verifiers.into());
+            }
             old
         }
     };

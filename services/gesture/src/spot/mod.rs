@@ -61,11 +61,15 @@ impl SpottingModel {
             return Err(format!("spotting step {} is not in (0, 1)", self.step));
         }
         if let Some(v) = &self.verifier {
-            v.net
-                .validate()
-                .map_err(|e| format!("spotting verifier: {e}"))?;
-            if v.net.inputs() != v.dim() || v.net.outputs() != v.classes.len() + 1 {
-                return Err("spotting verifier has the wrong dimensions".into());
+            if v.nets.is_empty() {
+                return Err("spotting verifier has no network".into());
+            }
+            for net in &v.nets {
+                net.validate()
+                    .map_err(|e| format!("spotting verifier: {e}"))?;
+                if net.inputs() != v.dim() || net.outputs() != v.classes.len() + 1 {
+                    return Err("spotting verifier has the wrong dimensions".into());
+                }
             }
         }
         for m in &self.models {
@@ -85,8 +89,15 @@ impl SpottingModel {
 
     /// Trains one banded HMM per label on the stream codes of the samples (each scaled
     /// so that its larger side is 1), and the verifier, which uses `classifier` (a model
-    /// with the same labels; its spotting part is not used).
-    pub fn train(samples: &[Sample], classifier: &Model, step: f64, states: usize) -> Self {
+    /// with the same labels; its spotting part is not used) and has `verifiers`
+    /// networks (at least one).
+    pub fn train(
+        samples: &[Sample],
+        classifier: &Model,
+        step: f64,
+        states: usize,
+        verifiers: usize,
+    ) -> Self {
         let labels = &classifier.labels;
         let cfg = HmmTrainConfig {
             states,
@@ -117,7 +128,9 @@ impl SpottingModel {
             models,
             verifier: None,
         };
-        model.verifier = Some(Verifier::train(samples, classifier, &model, 7));
+        // Seed 7 first: a one-network verifier is the one trained before ensembles.
+        let seeds: Vec<u64> = (7..).take(verifiers.max(1)).collect();
+        model.verifier = Some(Verifier::train(samples, classifier, &model, &seeds));
         model
     }
 }

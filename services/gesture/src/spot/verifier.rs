@@ -96,7 +96,26 @@ pub struct Verifier {
     /// 0 in models trained before it existed.
     #[serde(default)]
     pub timing: usize,
-    pub net: Mlp,
+    /// Networks trained apart (each on its own streams, from its own seed) whose
+    /// probabilities are averaged: one network's verdicts on unseen writers vary with
+    /// its seed by a point or two of spotting reliability. Models trained before hold
+    /// one, under `net`.
+    #[serde(alias = "net", deserialize_with = "one_or_many")]
+    pub nets: Vec<Mlp>,
+}
+
+/// A network or a list of them.
+fn one_or_many<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<Mlp>, D::Error> {
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum OneOrMany {
+        One(Mlp),
+        Many(Vec<Mlp>),
+    }
+    Ok(match OneOrMany::deserialize(d)? {
+        OneOrMany::One(n) => vec![n],
+        OneOrMany::Many(v) => v,
+    })
 }
 
 /// Training examples for every drawn gesture (each sample is drawn this many times, in
@@ -138,11 +157,13 @@ impl Verifier {
     pub fn probs(&self, input: &VerifierInput) -> Vec<f64> {
         let mut f = Vec::with_capacity(self.dim());
         verifier_features(input, self, &mut f);
-        self.net
-            .log_probs(&f)
-            .iter()
-            .map(|&l| (l as f64).exp())
-            .collect()
+        let mut probs = vec![0.0; self.classes.len() + 1];
+        for net in &self.nets {
+            for (p, l) in probs.iter_mut().zip(net.log_probs(&f)) {
+                *p += (l as f64).exp() / self.nets.len() as f64;
+            }
+        }
+        probs
     }
 
     /// Trains on the segments the spotter will judge: the samples are drawn in
@@ -156,21 +177,35 @@ impl Verifier {
         samples: &[Sample],
         classifier: &Model,
         spotting: &SpottingModel,
-        seed: u64,
+        seeds: &[u64],
     ) -> Verifier {
-        let features = FeatureConfig {
-            pen_up: false,
-            points: 12,
-            grid: 3,
-        };
         let mut shell = Verifier {
-            features,
+            features: FeatureConfig {
+                pen_up: false,
+                points: 12,
+                grid: 3,
+            },
             classes: classifier.labels.clone(),
             timing: TIMING_POINTS,
-            net: Mlp::default(),
+            nets: Vec::new(),
         };
         let lee_kim = LeeKim::new(spotting);
-        let mut examples = stream_examples(samples, classifier, &lee_kim, seed);
+        shell.nets = seeds
+            .iter()
+            .map(|&seed| shell.train_net(samples, classifier, &lee_kim, seed))
+            .collect();
+        shell
+    }
+
+    /// One network, on streams of its own drawn from `seed`.
+    fn train_net(
+        &self,
+        samples: &[Sample],
+        classifier: &Model,
+        lee_kim: &LeeKim,
+        seed: u64,
+    ) -> Mlp {
+        let mut examples = stream_examples(samples, classifier, lee_kim, seed);
         let pos = examples.iter().filter(|e| e.1 > 0).count().max(1);
         let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5EED);
         let keep =
@@ -187,7 +222,7 @@ impl Verifier {
             let input = &examples[i].0;
             let mut f = Vec::new();
             if epoch == usize::MAX {
-                verifier_features(input, &shell, &mut f);
+                verifier_features(input, self, &mut f);
                 return f;
             }
             // A little rotation and scale, fresh every epoch.
@@ -207,20 +242,18 @@ impl Verifier {
                 posterior: input.posterior.clone(),
                 ratio: input.ratio,
             };
-            verifier_features(&moved, &shell, &mut f);
+            verifier_features(&moved, self, &mut f);
             f
         };
-        let net = Mlp::train(
+        Mlp::train(
             examples.len(),
-            shell.dim(),
+            self.dim(),
             &targets,
-            shell.classes.len() + 1,
+            self.classes.len() + 1,
             &cfg,
             feats,
             |_| {},
-        );
-        shell.net = net;
-        shell
+        )
     }
 }
 
@@ -372,6 +405,67 @@ pub fn stream_examples(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mlp::Layer;
+
+    /// A verifier over two labels whose single-layer networks answer `biases` (as
+    /// log-odds) whatever they see.
+    fn constant_verifier(biases: &[[f32; 3]]) -> Verifier {
+        let mut v = Verifier {
+            features: FeatureConfig {
+                pen_up: false,
+                points: 12,
+                grid: 3,
+            },
+            classes: vec!["a".into(), "b".into()],
+            timing: TIMING_POINTS,
+            nets: Vec::new(),
+        };
+        let dim = v.dim();
+        v.nets = biases
+            .iter()
+            .map(|b| Mlp {
+                mean: vec![0.0; dim],
+                std: vec![1.0; dim],
+                layers: vec![Layer {
+                    inputs: dim,
+                    outputs: 3,
+                    w: vec![0.0; 3 * dim],
+                    b: b.to_vec(),
+                }],
+            })
+            .collect();
+        v
+    }
+
+    #[test]
+    fn several_networks_are_averaged_and_one_stored_alone_still_loads() {
+        let input = VerifierInput {
+            segment: vec![[0.0, 0.0], [0.5, 0.2], [1.0, 1.0]],
+            times: vec![0.0, 0.2, 0.5],
+            before: [[0.0, 0.0]; CONTEXT_POINTS],
+            after: [[1.0, 1.0]; CONTEXT_POINTS],
+            posterior: vec![0.9, 0.1],
+            ratio: 1.0,
+        };
+        // ln 3: "not a gesture" three times as likely as each label; ln 0.5: half as.
+        let (a, b) = ([3f32.ln(), 0.0, 0.0], [0.5f32.ln(), 0.0, 0.0]);
+        let both = constant_verifier(&[a, b]).probs(&input);
+        let (pa, pb) = (
+            constant_verifier(&[a]).probs(&input),
+            constant_verifier(&[b]).probs(&input),
+        );
+        assert!((pa[0] - 0.6).abs() < 1e-6 && (pb[0] - 0.2).abs() < 1e-6);
+        for k in 0..3 {
+            assert!((both[k] - (pa[k] + pb[k]) / 2.0).abs() < 1e-6, "{both:?}");
+        }
+        // A model file written before ensembles holds its one network under `net`.
+        let one = constant_verifier(&[a]);
+        let mut json = serde_json::to_value(&one).unwrap();
+        let nets = json.as_object_mut().unwrap().remove("nets").unwrap();
+        json["net"] = nets[0].clone();
+        let old: Verifier = serde_json::from_value(json).unwrap();
+        assert_eq!(old, one);
+    }
 
     #[test]
     fn context_walks_the_path_by_arc_length_within_its_time() {
