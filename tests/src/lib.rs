@@ -156,6 +156,14 @@ pub fn succeed(cmd: &mut Command) -> Output {
     out
 }
 
+/// Runs a command that must fail and returns what it wrote to stderr (the message the
+/// test then checks).
+pub fn fail(cmd: &mut Command) -> String {
+    let out = cmd.output().unwrap();
+    assert!(!out.status.success(), "{cmd:?} succeeded");
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
 /// One full pipeline at a time within a test binary: on a 2-core machine parallel
 /// pipelines starve each other's capture stage and measure the machine instead.
 pub fn one_at_a_time() -> std::sync::MutexGuard<'static, ()> {

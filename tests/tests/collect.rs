@@ -3,7 +3,7 @@
 //! line of trajectory JSONL that `airglyph train` takes; an interrupted session keeps
 //! what it recorded. And the gesture stage's clear messages on bad models.
 
-use airglyph_system_tests::{signal, succeed, Isolated};
+use airglyph_system_tests::{fail, signal, succeed, Isolated};
 use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::Stdio;
@@ -126,14 +126,11 @@ fn bad_labels_and_models_fail_with_a_clear_message() {
     let p = Isolated::new();
     let tmp = tempfile::tempdir().unwrap();
     let long = "x".repeat(40);
-    let out = p
-        .command("airglyph")
-        .args(["collect", "--label", &long, "--count", "1", "--out"])
-        .arg(tmp.path().join("x.jsonl"))
-        .output()
-        .unwrap();
-    assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
+    let err = fail(
+        p.command("airglyph")
+            .args(["collect", "--label", &long, "--count", "1", "--out"])
+            .arg(tmp.path().join("x.jsonl")),
+    );
     assert!(err.contains("at most 32 bytes"), "{err}");
 
     // Training data with an empty stroke, a NaN point, a label too long: each named by
@@ -155,16 +152,13 @@ fn bad_labels_and_models_fail_with_a_clear_message() {
             format!("{{\"label\":\"b\",\"strokes\":[[[0,0],[1,0]]]}}\n{line}\n"),
         )
         .unwrap();
-        let out = p
-            .command("airglyph")
-            .args(["train", "--epochs", "1", "--ensemble", "1", "--data"])
-            .arg(&data)
-            .arg("--out")
-            .arg(tmp.path().join("m.json"))
-            .output()
-            .unwrap();
-        assert!(!out.status.success());
-        let err = String::from_utf8_lossy(&out.stderr);
+        let err = fail(
+            p.command("airglyph")
+                .args(["train", "--epochs", "1", "--ensemble", "1", "--data"])
+                .arg(&data)
+                .arg("--out")
+                .arg(tmp.path().join("m.json")),
+        );
         assert!(err.contains(want), "{line}: {err}");
         if !want.contains("32 bytes") {
             assert!(err.contains("bad.jsonl:2"), "{line}: {err}");
@@ -172,16 +166,13 @@ fn bad_labels_and_models_fail_with_a_clear_message() {
     }
 
     // A spotting verifier of no networks at all is refused before any work.
-    let out = p
-        .command("airglyph")
-        .args(["train", "--verifiers", "0", "--data"])
-        .arg(tmp.path().join("bad.jsonl"))
-        .arg("--out")
-        .arg(tmp.path().join("m.json"))
-        .output()
-        .unwrap();
-    assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
+    let err = fail(
+        p.command("airglyph")
+            .args(["train", "--verifiers", "0", "--data"])
+            .arg(tmp.path().join("bad.jsonl"))
+            .arg("--out")
+            .arg(tmp.path().join("m.json")),
+    );
     assert!(err.contains("--verifiers must be at least 1"), "{err}");
 
     // A model of another version: the stage says which file and what to do.
@@ -191,14 +182,7 @@ fn bad_labels_and_models_fail_with_a_clear_message() {
         r#"{"format":"airglyph-gesture-model","version":1,"labels":["a","b"]}"#,
     )
     .unwrap();
-    let out = p
-        .command("airglyph-gesture")
-        .arg("--model")
-        .arg(&model)
-        .output()
-        .unwrap();
-    assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
+    let err = fail(p.command("airglyph-gesture").arg("--model").arg(&model));
     assert!(
         err.contains("old.json") && err.contains("version 1 is not supported"),
         "{err}"

@@ -118,6 +118,13 @@ fn one_or_many<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<Mlp>, D::Er
     })
 }
 
+/// The segment's coarse shape the verifier sees (the classifier has the fine one).
+const SHAPE: FeatureConfig = FeatureConfig {
+    pen_up: false,
+    points: 12,
+    grid: 3,
+};
+
 /// Training examples for every drawn gesture (each sample is drawn this many times, in
 /// different streams and a little distorted each time)…
 const VERIFIER_REPEATS: usize = 3;
@@ -180,11 +187,7 @@ impl Verifier {
         seeds: &[u64],
     ) -> Verifier {
         let mut shell = Verifier {
-            features: FeatureConfig {
-                pen_up: false,
-                points: 12,
-                grid: 3,
-            },
+            features: SHAPE,
             classes: classifier.labels.clone(),
             timing: TIMING_POINTS,
             nets: Vec::new(),
@@ -411,11 +414,7 @@ mod tests {
     /// log-odds) whatever they see.
     fn constant_verifier(biases: &[[f32; 3]]) -> Verifier {
         let mut v = Verifier {
-            features: FeatureConfig {
-                pen_up: false,
-                points: 12,
-                grid: 3,
-            },
+            features: SHAPE,
             classes: vec!["a".into(), "b".into()],
             timing: TIMING_POINTS,
             nets: Vec::new(),
