@@ -144,13 +144,10 @@ fn explain(
             .as_ref()
             .and_then(|m| m.verifier.as_ref())
             .map_or(f64::NAN, |v| {
-                use airglyph_gesture::spot::{context, VerifierInput, CONTEXT_SECONDS};
-                let steps = (CONTEXT_SECONDS * cfg.fps as f64).round() as usize;
+                use airglyph_gesture::spot::VerifierInput;
+                let times = (0..seg.len()).map(|i| i as f32 / cfg.fps).collect();
+                let (s, e) = (t.start as usize, t.end as usize);
                 let input = VerifierInput {
-                    segment: seg.to_vec(),
-                    times: (0..seg.len()).map(|i| i as f32 / cfg.fps).collect(),
-                    before: context(&filtered, t.start as usize, true, steps),
-                    after: context(&filtered, t.end as usize, false, steps),
                     posterior: model
                         .posterior(&airglyph_gesture::stream::trajectory(seg))
                         .iter()
@@ -160,6 +157,7 @@ fn explain(
                         .spotting
                         .as_ref()
                         .map_or(0.0, |sm| airglyph_gesture::spot::LeeKim::new(sm).ratio(seg)),
+                    ..VerifierInput::cut(&filtered, s, e, times, cfg.fps as f64)
                 };
                 1.0 - v.probs(&input)[0]
             });

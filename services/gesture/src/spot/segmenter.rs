@@ -1,6 +1,6 @@
 //! Where a gesture can start or end: breaks of the hand's speed, and rests.
 
-use super::{context, SpotterConfig, VerifierInput, CONTEXT_SECONDS};
+use super::{SpotterConfig, VerifierInput};
 
 /// A place where a gesture may end (`end`) and the next begin (`start`): a dip of the
 /// hand's speed (both the same point) or a rest (its first and last point).
@@ -163,25 +163,17 @@ impl Segmenter {
     /// The verifier's input for the segment s..=e: its points, and the hand's path just
     /// before and after it ([`context`]; as far as kept).
     pub fn input(&self, s: usize, e: usize, fps: f64) -> Option<VerifierInput> {
-        let segment = self.points(s, e)?;
-        let (i0, i1) = (s - self.base, e - self.base);
+        let (i0, i1) = (s.checked_sub(self.base)?, e.checked_sub(self.base)?);
+        if i0 > i1 || i1 >= self.pts.len() {
+            return None;
+        }
         let all: Vec<[f32; 2]> = self.pts.iter().map(|p| p.0).collect();
-        let steps = (CONTEXT_SECONDS * fps).round() as usize;
-        let before = context(&all, i0, true, steps);
-        let after = context(&all, i1, false, steps);
         let t0 = self.pts[i0].2;
         let times = self.pts[i0..=i1]
             .iter()
             .map(|p| (p.2.saturating_sub(t0) as f64 * 1e-9) as f32)
             .collect();
-        Some(VerifierInput {
-            segment,
-            times,
-            before,
-            after,
-            posterior: Vec::new(),
-            ratio: 0.0,
-        })
+        Some(VerifierInput::cut(&all, i0, i1, times, fps))
     }
 
     /// The first point of the rest going on, if the hand rests.

@@ -79,6 +79,23 @@ pub struct VerifierInput {
     pub ratio: f64,
 }
 
+impl VerifierInput {
+    /// The segment `path[s..=e]`, timed by `times` (seconds from its first point), with
+    /// its context cut from the hand's `path` sampled at `fps`; posterior and ratio are
+    /// left for the caller.
+    pub fn cut(path: &[[f32; 2]], s: usize, e: usize, times: Vec<f32>, fps: f64) -> Self {
+        let steps = (CONTEXT_SECONDS * fps).round() as usize;
+        VerifierInput {
+            segment: path[s..=e].to_vec(),
+            times,
+            before: context(path, s, true, steps),
+            after: context(path, e, false, steps),
+            posterior: Vec::new(),
+            ratio: 0.0,
+        }
+    }
+}
+
 /// A network telling a whole gesture from movement around, before, after or inside
 /// one, and naming it. It sees the segment's coarse shape (the classifier has the fine
 /// one: a verifier that sees every detail learns its training writers by heart), its
