@@ -54,6 +54,11 @@ pub struct PoseConfig {
     pub reinit_yaws: Vec<f32>,
     /// Turn the torso to face where the toes point when they disagree by over 45°.
     pub feet_facing: bool,
+    /// A person found afresh whose torso core is narrower than this (half width,
+    /// metres; [`crate::torso::TorsoFit::core_half_width`]) may be side-on: the
+    /// articulated registration also races a standing body turned a quarter either
+    /// way (0 = never).
+    pub side_on_half_width: f32,
     /// Half-axes of the elliptic-cylinder torso model (lateral, front-back) and its
     /// vertical extent below/above the torso joint.
     pub torso_half_width: f32,
@@ -173,6 +178,7 @@ impl Default for PoseConfig {
             max_torso_offset: 0.09,
             reinit_yaws: vec![0.0],
             feet_facing: true,
+            side_on_half_width: 0.125,
             torso_half_width: 0.16,
             torso_half_depth: 0.11,
             torso_bottom: -0.30,

@@ -72,6 +72,14 @@
 //!   body gives the torso frame for the geodesic steps); every tenth frame, and whenever
 //!   a geodesic maximum lies 25 cm from the tracked body's limb tip, the seed's steps
 //!   run in full and race the tracked body, so a lost limb is found again.
+//! * A person found afresh whose torso core is narrow (half width under 0.125 m,
+//!   [`PoseConfig::side_on_half_width`]; 0.15–0.16 m facing the camera, 0.09–0.11 m
+//!   side-on) may be side-on, where the seed's torso step fits its frontal model to a
+//!   flank. The registration then also races a standing body turned a quarter either
+//!   way, for every step and without the tips (assigned to the frontal body's limbs).
+//!   Side-on scenes before floor and wall with noise fall from 29 to 19 cm mean error
+//!   (MakeHuman, seven poses, both sides). Of 22 such people turning to the camera, 1
+//!   instead of 4 stays lost once facing it. Frontal detections are unchanged.
 //! * Upper arms and thighs the camera did not see last frame are pulled weakly towards
 //!   hanging down ([`config::RegisterConfig::limb_rest_prior`], 0.3): a limb behind the
 //!   body has no data to hold it, and "hanging" is a better guess for it than wherever
