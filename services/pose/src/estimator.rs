@@ -874,15 +874,18 @@ impl PoseEstimator {
                 .collect();
             // A side-on body races from a standing pose, for every step, and without
             // the tips: they were assigned to the limbs of the frontal body.
-            let mut register_cfg = cfg.register.clone();
-            let mut tips_now = tips;
-            if side_on {
-                if let Some(g) = geodesic {
+            let side_on_cfg;
+            let (register_cfg, tips_now) = match geodesic.filter(|_| side_on) {
+                Some(g) => {
                     starts.extend(side_on_starts(&g, &seg.centroid));
-                    register_cfg.race_iterations = register_cfg.iterations;
-                    tips_now = [None; 5];
+                    side_on_cfg = crate::register::RegisterConfig {
+                        race_iterations: cfg.register.iterations,
+                        ..cfg.register.clone()
+                    };
+                    (&side_on_cfg, [None; 5])
                 }
-            }
+                None => (&cfg.register, tips),
+            };
             match self.offered.take() {
                 Some(OfferedStart::Also(s)) => starts.extend(BodyPose::from_skeleton(&tpl, &s)),
                 Some(OfferedStart::Only(s)) => {
@@ -898,7 +901,7 @@ impl PoseEstimator {
                 &starts,
                 &tips_now,
                 &self.prev_hidden,
-                &register_cfg,
+                register_cfg,
             );
             if race {
                 self.debug.geodesic = Some(skel);

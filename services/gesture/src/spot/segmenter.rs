@@ -1,6 +1,6 @@
 //! Where a gesture can start or end: breaks of the hand's speed, and rests.
 
-use super::{SpotterConfig, VerifierInput};
+use super::{SpotterConfig, VerifierInput, CONTEXT_SECONDS};
 
 /// A place where a gesture may end (`end`) and the next begin (`start`): a dip of the
 /// hand's speed (both the same point) or a rest (its first and last point).
@@ -161,19 +161,30 @@ impl Segmenter {
     }
 
     /// The verifier's input for the segment s..=e: its points, and the hand's path just
-    /// before and after it ([`context`]; as far as kept).
+    /// before and after it ([`VerifierInput::cut`]; as far as kept).
     pub fn input(&self, s: usize, e: usize, fps: f64) -> Option<VerifierInput> {
         let (i0, i1) = (s.checked_sub(self.base)?, e.checked_sub(self.base)?);
         if i0 > i1 || i1 >= self.pts.len() {
             return None;
         }
-        let all: Vec<[f32; 2]> = self.pts.iter().map(|p| p.0).collect();
+        // The context walks at most this many points from either end: only that window
+        // is copied, not every point kept (this runs for every candidate).
+        let reach = (CONTEXT_SECONDS * fps).round() as usize + 1;
+        let from = i0.saturating_sub(reach);
+        let to = (i1 + reach + 1).min(self.pts.len());
+        let window: Vec<[f32; 2]> = self.pts[from..to].iter().map(|p| p.0).collect();
         let t0 = self.pts[i0].2;
         let times = self.pts[i0..=i1]
             .iter()
             .map(|p| (p.2.saturating_sub(t0) as f64 * 1e-9) as f32)
             .collect();
-        Some(VerifierInput::cut(&all, i0, i1, times, fps))
+        Some(VerifierInput::cut(
+            &window,
+            i0 - from,
+            i1 - from,
+            times,
+            fps,
+        ))
     }
 
     /// The first point of the rest going on, if the hand rests.
