@@ -92,6 +92,28 @@ impl Chain {
         s / sw.max(1e-9)
     }
 
+    /// The error of [`Chain::error`] and, from the same nearest points, the upper
+    /// bone's turn about the root that [`fit_chain`]'s next step starts with: the
+    /// nearest points of a step's error are those of the next step's first half, and
+    /// finding them is most of the fit's work.
+    fn sweep(
+        &self,
+        targets: &[Point3<f32>],
+        omega_succ: f32,
+        beyond: f32,
+    ) -> (f32, RotationAccumulator) {
+        let (mut s, mut sw) = (0.0, 0.0);
+        let mut upper = RotationAccumulator::default();
+        for t in targets {
+            let (bone, c, w) = self.nearest(t, beyond);
+            s += w * (c - t).norm_squared();
+            sw += w;
+            let w = if bone == 0 { w } else { w * omega_succ };
+            upper.add(&(c - self.root), &(t - self.root), w);
+        }
+        (s / sw.max(1e-9), upper)
+    }
+
     /// Which bone is nearer `t` (0 upper, 1 lower), the nearest point on it, and the
     /// target's weight (`beyond` past the end joint, else 1).
     #[inline]
@@ -134,25 +156,17 @@ pub fn fit_chain(
     beyond: f32,
     iterations: usize,
 ) -> (Chain, f32) {
-    let mut err = chain.error(targets, beyond);
     if targets.is_empty() {
-        return (chain, err);
+        return (chain, chain.error(targets, beyond));
     }
+    let (mut err, mut upper) = chain.sweep(targets, omega_succ, beyond);
     let single = (chain.end - chain.mid).norm() < 1e-6;
     for _ in 0..iterations {
         let prev = chain;
-        // Upper bone about the root.
-        let mut acc = RotationAccumulator::default();
-        for t in targets {
-            let (bone, c, w) = chain.nearest(t, beyond);
-            let w = if bone == 0 { w } else { w * omega_succ };
-            acc.add(&(c - chain.root), &(t - chain.root), w);
-        }
-        let r1 = acc.rotation();
+        let r1 = upper.rotation();
         chain.mid = chain.root + r1 * (chain.mid - chain.root);
         chain.end = chain.root + r1 * (chain.end - chain.root);
         if !single {
-            // Lower bone about the middle joint.
             let mut acc = RotationAccumulator::default();
             for t in targets {
                 let (bone, c, w) = chain.nearest(t, beyond);
@@ -165,13 +179,13 @@ pub fn fit_chain(
                 chain.end = chain.mid + r2 * (chain.end - chain.mid);
             }
         }
-        let e = chain.error(targets, beyond);
+        let (e, next) = chain.sweep(targets, omega_succ, beyond);
         if !chain.is_finite() || e > err {
             chain = prev;
             break;
         }
         let gain = err - e;
-        err = e;
+        (err, upper) = (e, next);
         if gain < 1e-8 {
             break;
         }

@@ -479,10 +479,21 @@ impl Segmenter {
                         && b.area <= cfg.max_person_area)
             })
             .collect();
-        // Pairs of such blobs that border each other, one entry a touching pixel.
+        // Pairs of such blobs that border each other, one entry a touching pixel: both
+        // pixels lie within the eligible blobs' bounding boxes.
+        let mut area_of_interest = (u32::MAX, u32::MAX, 0, 0);
+        for (b, _) in blobs.iter().zip(&eligible).filter(|(_, &e)| e) {
+            area_of_interest = (
+                area_of_interest.0.min(b.bbox.0),
+                area_of_interest.1.min(b.bbox.1),
+                area_of_interest.2.max(b.bbox.2),
+                area_of_interest.3.max(b.bbox.3),
+            );
+        }
+        let (u0, v0, u1, v1) = area_of_interest;
         self.contacts.clear();
-        for v in 0..h {
-            for u in 0..w {
+        for v in v0 as usize..=v1 as usize {
+            for u in u0 as usize..=u1 as usize {
                 let i = v * w + u;
                 let la = self.labels[i];
                 if la == u32::MAX || points[i].z <= 0.0 || !eligible[la as usize] {
@@ -565,8 +576,9 @@ impl Segmenter {
                 .zip(ys)
                 .zip(zs)
                 // Plane::height's sum, in its order.
-                .map(|((&x, &y), &z)| usize::from((n.x * x + n.y * y + n.z * z + d).abs() < tol))
-                .sum()
+                // Counted in u32, four to a vector register, not usize's two.
+                .map(|((&x, &y), &z)| u32::from((n.x * x + n.y * y + n.z * z + d).abs() < tol))
+                .sum::<u32>() as usize
         };
         let mut best: Option<(usize, Plane)> = prev.map(|pl| (count(&pl), pl));
         let mut rng = XorShift::new(0x9e37_79b9_7f4a_7c15);
