@@ -537,18 +537,62 @@ fn symmetric(upper: &[f32; UPPER]) -> Local {
     m
 }
 
+/// For the nearest-capsule search, per placed capsule g the others c by the gap
+/// between their bounding spheres, |centre_g − centre_c| − bound_g − bound_c, least
+/// first. A point whose surface distance to g is d lies within d + bound_g of g's
+/// centre, so a capsule with a gap above 2d lies more than d from it: the search
+/// from g stops there, after the few capsules beside g, instead of testing every one.
+struct Gaps {
+    n: usize,
+    /// Row g: (gap, c) for every c ≠ g, least gap first.
+    rows: Vec<(f32, u16)>,
+}
+
+impl Gaps {
+    fn new(placed: &[Placed]) -> Self {
+        let n = placed.len();
+        let mut rows = Vec::with_capacity(n * n.saturating_sub(1));
+        for (g, a) in placed.iter().enumerate() {
+            let start = rows.len();
+            rows.extend(
+                placed
+                    .iter()
+                    .enumerate()
+                    .filter(|&(c, _)| c != g)
+                    .map(|(c, b)| ((a.centre - b.centre).norm() - a.bound - b.bound, c as u16)),
+            );
+            rows[start..].sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
+        }
+        Self { n, rows }
+    }
+
+    fn of(&self, g: usize) -> &[(f32, u16)] {
+        let m = self.n - 1;
+        &self.rows[g * m..(g + 1) * m]
+    }
+}
+
 /// The capsule whose surface is nearest `p`: its index, the axis point and the signed
 /// distance. The search starts from capsule `guess` (the point's last one, which is
-/// mostly still the nearest): capsules whose bounding sphere lies farther than the best
-/// so far are skipped without a square root, and from a near start most are.
+/// mostly still the nearest) and tries only the capsules whose bounding spheres come
+/// near the guess's ([`Gaps`]); of those, the ones whose bounding sphere lies farther
+/// than the best so far are skipped without a square root.
 #[inline]
-fn nearest_capsule(placed: &[Placed], p: &Point3<f32>, guess: usize) -> (usize, Point3<f32>, f32) {
+fn nearest_capsule(
+    placed: &[Placed],
+    gaps: &Gaps,
+    p: &Point3<f32>,
+    guess: usize,
+) -> (usize, Point3<f32>, f32) {
     let (q, _, d) = placed[guess].nearest(p);
     let mut best = (guess, q, if d.is_nan() { f32::INFINITY } else { d });
-    for (ci, c) in placed.iter().enumerate() {
-        if ci == guess {
-            continue;
+    let within = 2.0 * best.2;
+    for &(gap, ci) in gaps.of(guess) {
+        if gap > within {
+            break;
         }
+        let ci = usize::from(ci);
+        let c = &placed[ci];
         let reach = best.2 + c.bound;
         if reach > 0.0 && (p - c.centre).norm_squared() > reach * reach {
             continue;
@@ -994,12 +1038,14 @@ impl Registration {
     ) -> (Accumulator, [f32; Segment::COUNT]) {
         let (f, t, tips, cfg) = (p.frame, p.body, p.tips, p.cfg);
         let placed = place(t, posed);
+        let gaps = pass.search.then(|| Gaps::new(&placed));
         let mut acc = Accumulator::new(posed, cfg.bone_evidence.is_some());
 
         // Data: each point on its nearest capsule's surface.
         for ((p, area), ci) in self.data.iter().zip(assign.iter_mut()) {
             let (q, d) = if pass.search {
-                let (c, q, d) = nearest_capsule(&placed, p, usize::from(*ci));
+                let gaps = gaps.as_ref().expect("searched");
+                let (c, q, d) = nearest_capsule(&placed, gaps, p, usize::from(*ci));
                 *ci = c as u16;
                 (q, d)
             } else {
