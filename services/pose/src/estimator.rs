@@ -657,8 +657,8 @@ impl PoseEstimator {
 
         // The limbs' tips, and whether the seed's chains are needed this frame: the
         // geodesic estimate races the tracked body when detecting, when nothing is
-        // tracked, or when a limb tip lies far from the tracked body's; otherwise the
-        // registration alone follows the body from the last frame.
+        // tracked, or when a limb tip lies far from the tracked body's and off its
+        // surface; otherwise the registration alone follows the body from the last frame.
         let tpl = BodyTemplate::new(cfg);
         let mut tips = [None; 5];
         for l in Limb::ALL {
@@ -672,10 +672,7 @@ impl PoseEstimator {
         let race = !cfg.register.enabled
             || detecting
             || self.prev_body.is_none_or(|prev| {
-                let posed = Posed::new(&tpl, &prev);
-                tips.iter().zip(&tpl.tips).any(|(m, (seg, local))| {
-                    m.is_some_and(|m| (posed.point(*seg, local) - m).norm() > cfg.register.race_gap)
-                })
+                crate::register::tips_strayed(&tpl, &prev, &tips, &cfg.register)
             });
         self.debug.raced = race;
 

@@ -230,9 +230,13 @@ pub struct RegisterConfig {
     pub bone_evidence: Option<f64>,
     /// Every this many frames the seed's torso registration runs and the geodesic
     /// estimate races the tracked body; in between it races only when a limb tip lies
-    /// farther than `race_gap` from the tracked body's.
+    /// farther than `race_gap` from the tracked body's (and off its surface, see
+    /// `race_off_body`).
     pub redetect_every: usize,
     pub race_gap: f32,
+    /// A strayed tip races only when it also lies this far off the tracked body's
+    /// surface ([`tips_strayed`]); 0 = wherever it lies.
+    pub race_off_body: f32,
     /// Also race the tracked body with its strayed limbs taken from the geodesic
     /// estimate.
     pub race_hybrid: bool,
@@ -277,6 +281,7 @@ impl Default for RegisterConfig {
             bone_evidence: None,
             redetect_every: 10,
             race_gap: 0.25,
+            race_off_body: 0.05,
             race_hybrid: false,
             damping: 0.05,
             damping_abs: 0.01,
@@ -626,6 +631,38 @@ fn place(t: &BodyTemplate, posed: &Posed) -> Vec<Placed> {
             }
         })
         .collect()
+}
+
+/// Whether a limb's tip (its geodesic maximum, as [`drop_borrowed_tips`] left them)
+/// strayed from `tracked`, the last frame's body, so that the geodesic estimate must
+/// race it: it lies farther than [`RegisterConfig::race_gap`] from its own limb's tip
+/// and more than [`RegisterConfig::race_off_body`] off the body's surface. A maximum
+/// on the body's surface is one the body explains where it is, whichever limb it was
+/// assigned to; sensor noise makes such maxima on a knee or a hip in most frames of a
+/// noisy 320×240 image, and racing on them cost every such frame the seed's chains and
+/// a second start without finding a better body.
+pub fn tips_strayed(
+    t: &BodyTemplate,
+    tracked: &BodyPose,
+    tips: &[Option<Point3<f32>>; 5],
+    cfg: &RegisterConfig,
+) -> bool {
+    let posed = Posed::new(t, tracked);
+    let mut placed = None;
+    tips.iter().zip(&t.tips).any(|(m, (seg, local))| {
+        let Some(m) = m else { return false };
+        if (posed.point(*seg, local) - m).norm() <= cfg.race_gap {
+            return false;
+        }
+        cfg.race_off_body <= 0.0 || {
+            let placed = placed.get_or_insert_with(|| place(t, &posed));
+            let off = placed
+                .iter()
+                .map(|c| c.nearest(m).2)
+                .fold(f32::INFINITY, f32::min);
+            off > cfg.race_off_body
+        }
+    })
 }
 
 /// How near (metres) a tip must lie to another limb's surface to be taken for its point.
@@ -1383,6 +1420,40 @@ mod tests {
         };
         drop_borrowed_tips(&t, &tracked, &mut tips, &off);
         assert_eq!(tips[Limb::RightArm.index()], Some(on_left_forearm));
+    }
+
+    #[test]
+    fn only_a_tip_off_the_tracked_body_makes_the_geodesic_estimate_race() {
+        use crate::Limb;
+        let (t, _) = scene();
+        let tracked = facing(Point3::new(0.0, 0.1, 2.6));
+        let posed = Posed::new(&t, &tracked);
+        let own = t.tips.map(|(s, local)| Some(posed.point(s, &local)));
+        let cfg = RegisterConfig::default();
+        assert!(!tips_strayed(&t, &tracked, &own, &cfg));
+        // The left leg's maximum on the front of the right knee: far from the left toes,
+        // but on the body.
+        let shin = t
+            .capsules
+            .iter()
+            .find(|c| c.segment == Segment::RightShin)
+            .expect("a right shin");
+        let knee = posed.point(shin.segment, &shin.a) - Vector3::z() * shin.ra;
+        let mut tips = own;
+        tips[Limb::LeftLeg.index()] = Some(knee);
+        let toes = own[Limb::LeftLeg.index()].expect("toes");
+        assert!((knee - toes).norm() > cfg.race_gap);
+        assert!(!tips_strayed(&t, &tracked, &tips, &cfg));
+        // Without the surface test it races.
+        let anywhere = RegisterConfig {
+            race_off_body: 0.0,
+            ..cfg.clone()
+        };
+        assert!(tips_strayed(&t, &tracked, &tips, &anywhere));
+        // A hand raised 40 cm before the chest, where the tracked body is not, races.
+        let mut tips = own;
+        tips[Limb::RightArm.index()] = Some(Point3::new(0.0, -0.2, 2.2));
+        assert!(tips_strayed(&t, &tracked, &tips, &cfg));
     }
 
     #[test]
