@@ -5,6 +5,8 @@
 //!  [mh] [follow] [noise] [floor] [qvga] [frames] [oracle|oracle-only] [overlays:DIR] [from:N] [every:N] [set:FIELD=VALUE]`
 #![allow(clippy::needless_range_loop)]
 
+mod support;
+
 use airglyph_core::{Intrinsics, Joint};
 use airglyph_pose::metrics::PoseEval;
 use airglyph_pose::{overlay, OfferedStart, PoseConfig, PoseEstimator};
@@ -63,21 +65,7 @@ fn main() {
     let k = synth.intrinsics();
     let n = synth.len().map_or(frames, |l| l.min(frames));
     let mut pcfg = PoseConfig::default();
-    for a in &args {
-        // set:FIELD=VALUE sets any PoseConfig field (VALUE as JSON), e.g.
-        // set:calibrate_body=false, set:work_width=0, set:geodesic_reach_ratio=[1.3,1.2],
-        // set:register.collar_gain=0.1.
-        if let Some((k, v)) = a.strip_prefix("set:").and_then(|kv| kv.split_once('=')) {
-            // A dotted FIELD reaches into nested settings (register.collar_gain); an
-            // unknown one is refused rather than silently ignored.
-            let mut j = serde_json::to_value(&pcfg).unwrap();
-            let slot = j
-                .pointer_mut(&format!("/{}", k.replace('.', "/")))
-                .unwrap_or_else(|| panic!("no PoseConfig field {k}"));
-            *slot = serde_json::from_str(v).expect("a JSON value");
-            pcfg = serde_json::from_value(j).expect("a PoseConfig field");
-        }
-    }
+    support::apply_sets(&mut pcfg, &args);
     for a in &args {
         if let Some(f) = a.strip_prefix("shape:") {
             let text = std::fs::read_to_string(f).expect("shape file");

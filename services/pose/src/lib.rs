@@ -70,16 +70,21 @@
 //!   01_01 and 01_03 fall from 7.6 / 14.4 cm mean error to under 5 cm. While it tracks
 //!   the body, the seed's torso registration and chains are skipped (the registered
 //!   body gives the torso frame for the geodesic steps); every tenth frame, and whenever
-//!   a geodesic maximum lies 25 cm from the tracked body's limb tip, the seed's steps
-//!   run in full and race the tracked body, so a lost limb is found again.
+//!   a geodesic maximum lies 25 cm from the tracked body's limb tip and 5 cm off its
+//!   surface ([`register::tips_strayed`]), the seed's steps run in full and race the
+//!   tracked body, so a lost limb is found again. A maximum on the body's surface (noise
+//!   makes them on knees and hips) is explained where the body is: racing on those cost
+//!   most frames of a noisy 320×240 image the chains and a second start, and sometimes
+//!   the race went to the wrong start (CMU 01_03 with noise 3.94 → 3.81 cm without).
 //! * A person found afresh whose torso core is narrow (half width under 0.125 m,
 //!   [`PoseConfig::side_on_half_width`]; 0.15–0.16 m facing the camera, 0.09–0.11 m
 //!   side-on) may be side-on, where the seed's torso step fits its frontal model to a
 //!   flank. The registration then also races a standing body turned a quarter either
 //!   way, for every step and without the tips (assigned to the frontal body's limbs).
-//!   Side-on scenes before floor and wall with noise fall from 29 to 19 cm mean error
-//!   (MakeHuman, seven poses, both sides). Of 22 such people turning to the camera, 1
-//!   instead of 4 stays lost once facing it. Frontal detections are unchanged.
+//!   Side-on scenes before floor and wall with noise fall from 29 to 20 cm mean error
+//!   (MakeHuman, seven poses, both sides; `examples/turning.rs`). Of 22 such people
+//!   turning to the camera, none instead of 4 stays lost once facing it. Frontal
+//!   detections are unchanged.
 //! * Upper arms and thighs the camera did not see last frame are pulled weakly towards
 //!   hanging down ([`config::RegisterConfig::limb_rest_prior`], 0.3): a limb behind the
 //!   body has no data to hold it, and "hanging" is a better guess for it than wherever
