@@ -8,7 +8,7 @@
 //! [`feed`] subscribes like any stage and copies what arrives into a [`Scene`]; the scene
 //! picks the frame to show with the skeleton estimated from it, follows the drawing hand
 //! (airglyph-gesture's [`airglyph_gesture::HandTracker`]) and keeps the last gestures and
-//! a minute of telemetry; [`render`] draws the picture, the same for the web page
+//! a minute of telemetry; [`render()`] draws the picture, the same for the web page
 //! ([`server`]) and for `airglyph snapshot`.
 
 pub mod colormap;

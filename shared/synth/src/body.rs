@@ -2,7 +2,7 @@
 //! skinning, up to 4 bones a vertex) and the ground-truth joints attached to bones.
 //!
 //! Two bodies exist: [`Body::procedural`], built from ellipsoids and tapered capsules
-//! with no external file, and [`Body::makehuman`] (see `makehuman.rs`).
+//! with no external file, and MakeHuman's ([`crate::makehuman::load`]).
 
 use crate::canon::{shortest_arc, Bone, Pose, TposeSkeleton};
 use crate::error::SynthError;

@@ -17,7 +17,7 @@ pub const NEAR_M: f32 = 0.05;
 /// Tolerance of the inside test (edge-function units, px²).
 const EDGE_EPS: f32 = 1e-2;
 
-/// Reusable buffers for [`rasterize`].
+/// Reusable buffers for [`Raster::rasterize`].
 #[derive(Debug, Default, Clone)]
 pub struct Raster {
     screen: Vec<[f32; 3]>,

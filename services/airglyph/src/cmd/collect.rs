@@ -36,7 +36,7 @@ pub struct Args {
     /// The trajectory JSONL file to append to (created if missing).
     #[arg(long)]
     out: PathBuf,
-    /// Where frames come from: v4l2:/dev/videoN, openni2[:URI], recording:DIR, or
+    /// Where frames come from: v4l2:/dev/videoN, openni2 or openni2:URI, recording:DIR, or
     /// synthetic:draw:SYMBOLS. Default for a built-in symbol (0–9, A–Z): the synthetic
     /// person drawing it --count times.
     #[arg(long)]

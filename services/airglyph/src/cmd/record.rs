@@ -11,7 +11,7 @@ use std::path::PathBuf;
 /// depth/NNNNNN.png, frames.csv, and joints.csv when the source knows the true skeleton).
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Where frames come from: synthetic, recording:DIR, v4l2:/dev/videoN or openni2[:URI].
+    /// Where frames come from: synthetic, recording:DIR, v4l2:/dev/videoN, openni2 (the first device) or openni2:URI.
     #[arg(long)]
     source: SourceSpec,
     /// The recording directory to create.

@@ -22,7 +22,7 @@ use std::time::{Duration, Instant};
 /// SIGINT/SIGTERM stop every stage cleanly.
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
-    /// Where frames come from: synthetic, recording:DIR, v4l2:/dev/videoN or openni2[:URI].
+    /// Where frames come from: synthetic, recording:DIR, v4l2:/dev/videoN, openni2 (the first device) or openni2:URI.
     #[arg(long, default_value = "synthetic")]
     pub source: SourceSpec,
     /// Print one JSON object a line instead of plain text.

@@ -109,7 +109,7 @@ pub struct Verifier {
     pub features: FeatureConfig,
     /// Labels of outputs 1…; output 0 is "not a whole gesture".
     pub classes: Vec<String>,
-    /// Points of the segment's timing profile the network sees ([`timing_profile`]);
+    /// Points of the segment's timing profile the network sees (`timing_profile`);
     /// 0 in models trained before it existed.
     #[serde(default)]
     pub timing: usize,
