@@ -16,7 +16,7 @@ use clap::Parser;
 #[derive(Parser)]
 #[command(name = "airglyph-capture", version)]
 struct Args {
-    /// Where frames come from: synthetic, recording:DIR, v4l2:/dev/videoN or openni2[:URI].
+    /// Where frames come from: synthetic, recording:DIR, v4l2:/dev/videoN, openni2 (the first device) or openni2:URI.
     #[arg(long, default_value = "synthetic")]
     source: SourceSpec,
     /// Replay a recording as fast as possible instead of at its recorded times.
