@@ -154,6 +154,9 @@ impl Step {
 pub struct Segmenter {
     labels: Vec<u32>,
     spans: Vec<Span>,
+    /// Every blob's spans as its fill took them, blob after blob: the shape statistics
+    /// are gathered from them afterwards, and only for blobs small enough to matter.
+    filled: Vec<Span>,
     samples: Vec<Point3<f32>>,
     /// The samples' x, y and z.
     coords: [Vec<f32>; 3],
@@ -166,6 +169,8 @@ pub struct Segmenter {
 
 struct Blob {
     label: u32,
+    /// Its spans in [`Segmenter::filled`].
+    spans: std::ops::Range<usize>,
     pixels: usize,
     area: f32,
     moments: Moments,
@@ -180,6 +185,7 @@ impl Blob {
     fn new(label: u32) -> Self {
         Self {
             label,
+            spans: 0..0,
             pixels: 0,
             area: 0.0,
             moments: Moments::default(),
@@ -191,16 +197,8 @@ impl Blob {
         }
     }
 
-    /// Adds the pixels `u0..=u1` of row `v` (`points` of that row).
-    fn add_span(
-        &mut self,
-        points: &[Point3<f32>],
-        v: u32,
-        u0: u32,
-        u1: u32,
-        floor: Option<Plane>,
-        inv_f: f32,
-    ) {
+    /// Counts the pixels `u0..=u1` of row `v` (`points` of that row) and their area.
+    fn add_span(&mut self, points: &[Point3<f32>], v: u32, u0: u32, u1: u32, inv_f: f32) {
         let span = &points[u0 as usize..=u1 as usize];
         self.pixels += span.len();
         self.bbox = (
@@ -212,6 +210,21 @@ impl Blob {
         for p in span {
             let fp = p.z * inv_f;
             self.area += fp * fp;
+        }
+    }
+
+    /// The extent, heights above the floor and moments of the pixels `u0..=u1` of row
+    /// `v` (`points` of that row).
+    fn add_shape(
+        &mut self,
+        points: &[Point3<f32>],
+        v: u32,
+        u0: u32,
+        u1: u32,
+        floor: Option<Plane>,
+    ) {
+        let span = &points[u0 as usize..=u1 as usize];
+        for p in span {
             self.min = self.min.inf(&p.coords);
             self.max = self.max.sup(&p.coords);
         }
@@ -272,6 +285,7 @@ impl Segmenter {
         // Connected components split at depth jumps.
         self.labels.clear();
         self.labels.resize(n, u32::MAX);
+        self.filled.clear();
         let mut blobs: Vec<Blob> = Vec::new();
         let inv_f = 2.0 / (k.fx + k.fy);
         for start in 0..n {
@@ -280,7 +294,15 @@ impl Segmenter {
             }
             let label = blobs.len() as u32;
             let jump = (cfg.blob_jump_px, cfg.blob_jump_min);
-            blobs.push(self.fill(points, w, h, start, label, floor, inv_f, jump));
+            blobs.push(self.fill(points, w, h, start, label, inv_f, jump));
+        }
+        // A blob larger than a person (a wall) is no person, nor part of one: its
+        // shape is not needed.
+        for b in blobs.iter_mut().filter(|b| b.area <= cfg.max_person_area) {
+            for span in &self.filled[b.spans.clone()] {
+                let row = span.v as usize * w;
+                b.add_shape(&points[row..row + w], span.v, span.u0, span.u1, floor);
+            }
         }
 
         // The largest blob that could be a person.
@@ -388,7 +410,8 @@ impl Segmenter {
 
     /// The blob of pixel `start`: its pixels labelled `label` by a flood fill over
     /// 4-neighbours, a step from `p` to `q` allowed when their depths differ by less
-    /// than `max(jump.0 × footprint of p, jump.1)`, and its statistics.
+    /// than `max(jump.0 × footprint of p, jump.1)`, with its pixel count, box and area
+    /// (the spans it took go on [`Segmenter::filled`] for the rest).
     ///
     /// The fill works on horizontal spans, not pixels: a span's pixels are visited in
     /// one tight loop along the row, and only the spans they start in the rows above
@@ -404,14 +427,14 @@ impl Segmenter {
         h: usize,
         start: usize,
         label: u32,
-        floor: Option<Plane>,
         inv_f: f32,
         jump: (f32, f32),
     ) -> Blob {
         let mut b = Blob::new(label);
         let step = Step { inv_f, jump };
         // Local borrows: the compiler need not reload the buffers after every store.
-        let (labels, spans) = (&mut self.labels[..], &mut self.spans);
+        let (labels, spans, filled) = (&mut self.labels[..], &mut self.spans, &mut self.filled);
+        let first = filled.len();
         labels[start] = label;
         spans.clear();
         let (u, v) = ((start % w) as u32, (start / w) as u32);
@@ -424,7 +447,8 @@ impl Segmenter {
                 span,
                 label,
             );
-            b.add_span(&points[row..row + w], span.v, u0, u1, floor, inv_f);
+            b.add_span(&points[row..row + w], span.v, u0, u1, inv_f);
+            filled.push(Span { v: span.v, u0, u1 });
             let from = row + u0 as usize..row + u1 as usize + 1;
             if span.v > 0 {
                 let to = from.start - w..from.end - w;
@@ -443,6 +467,7 @@ impl Segmenter {
                 step.seed(points, labels, spans, (from, to), span.v + 1, u0, label);
             }
         }
+        b.spans = first..filled.len();
         b
     }
 
@@ -734,7 +759,7 @@ mod tests {
                 if points[start].z <= 0.0 || seg.labels[start] != u32::MAX {
                     continue;
                 }
-                let b = seg.fill(&points, w, h, start, label, None, inv_f, jump);
+                let b = seg.fill(&points, w, h, start, label, inv_f, jump);
                 assert_eq!(b.pixels, want.iter().filter(|&&l| l == label).count());
                 label += 1;
             }
