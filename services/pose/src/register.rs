@@ -610,6 +610,14 @@ fn nearest_capsule(
     best
 }
 
+/// How far `p` lies from the nearest surface of `capsules` (negative inside one).
+fn surface_distance<'a>(capsules: impl IntoIterator<Item = &'a Placed>, p: &Point3<f32>) -> f32 {
+    capsules
+        .into_iter()
+        .map(|c| c.nearest(p).2)
+        .fold(f32::INFINITY, f32::min)
+}
+
 fn place(t: &BodyTemplate, posed: &Posed) -> Vec<Placed> {
     t.capsules
         .iter()
@@ -656,11 +664,7 @@ pub fn tips_strayed(
         }
         cfg.race_off_body <= 0.0 || {
             let placed = placed.get_or_insert_with(|| place(t, &posed));
-            let off = placed
-                .iter()
-                .map(|c| c.nearest(m).2)
-                .fold(f32::INFINITY, f32::min);
-            off > cfg.race_off_body
+            surface_distance(placed.iter(), m) > cfg.race_off_body
         }
     })
 }
@@ -685,11 +689,7 @@ pub fn drop_borrowed_tips(
     let placed = place(t, &Posed::new(t, tracked));
     let distance = |limb: crate::Limb, p: &Point3<f32>| {
         let segments = crate::body::limb_segments(limb);
-        placed
-            .iter()
-            .filter(|c| segments.contains(&c.segment))
-            .map(|c| c.nearest(p).2)
-            .fold(f32::INFINITY, f32::min)
+        surface_distance(placed.iter().filter(|c| segments.contains(&c.segment)), p)
     };
     for l in crate::Limb::ALL {
         let Some(m) = tips[l.index()] else { continue };
@@ -1080,8 +1080,7 @@ impl Registration {
 
         // Data: each point on its nearest capsule's surface.
         for ((p, area), ci) in self.data.iter().zip(assign.iter_mut()) {
-            let (q, d) = if pass.search {
-                let gaps = gaps.as_ref().expect("searched");
+            let (q, d) = if let Some(gaps) = &gaps {
                 let (c, q, d) = nearest_capsule(&placed, gaps, p, usize::from(*ci));
                 *ci = c as u16;
                 (q, d)
@@ -1388,13 +1387,21 @@ mod tests {
         assert!(after.iter().all(|&d| d < 2.0), "{after:?} pixels off");
     }
 
-    #[test]
-    fn a_tip_on_another_limb_of_the_tracked_body_is_dropped() {
-        use crate::Limb;
+    /// A body standing before the camera as the last frame tracked it, and each limb's
+    /// own tip on it.
+    fn tracked_with_own_tips() -> (BodyTemplate, BodyPose, [Option<Point3<f32>>; 5]) {
         let (t, _) = scene();
         let tracked = facing(Point3::new(0.0, 0.1, 2.6));
         let posed = Posed::new(&t, &tracked);
         let own = t.tips.map(|(s, local)| Some(posed.point(s, &local)));
+        (t, tracked, own)
+    }
+
+    #[test]
+    fn a_tip_on_another_limb_of_the_tracked_body_is_dropped() {
+        use crate::Limb;
+        let (t, tracked, own) = tracked_with_own_tips();
+        let posed = Posed::new(&t, &tracked);
         let cfg = RegisterConfig::default();
         // Every limb's own tip stays, a hanging hand beside its thigh too.
         let mut tips = own;
@@ -1425,10 +1432,8 @@ mod tests {
     #[test]
     fn only_a_tip_off_the_tracked_body_makes_the_geodesic_estimate_race() {
         use crate::Limb;
-        let (t, _) = scene();
-        let tracked = facing(Point3::new(0.0, 0.1, 2.6));
+        let (t, tracked, own) = tracked_with_own_tips();
         let posed = Posed::new(&t, &tracked);
-        let own = t.tips.map(|(s, local)| Some(posed.point(s, &local)));
         let cfg = RegisterConfig::default();
         assert!(!tips_strayed(&t, &tracked, &own, &cfg));
         // The left leg's maximum on the front of the right knee: far from the left toes,

@@ -26,7 +26,8 @@ mod verifier;
 pub use segmenter::Segmenter;
 pub use threshold::{sample_codes, LeeKim, Quantizer, ThresholdModel, REST_CODE, STREAM_SYMBOLS};
 pub use verifier::{
-    context, stream_examples, Verifier, VerifierInput, CONTEXT_ARC, CONTEXT_POINTS, CONTEXT_SECONDS,
+    context, context_steps, stream_examples, Verifier, VerifierInput, CONTEXT_ARC, CONTEXT_POINTS,
+    CONTEXT_SECONDS,
 };
 
 use crate::data::{Sample, Trajectory};
@@ -376,7 +377,7 @@ impl Spotter {
             .extend(self.seg.push([p.x * inv, p.y * inv], seq, time_ns));
         let mut out = None;
         // A break's candidates are judged once the context after it is in.
-        let after = (CONTEXT_SECONDS * self.seg.fps()).round() as usize;
+        let after = context_steps(self.seg.fps());
         while let Some(&e) = self.waiting.front() {
             if e + after > now {
                 break;
@@ -479,7 +480,7 @@ impl Spotter {
             return None;
         }
         // Breaks are judged this many points late.
-        let after = (CONTEXT_SECONDS * fps).round() as usize;
+        let after = context_steps(fps);
         let judged = now.saturating_sub(after);
         let rested = self
             .seg

@@ -1,6 +1,6 @@
 //! Where a gesture can start or end: breaks of the hand's speed, and rests.
 
-use super::{SpotterConfig, VerifierInput, CONTEXT_SECONDS};
+use super::{context_steps, SpotterConfig, VerifierInput};
 
 /// A place where a gesture may end (`end`) and the next begin (`start`): a dip of the
 /// hand's speed (both the same point) or a rest (its first and last point).
@@ -169,7 +169,7 @@ impl Segmenter {
         }
         // The context walks at most this many points from either end: only that window
         // is copied, not every point kept (this runs for every candidate).
-        let reach = (CONTEXT_SECONDS * fps).round() as usize + 1;
+        let reach = context_steps(fps);
         let from = i0.saturating_sub(reach);
         let to = (i1 + reach + 1).min(self.pts.len());
         let window: Vec<[f32; 2]> = self.pts[from..to].iter().map(|p| p.0).collect();

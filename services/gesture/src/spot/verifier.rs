@@ -24,6 +24,13 @@ pub const CONTEXT_ARC: f32 = 0.08;
 /// went, and whether it was still, however fast it moved.
 pub const CONTEXT_SECONDS: f64 = 0.4;
 
+/// The points a segment's context walks at most from either end, for a path sampled at
+/// `fps` ([`CONTEXT_SECONDS`]): how far the path must be kept, and how long a break
+/// waits before its candidates are judged.
+pub fn context_steps(fps: f64) -> usize {
+    (CONTEXT_SECONDS * fps).round() as usize
+}
+
 /// The context of one end of a segment: walking from `points[at]` backwards (`back`)
 /// or forwards, the points where the path has covered `k · CONTEXT_ARC`, k = 1…, within
 /// `max_steps` points; beyond that, the last point looked at.
@@ -84,7 +91,7 @@ impl VerifierInput {
     /// its context cut from the hand's `path` sampled at `fps`; posterior and ratio are
     /// left for the caller.
     pub fn cut(path: &[[f32; 2]], s: usize, e: usize, times: Vec<f32>, fps: f64) -> Self {
-        let steps = (CONTEXT_SECONDS * fps).round() as usize;
+        let steps = context_steps(fps);
         VerifierInput {
             segment: path[s..=e].to_vec(),
             times,
