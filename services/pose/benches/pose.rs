@@ -11,7 +11,7 @@ use airglyph_pose::config::RegisterConfig;
 use airglyph_pose::dijkstra::{Dijkstra, Graph};
 use airglyph_pose::dt::DistanceTransform;
 use airglyph_pose::graph::GeoGraph;
-use airglyph_pose::segment::Segmenter;
+use airglyph_pose::segment::{Segmentation, Segmenter};
 use airglyph_pose::torso::{TorsoEstimator, TorsoStart};
 use airglyph_pose::{PoseConfig, PoseEstimator};
 use airglyph_synth::{Background, MotionSpec, SceneConfig, ScriptedPose, Synthesizer};
@@ -59,13 +59,29 @@ fn bench(c: &mut Criterion) {
         let mut seg = Segmenter::default();
         let mut points: Vec<Point3<f32>> = Vec::new();
         let mut mask: Vec<bool> = Vec::new();
-        g.bench_function("1 segment", |b| {
-            b.iter(|| {
-                black_box(seg.run(&img.view(), &k, &cfg, None, None, &mut points, &mut mask));
-            })
+        let mut run = |last: Option<&Segmentation>| {
+            let (floor, centroid) = (last.and_then(|s| s.floor), last.map(|s| s.centroid));
+            let bbox = last.map(|s| s.bbox);
+            seg.run(
+                &img.view(),
+                &k,
+                &cfg,
+                floor,
+                centroid,
+                bbox,
+                &mut points,
+                &mut mask,
+            )
+        };
+        g.bench_function("1 segment (whole image)", |b| {
+            b.iter(|| black_box(run(None)))
         });
-        let s = seg.run(&img.view(), &k, &cfg, None, None, &mut points, &mut mask);
+        let s = run(None);
         assert!(s.found);
+        g.bench_function("1b segment (around the last frame's person)", |b| {
+            b.iter(|| black_box(run(Some(&s))))
+        });
+        assert!(run(Some(&s)).windowed);
         let (wu, hu) = (w as usize, h as usize);
         let mut dt = DistanceTransform::default();
         let mut dist = Vec::new();

@@ -25,17 +25,19 @@ fn main() {
         other => panic!("unknown scene {other}: static or drawing"),
     };
     let mut est = PoseEstimator::new(k, PoseConfig::default());
-    let mut sum = 0f64;
+    let (mut sum, mut windowed) = (0f64, 0);
     let t0 = Instant::now();
     for i in 0..n {
         let r = est.estimate(frames[i % frames.len()].view());
+        windowed += usize::from(est.debug().windowed);
         for (j, c) in r.skeleton.joints.iter().zip(r.skeleton.confidence) {
             sum += (j.x + 2.0 * j.y + 3.0 * j.z + 4.0 * c) as f64;
         }
     }
     let dt = t0.elapsed().as_secs_f64();
     println!(
-        "{which} {width}: {n} frames, {:.3} ms a frame, checksum {sum:.9}",
+        "{which} {width}: {n} frames, {:.3} ms a frame, checksum {sum:.9}, \
+         {windowed} segmented around the last person",
         dt * 1e3 / n as f64
     );
 }

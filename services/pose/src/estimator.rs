@@ -53,6 +53,9 @@ pub struct Debug {
     pub torso_residual: f32,
     pub torso_reinit: bool,
     pub floor: Option<Plane>,
+    /// Whether segmentation found the person around the last frame's, without looking
+    /// at the whole image ([`crate::segment::Segmentation::windowed`]).
+    pub windowed: bool,
     /// Assignment cost of each maximum (rows) for each limb (columns).
     pub cost: Vec<[f32; 5]>,
     /// Geodesic distance of each maximum from the torso centre, metres.
@@ -108,6 +111,8 @@ pub struct PoseEstimator {
     prev_offset: Option<Vector3<f32>>,
     prev_floor: Option<Plane>,
     prev_centroid: Option<Point3<f32>>,
+    /// The last frame's person box in the image, where segmentation looks first.
+    prev_box: Option<(u32, u32, u32, u32)>,
     limbs: [Option<LimbState>; 5],
     reg: Registration,
     /// The last frame's registered body, and frames since the torso was last
@@ -161,6 +166,7 @@ impl PoseEstimator {
             prev_offset: None,
             prev_floor: None,
             prev_centroid: None,
+            prev_box: None,
             limbs: [None; 5],
             reg: Registration::default(),
             prev_body: None,
@@ -209,6 +215,7 @@ impl PoseEstimator {
         self.prev_offset = None;
         self.prev_floor = None;
         self.prev_centroid = None;
+        self.prev_box = None;
         self.limbs = [None; 5];
         self.prev_body = None;
         self.prev_hidden = [0.0; crate::body::Segment::COUNT];
@@ -369,13 +376,16 @@ impl PoseEstimator {
             cfg,
             self.prev_floor,
             self.prev_centroid,
+            self.prev_box,
             &mut self.points,
             &mut self.mask,
         );
         self.prev_floor = seg.floor;
         self.debug.floor = seg.floor;
+        self.debug.windowed = seg.windowed;
         let t1 = Instant::now();
         self.times.segment = (t1 - t0).as_secs_f64();
+        self.prev_box = seg.found.then_some(seg.bbox);
         if !seg.found {
             return None;
         }

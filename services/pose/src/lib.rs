@@ -33,7 +33,10 @@
 //!
 //! 1. [`segment`]: back-projection (airglyph-core), depth band, floor plane by RANSAC
 //!    removed, blobs split at depth jumps, the largest person-shaped blob kept (planar,
-//!    too small or too large blobs are walls, tables, noise).
+//!    too small or too large blobs are walls, tables, noise). While a person is
+//!    tracked, only a window around the last frame's is looked at; the whole image
+//!    only when the person found there is not the tracked one or may reach beyond it,
+//!    so the person's pixels are the whole image's either way.
 //! 2. [`torso`]: distance transform of the mask ([`dt`]); the torso region is where it
 //!    is at least half its maximum; PCA of its points gives a first frame; a torso model
 //!    is registered by mutual closest points (< 0.1 m) and Horn's quaternion closed form

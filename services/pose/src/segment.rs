@@ -33,6 +33,81 @@ pub struct Segmentation {
     pub bbox: (u32, u32, u32, u32),
     /// The floor found in this frame, if any.
     pub floor: Option<Plane>,
+    /// Whether the person was found within the window around the last frame's
+    /// ([`Segmenter::run`]), not in the whole image.
+    pub windowed: bool,
+}
+
+/// The part of the image segmentation looks at: columns `u0..=u1`, rows `v0..=v1`.
+///
+/// A person moves a few pixels a frame, so the last frame's box with a margin holds
+/// this frame's person; the wall and the floor around it, most of the image, are
+/// neither back-projected nor filled. What the window cuts off was not looked at: a
+/// blob that reaches one of its cut edges may go on beyond it ([`Window::cuts`]), and a
+/// person found only so is looked for again in the whole image.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Window {
+    u0: usize,
+    v0: usize,
+    u1: usize,
+    v1: usize,
+    /// The image's size.
+    w: usize,
+    h: usize,
+}
+
+impl Window {
+    fn whole(w: usize, h: usize) -> Self {
+        Self {
+            u0: 0,
+            v0: 0,
+            u1: w - 1,
+            v1: h - 1,
+            w,
+            h,
+        }
+    }
+
+    /// `bbox` grown by `margin` pixels on every side, within the image.
+    fn around(bbox: (u32, u32, u32, u32), margin: usize, w: usize, h: usize) -> Self {
+        let (u0, v0, u1, v1) = (
+            bbox.0 as usize,
+            bbox.1 as usize,
+            bbox.2 as usize,
+            bbox.3 as usize,
+        );
+        Self {
+            u0: u0.saturating_sub(margin),
+            v0: v0.saturating_sub(margin),
+            u1: (u1 + margin).min(w - 1),
+            v1: (v1 + margin).min(h - 1),
+            w,
+            h,
+        }
+    }
+
+    fn is_whole(&self) -> bool {
+        *self == Self::whole(self.w, self.h)
+    }
+
+    /// Whether the box `bbox` reaches an edge of the window that is not the image's.
+    fn cuts(&self, bbox: (u32, u32, u32, u32)) -> bool {
+        let (u0, v0, u1, v1) = (
+            bbox.0 as usize,
+            bbox.1 as usize,
+            bbox.2 as usize,
+            bbox.3 as usize,
+        );
+        (u0 <= self.u0 && self.u0 > 0)
+            || (v0 <= self.v0 && self.v0 > 0)
+            || (u1 >= self.u1 && self.u1 + 1 < self.w)
+            || (v1 >= self.v1 && self.v1 + 1 < self.h)
+    }
+
+    /// The window's pixels of row `v`, as indices of the image.
+    fn row(&self, v: usize) -> std::ops::Range<usize> {
+        v * self.w + self.u0..v * self.w + self.u1 + 1
+    }
 }
 
 /// Deterministic xorshift generator (the estimator must not depend on a global seed).
@@ -149,6 +224,27 @@ impl Step {
     }
 }
 
+/// Pixels the window reaches beyond the last frame's person box, at 320 pixels across
+/// (scaled with the image): a hand drawing at 2 m/s moves 3–4 pixels a frame there.
+const WINDOW_MARGIN: usize = 16;
+
+/// A blob whose centroid lies within this of the last frame's person (metres) is the
+/// tracked person.
+const TRACKED: f32 = 0.5;
+
+/// The camera-frame point of a pixel of depth `d` (millimetres) on the ray
+/// (`ray_x`, `ray_y`, 1); the origin (no data) outside the depth `band` (millimetres).
+#[inline]
+fn ray_point(d: u16, ray_x: f32, ray_y: f32, band: (f32, f32)) -> Point3<f32> {
+    let d = d as f32;
+    if d > 0.0 && d >= band.0 && d <= band.1 {
+        let z = d * 1e-3;
+        Point3::new(ray_x * z, ray_y * z, z)
+    } else {
+        Point3::origin()
+    }
+}
+
 /// Reusable buffers of the segmentation step.
 #[derive(Debug, Default)]
 pub struct Segmenter {
@@ -179,6 +275,9 @@ struct Blob {
     bbox: (u32, u32, u32, u32),
     hmin: f32,
     hmax: f32,
+    /// It reaches a cut edge of the window ([`Window::cuts`]): its pixels and figures
+    /// may be only part of it.
+    cut: bool,
 }
 
 impl Blob {
@@ -194,6 +293,7 @@ impl Blob {
             bbox: (u32::MAX, u32::MAX, 0, 0),
             hmin: f32::MAX,
             hmax: f32::MIN,
+            cut: false,
         }
     }
 
@@ -245,8 +345,11 @@ impl Blob {
 }
 
 impl Segmenter {
-    /// Back-projects `depth` into `points` (z = 0 where there is no data or the depth is
-    /// outside the band) and marks the person's pixels in `mask`.
+    /// Back-projects `depth` into `points` (z = 0 where there is no data, the depth is
+    /// outside the band, or segmentation did not look) and marks the person's pixels in
+    /// `mask`. With `last_box`, the last frame's person box, it looks around that box
+    /// first ([`Window`]) and in the whole image only when the person found there is
+    /// not the tracked one or may go on beyond the window.
     #[allow(clippy::too_many_arguments)]
     pub fn run(
         &mut self,
@@ -255,6 +358,7 @@ impl Segmenter {
         cfg: &PoseConfig,
         prev_floor: Option<Plane>,
         prev_centroid: Option<Point3<f32>>,
+        last_box: Option<(u32, u32, u32, u32)>,
         points: &mut Vec<Point3<f32>>,
         mask: &mut Vec<bool>,
     ) -> Segmentation {
@@ -264,16 +368,64 @@ impl Segmenter {
         // first only doubled the writes.
         points.resize(n, Point3::origin());
         mask.resize(n, false);
-        self.back_project(depth, k, cfg, points);
+        self.labels.resize(n, u32::MAX);
+        // x / z per column: no division a pixel.
+        self.ray_x.clear();
+        self.ray_x.extend((0..w).map(|u| (u as f32 - k.cx) / k.fx));
         let floor = if cfg.remove_floor {
-            self.find_floor(points, w, h, cfg, prev_floor)
+            self.find_floor(depth, k, cfg, prev_floor)
         } else {
             None
         };
+        let window = last_box
+            .map(|b| Window::around(b, WINDOW_MARGIN * w.max(h) / 320, w, h))
+            .filter(|win| !win.is_whole());
+        if let (Some(win), Some(c)) = (window, prev_centroid) {
+            let seg = self.look(depth, k, cfg, floor, prev_centroid, win, points, mask);
+            // The tracked person, whole within the window.
+            if seg.found && (seg.centroid - c).norm() < TRACKED && !win.cuts(seg.bbox) {
+                return Segmentation {
+                    windowed: true,
+                    ..seg
+                };
+            }
+        }
+        self.look(
+            depth,
+            k,
+            cfg,
+            floor,
+            prev_centroid,
+            Window::whole(w, h),
+            points,
+            mask,
+        )
+    }
+
+    /// Segmentation within `win`: the rest of `points` and `mask` is cleared. Blobs
+    /// reaching the window's cut edges are never the person; one taken as a part of the
+    /// person's body makes the result's box reach the cut edge, for the caller to look
+    /// again.
+    #[allow(clippy::too_many_arguments)]
+    fn look(
+        &mut self,
+        depth: &DepthView,
+        k: &Intrinsics,
+        cfg: &PoseConfig,
+        floor: Option<Plane>,
+        prev_centroid: Option<Point3<f32>>,
+        win: Window,
+        points: &mut [Point3<f32>],
+        mask: &mut [bool],
+    ) -> Segmentation {
+        let (w, h) = (win.w, win.h);
+        self.back_project(depth, k, cfg, &win, points);
         if let Some(pl) = floor {
-            for p in points.iter_mut() {
-                if p.z > 0.0 && pl.height(p).abs() < cfg.floor_margin {
-                    *p = Point3::origin();
+            for v in win.v0..=win.v1 {
+                for p in &mut points[win.row(v)] {
+                    if p.z > 0.0 && pl.height(p).abs() < cfg.floor_margin {
+                        *p = Point3::origin();
+                    }
                 }
             }
         }
@@ -282,22 +434,29 @@ impl Segmenter {
             ..Default::default()
         };
 
-        // Connected components split at depth jumps.
-        self.labels.clear();
-        self.labels.resize(n, u32::MAX);
+        // Connected components split at depth jumps. Labels beyond the window are
+        // never read: the fill does not step onto a pixel without data.
+        for v in win.v0..=win.v1 {
+            self.labels[win.row(v)].fill(u32::MAX);
+        }
         self.filled.clear();
         let mut blobs: Vec<Blob> = Vec::new();
         let inv_f = 2.0 / (k.fx + k.fy);
-        for start in 0..n {
-            if points[start].z <= 0.0 || self.labels[start] != u32::MAX {
-                continue;
+        for v in win.v0..=win.v1 {
+            for start in win.row(v) {
+                if points[start].z <= 0.0 || self.labels[start] != u32::MAX {
+                    continue;
+                }
+                let label = blobs.len() as u32;
+                let jump = (cfg.blob_jump_px, cfg.blob_jump_min);
+                blobs.push(self.fill(points, w, h, start, label, inv_f, jump));
             }
-            let label = blobs.len() as u32;
-            let jump = (cfg.blob_jump_px, cfg.blob_jump_min);
-            blobs.push(self.fill(points, w, h, start, label, inv_f, jump));
         }
         // A blob larger than a person (a wall) is no person, nor part of one: its
         // shape is not needed.
+        for b in &mut blobs {
+            b.cut = win.cuts(b.bbox);
+        }
         for b in blobs.iter_mut().filter(|b| b.area <= cfg.max_person_area) {
             for span in &self.filled[b.spans.clone()] {
                 let row = span.v as usize * w;
@@ -308,7 +467,7 @@ impl Segmenter {
         // The largest blob that could be a person.
         let mut best: Option<(f32, usize)> = None;
         for (bi, b) in blobs.iter().enumerate() {
-            if b.area < cfg.min_person_area || b.area > cfg.max_person_area {
+            if b.cut || b.area < cfg.min_person_area || b.area > cfg.max_person_area {
                 continue;
             }
             let height = if floor.is_some() {
@@ -334,7 +493,7 @@ impl Segmenter {
             // Largest in the image: of two people, the nearer one.
             let mut score = b.pixels as f32;
             if let Some(c) = prev_centroid {
-                if (b.moments.mean() - c).norm() < 0.5 {
+                if (b.moments.mean() - c).norm() < TRACKED {
                     score *= 1.5;
                 }
             }
@@ -342,6 +501,7 @@ impl Segmenter {
                 best = Some((score, bi));
             }
         }
+        mask.fill(false);
         if let Some((_, bi)) = best {
             let b = &blobs[bi];
             let limbs = self.body_parts(points, w, h, &blobs, bi, cfg);
@@ -363,47 +523,50 @@ impl Segmenter {
             for &bi in limbs.iter().chain([&bi]) {
                 self.keep[blobs[bi].label as usize] = true;
             }
-            for (m, &l) in mask.iter_mut().zip(&self.labels) {
-                *m = self.keep.get(l as usize).copied().unwrap_or(false);
+            for v in win.v0..=win.v1 {
+                for (m, &l) in mask[win.row(v)].iter_mut().zip(&self.labels[win.row(v)]) {
+                    *m = self.keep.get(l as usize).copied().unwrap_or(false);
+                }
             }
             seg.found = true;
             seg.pixels = pixels;
             seg.centroid = b.moments.mean();
             seg.bbox = bbox;
-        } else {
-            mask.fill(false);
         }
         seg
     }
 
-    /// `points` (of the image's size) from `depth`, zero where there is no data or the
-    /// depth is outside the band.
+    /// `points` within `win` from `depth`, zero where there is no data or the depth is
+    /// outside the band; zero beyond the window.
     fn back_project(
         &mut self,
         depth: &DepthView,
         k: &Intrinsics,
         cfg: &PoseConfig,
+        win: &Window,
         points: &mut [Point3<f32>],
     ) {
-        let w = depth.width() as usize;
-        // x / z and y / z per column and row: no division a pixel.
-        self.ray_x.clear();
-        self.ray_x.extend((0..w).map(|u| (u as f32 - k.cx) / k.fx));
-        let (near_mm, far_mm) = (cfg.near * 1000.0, cfg.far * 1000.0);
+        let w = win.w;
+        let band = (cfg.near * 1000.0, cfg.far * 1000.0);
         let rows = depth
             .pixels()
             .chunks_exact(w)
             .zip(points.chunks_exact_mut(w));
         for (v, (row, out)) in rows.enumerate() {
+            if v < win.v0 || v > win.v1 {
+                out.fill(Point3::origin());
+                continue;
+            }
+            out[..win.u0].fill(Point3::origin());
+            out[win.u1 + 1..].fill(Point3::origin());
             let ray_y = (v as f32 - k.cy) / k.fy;
-            for ((&d, p), &ray_x) in row.iter().zip(out).zip(&self.ray_x) {
-                let d = d as f32;
-                *p = if d > 0.0 && d >= near_mm && d <= far_mm {
-                    let z = d * 1e-3;
-                    Point3::new(ray_x * z, ray_y * z, z)
-                } else {
-                    Point3::origin()
-                };
+            let cols = win.u0..win.u1 + 1;
+            for ((&d, p), &ray_x) in row[cols.clone()]
+                .iter()
+                .zip(&mut out[cols.clone()])
+                .zip(&self.ray_x[cols])
+            {
+                *p = ray_point(d, ray_x, ray_y, band);
             }
         }
     }
@@ -495,13 +658,17 @@ impl Segmenter {
             .iter()
             .enumerate()
             .map(|(bi, b)| {
+                // Of a blob the window cuts, only what its whole would fail too: its
+                // depths and area grow with it, its centre and extent may go anywhere.
+                let depth_and_area = b.min.z > p.min.z - 0.9
+                    && b.max.z < p.max.z + 0.25
+                    && b.area <= cfg.max_person_area;
                 bi == person
-                    || ((b.moments.mean() - centre).norm() < 1.0
-                        && near(b.min)
-                        && near(b.max)
-                        && b.min.z > p.min.z - 0.9
-                        && b.max.z < p.max.z + 0.25
-                        && b.area <= cfg.max_person_area)
+                    || (depth_and_area
+                        && (b.cut
+                            || ((b.moments.mean() - centre).norm() < 1.0
+                                && near(b.min)
+                                && near(b.max))))
             })
             .collect();
         // Pairs of such blobs that border each other, one entry a touching pixel: both
@@ -565,19 +732,24 @@ impl Segmenter {
 
     /// RANSAC for a floor-like plane (normal within 37° of the image's up) among the
     /// points of the lower two thirds of the image.
+    /// Its samples are back-projected from `depth` on their own, so the floor is the
+    /// whole image's whatever the window; `self.ray_x` must be `depth`'s.
     fn find_floor(
         &mut self,
-        points: &[Point3<f32>],
-        w: usize,
-        h: usize,
+        depth: &DepthView,
+        k: &Intrinsics,
         cfg: &PoseConfig,
         prev: Option<Plane>,
     ) -> Option<Plane> {
+        let (w, h) = (depth.width() as usize, depth.height() as usize);
+        let band = (cfg.near * 1000.0, cfg.far * 1000.0);
+        let pixels = depth.pixels();
         self.samples.clear();
         let step = (((w * h) as f32 / 4000.0).sqrt().floor() as usize).max(1);
         for v in (h / 3..h).step_by(step) {
+            let ray_y = (v as f32 - k.cy) / k.fy;
             for u in (0..w).step_by(step) {
-                let p = points[v * w + u];
+                let p = ray_point(pixels[v * w + u], self.ray_x[u], ray_y, band);
                 if p.z > 0.0 {
                     self.samples.push(p);
                 }
@@ -740,6 +912,106 @@ mod tests {
             z[rng.below(w * h)] = 0.0;
         }
         z.iter().map(|&z| Point3::new(0.0, 0.0, z)).collect()
+    }
+
+    /// Frames of the drawing person before floor and wall, with sensor noise.
+    fn drawing_frames(n: usize) -> (Vec<airglyph_core::DepthImage>, Intrinsics) {
+        use airglyph_synth::{Background, MotionSpec, SceneConfig, Synthesizer};
+        let k = Intrinsics::default().scaled_to(320, 240);
+        let mut synth = Synthesizer::new(SceneConfig {
+            intrinsics: k,
+            motion: MotionSpec::parse("draw:8", None, false).expect("draw spec"),
+            background: Background::FloorAndWall,
+            sensor_noise: true,
+            ..SceneConfig::default()
+        })
+        .expect("scene");
+        ((0..n).map(|i| synth.render(i * 3).0).collect(), k)
+    }
+
+    fn segment(
+        s: &mut Segmenter,
+        img: &airglyph_core::DepthImage,
+        k: &Intrinsics,
+        last: Option<&Segmentation>,
+    ) -> (Segmentation, Vec<Point3<f32>>, Vec<bool>) {
+        let (mut points, mut mask) = (Vec::new(), Vec::new());
+        let cfg = PoseConfig::default();
+        let seg = s.run(
+            &img.view(),
+            k,
+            &cfg,
+            last.and_then(|l| l.floor),
+            last.map(|l| l.centroid),
+            last.filter(|l| l.found).map(|l| l.bbox),
+            &mut points,
+            &mut mask,
+        );
+        (seg, points, mask)
+    }
+
+    #[test]
+    fn the_window_around_the_last_person_finds_what_the_whole_image_finds() {
+        let (frames, k) = drawing_frames(12);
+        let (mut tracking, mut whole) = (Segmenter::default(), Segmenter::default());
+        let mut last: Option<Segmentation> = None;
+        let mut windowed = 0;
+        for (i, img) in frames.iter().enumerate() {
+            let (a, pa, ma) = segment(&mut tracking, img, &k, last.as_ref());
+            // The same floor and centroid, but never a box: always the whole image.
+            let (b, _, mb) = segment(
+                &mut whole,
+                img,
+                &k,
+                last.as_ref()
+                    .map(|l| Segmentation {
+                        found: false,
+                        ..l.clone()
+                    })
+                    .as_ref(),
+            );
+            assert!(a.found && b.found, "frame {i}");
+            assert_eq!(ma, mb, "frame {i}: the person's pixels differ");
+            assert_eq!(
+                (a.pixels, a.bbox, a.centroid),
+                (b.pixels, b.bbox, b.centroid)
+            );
+            // Beyond the window nothing is left of another frame.
+            let person = pa.iter().zip(&ma).filter(|(p, &m)| m && p.z > 0.0).count();
+            assert_eq!(person, a.pixels, "frame {i}");
+            assert!(!b.windowed);
+            windowed += usize::from(a.windowed);
+            last = Some(a);
+        }
+        assert_eq!(windowed, frames.len() - 1, "the window was not used");
+    }
+
+    #[test]
+    fn a_person_beyond_the_window_is_looked_for_in_the_whole_image() {
+        let (frames, k) = drawing_frames(1);
+        let mut s = Segmenter::default();
+        let (whole, _, mask) = segment(&mut s, &frames[0], &k, None);
+        // Last frame's box in the image's top left corner, where only wall is.
+        let stale = Segmentation {
+            bbox: (0, 0, 20, 20),
+            ..whole.clone()
+        };
+        let (again, _, mask_again) = segment(&mut s, &frames[0], &k, Some(&stale));
+        assert!(again.found && !again.windowed);
+        assert_eq!(mask_again, mask);
+        // Boxes whose windows cut off the feet, or the drawing arm's side: the person
+        // they hold is near enough the last one, but reaches the window's edge.
+        let (u0, v0, u1, v1) = whole.bbox;
+        let beyond = 2 * WINDOW_MARGIN as u32;
+        for bbox in [(u0, v0, u1, v1 - beyond), (u0 + beyond, v0, u1, v1)] {
+            let cut = Segmentation {
+                bbox,
+                ..whole.clone()
+            };
+            let (again, _, mask_again) = segment(&mut s, &frames[0], &k, Some(&cut));
+            assert!(again.found && !again.windowed, "{bbox:?}");
+            assert_eq!(mask_again, mask, "{bbox:?}");
+        }
     }
 
     #[test]
