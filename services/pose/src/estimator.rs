@@ -143,6 +143,20 @@ pub enum OfferedStart {
     Only(Skeleton),
 }
 
+/// The cost of giving each geodesic maximum (rows) to each limb (columns), and what the
+/// chains need of each maximum's path.
+struct LimbCosts {
+    cost: Vec<[f32; 5]>,
+    /// Per maximum and limb: where the path back to the torso centre is cut (the index
+    /// of its point nearest the limb's root).
+    cuts: Vec<[usize; 5]>,
+    /// Per maximum and limb: the geodesic length from the limb's root (NaN for an arm
+    /// whose path misses its shoulder).
+    lengths: Vec<[f32; 5]>,
+    /// Per maximum: its path back to the torso centre, graph nodes from the maximum.
+    paths: Vec<Vec<u32>>,
+}
+
 impl PoseEstimator {
     /// An estimator for frames of the camera `intrinsics` describes. Frames of another
     /// size are handled by scaling the intrinsics to them.
@@ -462,34 +476,7 @@ impl PoseEstimator {
         self.times.graph = (t3 - t2).as_secs_f64();
 
         // 4. Dijkstra from the torso centre, then five maxima, each made a source.
-        let n = self.graph.node_count();
-        self.dij.reset(n);
-        self.dij.add_source(root);
-        self.dij.run(&self.graph);
-        self.dist0.clear();
-        self.dist0.extend_from_slice(&self.dij.dist);
-        self.pred0.clear();
-        self.pred0.extend_from_slice(&self.dij.pred);
-        let min_ext = (cfg.min_extremity * 1000.0) as u32;
-        let mut maxima: Vec<u32> = Vec::with_capacity(5);
-        for _ in 0..cfg.max_maxima {
-            let mut best = (0u32, NONE);
-            for (a, &d) in self.dij.dist.iter().enumerate() {
-                if d != INF && d > best.0 {
-                    best = (d, a as u32);
-                }
-            }
-            if best.1 == NONE || best.0 < min_ext {
-                break;
-            }
-            maxima.push(best.1);
-            self.dij.add_source(best.1);
-            self.dij.run(&self.graph);
-        }
-        self.debug.maxima = maxima
-            .iter()
-            .map(|&m| self.graph.pixel_of_node[m as usize])
-            .collect();
+        let maxima = self.geodesic_maxima(root, cfg);
         let t4 = Instant::now();
         self.times.geodesic = (t4 - t3).as_secs_f64();
 
@@ -508,112 +495,12 @@ impl PoseEstimator {
         // 5. Maxima to limbs by least total cost.
         let mut roots = [kp[0], kp[2], kp[3], kp[4], kp[5]];
         let mut inv = torso.inverse();
-        let mut cost: Vec<[f32; 5]> = Vec::with_capacity(maxima.len());
-        let mut cuts: Vec<[usize; 5]> = Vec::with_capacity(maxima.len());
-        let mut lengths: Vec<[f32; 5]> = Vec::with_capacity(maxima.len());
-        let mut paths: Vec<Vec<u32>> = Vec::with_capacity(maxima.len());
-        for &m in &maxima {
-            self.path.clear();
-            let mut a = m;
-            let mut guard = 0;
-            while a != NONE && guard < n {
-                self.path.push(a);
-                a = self.pred0[a as usize];
-                guard += 1;
-            }
-            let dm = self.dist0[m as usize] as f32 * 1e-3;
-            let mut row = [f32::INFINITY; 5];
-            let mut cut = [0usize; 5];
-            let mut len = [0f32; 5];
-            for l in Limb::ALL {
-                let r = roots[l.index()];
-                // Cut the path where it passes nearest the limb root: the geodesic cost
-                // from the root is the path's length beyond that point plus the gap.
-                let mut near = (f32::INFINITY, 0usize);
-                for (pi, &p) in self.path.iter().enumerate() {
-                    let d = (self.graph.pos[p as usize] - r).norm();
-                    if d < near.0 {
-                        near = (d, pi);
-                    }
-                }
-                let p_cut = self.path[near.1];
-                let mut best = (
-                    dm - self.dist0[p_cut as usize] as f32 * 1e-3 + near.0,
-                    near.1,
-                );
-                // The geodesic length of a limb hardly depends on how it is bent.
-                let (l1, l2) = cfg.bones(l);
-                let reach = l1 + l2 + cfg.extremity_extra(l);
-                // A hand resting against the hip or held before the chest may reach the
-                // torso by a path that never passes its shoulder: the arm's own link is
-                // hidden. Its geodesic length then says nothing; it must only be within
-                // the arm's reach, and its targets are the forearm's and hand's.
-                let hidden = matches!(l, Limb::LeftArm | Limb::RightArm)
-                    && cfg.hidden_root_gap > 0.0
-                    && near.0 > cfg.hidden_root_gap;
-                let mut c = if hidden {
-                    let distal = ((l2 + cfg.extremity_extra(l)) * 1000.0) as u32;
-                    let d_m = self.dist0[m as usize];
-                    let end = self
-                        .path
-                        .iter()
-                        .position(|&p| d_m.saturating_sub(self.dist0[p as usize]) >= distal)
-                        .unwrap_or(self.path.len() - 1);
-                    best = (f32::NAN, end);
-                    let euclid = (self.graph.pos[m as usize] - r).norm();
-                    (euclid - reach).max(0.0) + cfg.hidden_root_cost
-                } else {
-                    (best.0 - reach).abs() + (near.0 - 0.05).max(0.0)
-                };
-                if let Some(prev) = self.limbs[l.index()].and_then(|s| s.extremity) {
-                    let pm = self.graph.pos[m as usize];
-                    c += cfg.temporal_weight * (inv.apply(&pm) - prev).norm();
-                }
-                // An extremity lies on its own side of the body.
-                let local = inv.apply(&self.graph.pos[m as usize]);
-                c += match l {
-                    Limb::LeftArm | Limb::LeftLeg => (-local.x).max(0.0),
-                    Limb::RightArm | Limb::RightLeg => local.x.max(0.0),
-                    // The top of the head is on the torso's axis, not out on a shoulder.
-                    Limb::Head => {
-                        (-local.y).max(0.0)
-                            + cfg.head_off_axis_weight * (local.x.abs() - 0.08).max(0.0)
-                    }
-                };
-                // Feet stay below the hips.
-                if matches!(l, Limb::LeftLeg | Limb::RightLeg) {
-                    c += (local.y - cfg.torso_keypoints[4][1] + 0.2).max(0.0);
-                }
-                row[l.index()] = c;
-                cut[l.index()] = best.1;
-                len[l.index()] = best.0;
-            }
-            cost.push(row);
-            cuts.push(cut);
-            lengths.push(len);
-            paths.push(self.path.clone());
-        }
-        // A bent elbow or knee is a geodesic maximum of its own, beside the path to the
-        // hand or foot beyond it. Such a maximum is no limb's end while the farther
-        // one is there: it costs extra for every limb but the head.
-        if cfg.dominated_cost > 0.0 {
-            for (bi, &mb) in maxima.iter().enumerate() {
-                let pb = self.graph.pos[mb as usize];
-                let db = self.dist0[mb as usize];
-                let dominated = maxima.iter().enumerate().any(|(ai, &ma)| {
-                    ai != bi
-                        && self.dist0[ma as usize] > db + 150
-                        && paths[ai]
-                            .iter()
-                            .any(|&p| (self.graph.pos[p as usize] - pb).norm() < 0.08)
-                });
-                if dominated {
-                    for c in &mut cost[bi][1..] {
-                        *c += cfg.dominated_cost;
-                    }
-                }
-            }
-        }
+        let LimbCosts {
+            cost,
+            cuts,
+            lengths,
+            mut paths,
+        } = self.limb_costs(&maxima, &roots, &inv, cfg);
         let assignment = assign(&cost, cfg.unassigned_cost);
         self.debug.cost = cost.clone();
         self.debug.maxima_dist = maxima
@@ -707,133 +594,14 @@ impl PoseEstimator {
             skel.confidence[j.index()] = torso_conf;
         }
         let f = 0.5 * (k.fx + k.fy);
-        for l in Limb::ALL {
-            if !race {
-                break;
-            }
+        for l in Limb::ALL.into_iter().filter(|_| race) {
             let li = l.index();
-            let root_p = roots[li];
-            let (l1, l2) = cfg.bones(l);
-            let (jr, jm, je) = l.joints();
-            let _ = jr;
-            let prev = self.limbs[li];
-            let chain = match assignment[li] {
-                Some(mi) => {
-                    let path = &paths[mi];
-                    let cut = cuts[mi][li];
-                    let targets = self.gather_targets(&path[..=cut.min(path.len() - 1)], l, f);
-                    let mut cands: Vec<Chain> = Vec::with_capacity(2);
-                    // From the geodesic path: the middle joint where the path is one
-                    // upper bone from the root.
-                    let ext = self.graph.pos[maxima[mi] as usize];
-                    let ext_b = ext + ext.coords.normalize() * cfg.surface_offset(l);
-                    let mut mid_guess = ext_b;
-                    if l2 > 0.0 {
-                        for &p in path[..=cut.min(path.len() - 1)].iter().rev() {
-                            let q = self.graph.pos[p as usize];
-                            if (q - root_p).norm() >= l1 {
-                                mid_guess = q + q.coords.normalize() * cfg.surface_offset(l);
-                                break;
-                            }
-                        }
-                    }
-                    let l2_eff = if l2 > 0.0 { l2 } else { 0.0 };
-                    let c0 = if l2 > 0.0 {
-                        Chain::towards(root_p, mid_guess - root_p, ext_b, l1, l2_eff)
-                    } else {
-                        let d = (ext_b - root_p)
-                            .try_normalize(1e-6)
-                            .unwrap_or(torso.r * Vector3::y());
-                        Chain {
-                            root: root_p,
-                            mid: root_p + d * l1,
-                            end: root_p + d * l1,
-                        }
-                    };
-                    cands.push(c0);
-                    if let Some(s) = prev {
-                        let mid = torso.apply(&s.mid);
-                        let end = torso.apply(&s.end);
-                        let c = if l2 > 0.0 {
-                            Chain::towards(root_p, mid - root_p, end, l1, l2)
-                        } else {
-                            let d = (end - root_p)
-                                .try_normalize(1e-6)
-                                .unwrap_or(torso.r * Vector3::y());
-                            Chain {
-                                root: root_p,
-                                mid: root_p + d * l1,
-                                end: root_p + d * l1,
-                            }
-                        };
-                        cands.push(c);
-                    }
-                    let mut best: Option<(Chain, f32)> = None;
-                    for c in cands {
-                        let (fitc, e) = fit_chain(
-                            c,
-                            &targets,
-                            cfg.omega_succ,
-                            cfg.beyond_end_weight,
-                            cfg.chain_iterations,
-                        );
-                        if best.is_none_or(|(_, be)| e < be) {
-                            best = Some((fitc, e));
-                        }
-                    }
-                    let (mut fitc, e) = best.unwrap_or((c0, 0.0));
-                    // The hand follows the fingertips seen, a palm's length behind them
-                    // towards the elbow, rather than where the forearm's assumed length
-                    // puts it: a forearm a few centimetres off would otherwise shrink
-                    // every stroke the hand draws towards the elbow.
-                    if cfg.hand_behind_tip > 0.0 && matches!(l, Limb::LeftArm | Limb::RightArm) {
-                        if let Some(u) = (ext_b - fitc.mid).try_normalize(1e-6) {
-                            fitc.end = ext_b - u * cfg.hand_behind_tip;
-                        }
-                    }
-                    let rms = e.sqrt();
-                    let conf = ((1.0 - rms / 0.06).clamp(0.1, 1.0))
-                        * (targets.len() as f32 / 30.0).clamp(0.2, 1.0);
-                    self.debug.targets[li] = targets;
-                    self.limbs[li] = Some(LimbState {
-                        mid: inv.apply(&fitc.mid),
-                        end: inv.apply(&fitc.end),
-                        extremity: Some(inv.apply(&ext)),
-                        confidence: conf,
-                    });
-                    (fitc, conf)
-                }
-                None => {
-                    // Occluded: keep the last fit (in the torso frame), trusted less.
-                    // Long unseen, it falls back to the rest pose.
-                    let s = prev.filter(|s| s.confidence >= 0.1).unwrap_or_else(|| {
-                        let d = cfg.rest_direction(l);
-                        let r_local = inv.apply(&root_p);
-                        LimbState {
-                            mid: r_local + d * l1,
-                            end: r_local + d * (l1 + l2),
-                            extremity: None,
-                            confidence: 0.1,
-                        }
-                    });
-                    let conf = (s.confidence * cfg.occluded_decay).clamp(0.0, 1.0);
-                    self.limbs[li] = Some(LimbState {
-                        confidence: conf,
-                        ..s
-                    });
-                    let mid = torso.apply(&s.mid);
-                    let end = torso.apply(&s.end);
-                    (
-                        Chain {
-                            root: root_p,
-                            mid,
-                            end,
-                        },
-                        conf,
-                    )
-                }
-            };
-            let (c, conf) = chain;
+            let (_, jm, je) = l.joints();
+            let found = assignment[li].map(|mi| {
+                let path = &paths[mi];
+                (&path[..=cuts[mi][li].min(path.len() - 1)], maxima[mi])
+            });
+            let (c, conf) = self.limb_chain(l, roots[li], found, &torso, cfg, f);
             if let Some(jm) = jm {
                 skel.set(jm, c.mid);
                 skel.confidence[jm.index()] = conf;
@@ -1021,6 +789,299 @@ impl PoseEstimator {
         }
         self.debug.paths = paths;
         Some(skel)
+    }
+
+    /// Dijkstra from the graph's `root` (the torso centre), then up to
+    /// [`PoseConfig::max_maxima`] geodesic maxima, each joined to the sources by a
+    /// zero-weight edge before the next search (the search goes on from where it was,
+    /// not from scratch). The first search's distances and predecessors stay in
+    /// `dist0` and `pred0`: the paths back to the torso centre.
+    fn geodesic_maxima(&mut self, root: u32, cfg: &PoseConfig) -> Vec<u32> {
+        let n = self.graph.node_count();
+        self.dij.reset(n);
+        self.dij.add_source(root);
+        self.dij.run(&self.graph);
+        self.dist0.clear();
+        self.dist0.extend_from_slice(&self.dij.dist);
+        self.pred0.clear();
+        self.pred0.extend_from_slice(&self.dij.pred);
+        let min_ext = (cfg.min_extremity * 1000.0) as u32;
+        let mut maxima: Vec<u32> = Vec::with_capacity(5);
+        for _ in 0..cfg.max_maxima {
+            let mut best = (0u32, NONE);
+            for (a, &d) in self.dij.dist.iter().enumerate() {
+                if d != INF && d > best.0 {
+                    best = (d, a as u32);
+                }
+            }
+            if best.1 == NONE || best.0 < min_ext {
+                break;
+            }
+            maxima.push(best.1);
+            self.dij.add_source(best.1);
+            self.dij.run(&self.graph);
+        }
+        self.debug.maxima = maxima
+            .iter()
+            .map(|&m| self.graph.pixel_of_node[m as usize])
+            .collect();
+        maxima
+    }
+
+    /// What giving each maximum to each limb costs (seed: the geodesic length against the
+    /// limb's, plus the priors below), and each maximum's path back to the torso centre
+    /// with where it is cut for each limb. `roots`: the limbs' roots in the camera
+    /// frame; `inv`: camera frame → torso frame.
+    fn limb_costs(
+        &mut self,
+        maxima: &[u32],
+        roots: &[Point3<f32>; 5],
+        inv: &TorsoPose,
+        cfg: &PoseConfig,
+    ) -> LimbCosts {
+        let n = self.graph.node_count();
+        let mut cost: Vec<[f32; 5]> = Vec::with_capacity(maxima.len());
+        let mut cuts: Vec<[usize; 5]> = Vec::with_capacity(maxima.len());
+        let mut lengths: Vec<[f32; 5]> = Vec::with_capacity(maxima.len());
+        let mut paths: Vec<Vec<u32>> = Vec::with_capacity(maxima.len());
+        for &m in maxima {
+            self.path.clear();
+            let mut a = m;
+            let mut guard = 0;
+            while a != NONE && guard < n {
+                self.path.push(a);
+                a = self.pred0[a as usize];
+                guard += 1;
+            }
+            let dm = self.dist0[m as usize] as f32 * 1e-3;
+            let mut row = [f32::INFINITY; 5];
+            let mut cut = [0usize; 5];
+            let mut len = [0f32; 5];
+            for l in Limb::ALL {
+                let r = roots[l.index()];
+                // Cut the path where it passes nearest the limb root: the geodesic cost
+                // from the root is the path's length beyond that point plus the gap.
+                let mut near = (f32::INFINITY, 0usize);
+                for (pi, &p) in self.path.iter().enumerate() {
+                    let d = (self.graph.pos[p as usize] - r).norm();
+                    if d < near.0 {
+                        near = (d, pi);
+                    }
+                }
+                let p_cut = self.path[near.1];
+                let mut best = (
+                    dm - self.dist0[p_cut as usize] as f32 * 1e-3 + near.0,
+                    near.1,
+                );
+                // The geodesic length of a limb hardly depends on how it is bent.
+                let (l1, l2) = cfg.bones(l);
+                let reach = l1 + l2 + cfg.extremity_extra(l);
+                // A hand resting against the hip or held before the chest may reach the
+                // torso by a path that never passes its shoulder: the arm's own link is
+                // hidden. Its geodesic length then says nothing; it must only be within
+                // the arm's reach, and its targets are the forearm's and hand's.
+                let hidden = matches!(l, Limb::LeftArm | Limb::RightArm)
+                    && cfg.hidden_root_gap > 0.0
+                    && near.0 > cfg.hidden_root_gap;
+                let mut c = if hidden {
+                    let distal = ((l2 + cfg.extremity_extra(l)) * 1000.0) as u32;
+                    let d_m = self.dist0[m as usize];
+                    let end = self
+                        .path
+                        .iter()
+                        .position(|&p| d_m.saturating_sub(self.dist0[p as usize]) >= distal)
+                        .unwrap_or(self.path.len() - 1);
+                    best = (f32::NAN, end);
+                    let euclid = (self.graph.pos[m as usize] - r).norm();
+                    (euclid - reach).max(0.0) + cfg.hidden_root_cost
+                } else {
+                    (best.0 - reach).abs() + (near.0 - 0.05).max(0.0)
+                };
+                if let Some(prev) = self.limbs[l.index()].and_then(|s| s.extremity) {
+                    let pm = self.graph.pos[m as usize];
+                    c += cfg.temporal_weight * (inv.apply(&pm) - prev).norm();
+                }
+                // An extremity lies on its own side of the body.
+                let local = inv.apply(&self.graph.pos[m as usize]);
+                c += match l {
+                    Limb::LeftArm | Limb::LeftLeg => (-local.x).max(0.0),
+                    Limb::RightArm | Limb::RightLeg => local.x.max(0.0),
+                    // The top of the head is on the torso's axis, not out on a shoulder.
+                    Limb::Head => {
+                        (-local.y).max(0.0)
+                            + cfg.head_off_axis_weight * (local.x.abs() - 0.08).max(0.0)
+                    }
+                };
+                // Feet stay below the hips.
+                if matches!(l, Limb::LeftLeg | Limb::RightLeg) {
+                    c += (local.y - cfg.torso_keypoints[4][1] + 0.2).max(0.0);
+                }
+                row[l.index()] = c;
+                cut[l.index()] = best.1;
+                len[l.index()] = best.0;
+            }
+            cost.push(row);
+            cuts.push(cut);
+            lengths.push(len);
+            paths.push(self.path.clone());
+        }
+        // A bent elbow or knee is a geodesic maximum of its own, beside the path to the
+        // hand or foot beyond it. Such a maximum is no limb's end while the farther
+        // one is there: it costs extra for every limb but the head.
+        if cfg.dominated_cost > 0.0 {
+            for (bi, &mb) in maxima.iter().enumerate() {
+                let pb = self.graph.pos[mb as usize];
+                let db = self.dist0[mb as usize];
+                let dominated = maxima.iter().enumerate().any(|(ai, &ma)| {
+                    ai != bi
+                        && self.dist0[ma as usize] > db + 150
+                        && paths[ai]
+                            .iter()
+                            .any(|&p| (self.graph.pos[p as usize] - pb).norm() < 0.08)
+                });
+                if dominated {
+                    for c in &mut cost[bi][1..] {
+                        *c += cfg.dominated_cost;
+                    }
+                }
+            }
+        }
+        LimbCosts {
+            cost,
+            cuts,
+            lengths,
+            paths,
+        }
+    }
+
+    /// The seed's two-joint chain of limb `l` from `root`: fitted to the target points
+    /// along `found`'s path (its part from the geodesic maximum to the cut nearest the
+    /// root) and to the maximum, from the path's own bend and from the last frame's
+    /// fit, whichever fits better; without a maximum the last fit, trusted less. The
+    /// chain and its confidence; the limb's state is kept for the next frame.
+    fn limb_chain(
+        &mut self,
+        l: Limb,
+        root_p: Point3<f32>,
+        found: Option<(&[u32], u32)>,
+        torso: &TorsoPose,
+        cfg: &PoseConfig,
+        f: f32,
+    ) -> (Chain, f32) {
+        let li = l.index();
+        let (l1, l2) = cfg.bones(l);
+        let prev = self.limbs[li];
+        let inv = torso.inverse();
+        let Some((path, maximum)) = found else {
+            // Occluded: keep the last fit (in the torso frame), trusted less.
+            // Long unseen, it falls back to the rest pose.
+            let s = prev.filter(|s| s.confidence >= 0.1).unwrap_or_else(|| {
+                let d = cfg.rest_direction(l);
+                let r_local = inv.apply(&root_p);
+                LimbState {
+                    mid: r_local + d * l1,
+                    end: r_local + d * (l1 + l2),
+                    extremity: None,
+                    confidence: 0.1,
+                }
+            });
+            let conf = (s.confidence * cfg.occluded_decay).clamp(0.0, 1.0);
+            self.limbs[li] = Some(LimbState {
+                confidence: conf,
+                ..s
+            });
+            let mid = torso.apply(&s.mid);
+            let end = torso.apply(&s.end);
+            return (
+                Chain {
+                    root: root_p,
+                    mid,
+                    end,
+                },
+                conf,
+            );
+        };
+        let targets = self.gather_targets(path, l, f);
+        let mut cands: Vec<Chain> = Vec::with_capacity(2);
+        // From the geodesic path: the middle joint where the path is one
+        // upper bone from the root.
+        let ext = self.graph.pos[maximum as usize];
+        let ext_b = ext + ext.coords.normalize() * cfg.surface_offset(l);
+        let mut mid_guess = ext_b;
+        if l2 > 0.0 {
+            for &p in path.iter().rev() {
+                let q = self.graph.pos[p as usize];
+                if (q - root_p).norm() >= l1 {
+                    mid_guess = q + q.coords.normalize() * cfg.surface_offset(l);
+                    break;
+                }
+            }
+        }
+        let l2_eff = if l2 > 0.0 { l2 } else { 0.0 };
+        let c0 = if l2 > 0.0 {
+            Chain::towards(root_p, mid_guess - root_p, ext_b, l1, l2_eff)
+        } else {
+            let d = (ext_b - root_p)
+                .try_normalize(1e-6)
+                .unwrap_or(torso.r * Vector3::y());
+            Chain {
+                root: root_p,
+                mid: root_p + d * l1,
+                end: root_p + d * l1,
+            }
+        };
+        cands.push(c0);
+        if let Some(s) = prev {
+            let mid = torso.apply(&s.mid);
+            let end = torso.apply(&s.end);
+            let c = if l2 > 0.0 {
+                Chain::towards(root_p, mid - root_p, end, l1, l2)
+            } else {
+                let d = (end - root_p)
+                    .try_normalize(1e-6)
+                    .unwrap_or(torso.r * Vector3::y());
+                Chain {
+                    root: root_p,
+                    mid: root_p + d * l1,
+                    end: root_p + d * l1,
+                }
+            };
+            cands.push(c);
+        }
+        let mut best: Option<(Chain, f32)> = None;
+        for c in cands {
+            let (fitc, e) = fit_chain(
+                c,
+                &targets,
+                cfg.omega_succ,
+                cfg.beyond_end_weight,
+                cfg.chain_iterations,
+            );
+            if best.is_none_or(|(_, be)| e < be) {
+                best = Some((fitc, e));
+            }
+        }
+        let (mut fitc, e) = best.unwrap_or((c0, 0.0));
+        // The hand follows the fingertips seen, a palm's length behind them
+        // towards the elbow, rather than where the forearm's assumed length
+        // puts it: a forearm a few centimetres off would otherwise shrink
+        // every stroke the hand draws towards the elbow.
+        if cfg.hand_behind_tip > 0.0 && matches!(l, Limb::LeftArm | Limb::RightArm) {
+            if let Some(u) = (ext_b - fitc.mid).try_normalize(1e-6) {
+                fitc.end = ext_b - u * cfg.hand_behind_tip;
+            }
+        }
+        let rms = e.sqrt();
+        let conf =
+            ((1.0 - rms / 0.06).clamp(0.1, 1.0)) * (targets.len() as f32 / 30.0).clamp(0.2, 1.0);
+        self.debug.targets[li] = targets;
+        self.limbs[li] = Some(LimbState {
+            mid: inv.apply(&fitc.mid),
+            end: inv.apply(&fitc.end),
+            extremity: Some(inv.apply(&ext)),
+            confidence: conf,
+        });
+        (fitc, conf)
     }
 
     /// The joints filtered over time: still joints stop jittering with the sensor's
