@@ -494,7 +494,7 @@ impl PoseEstimator {
 
         // 5. Maxima to limbs by least total cost.
         let mut roots = [kp[0], kp[2], kp[3], kp[4], kp[5]];
-        let mut inv = torso.inverse();
+        let inv = torso.inverse();
         let LimbCosts {
             cost,
             cuts,
@@ -536,7 +536,6 @@ impl PoseEstimator {
             kp = keypoints(&torso, cfg);
             centre = kp[6];
             roots = [kp[0], kp[2], kp[3], kp[4], kp[5]];
-            inv = torso.inverse();
         }
 
         // The registered torso may have slid along its axis, which closest points do
@@ -615,168 +614,16 @@ impl PoseEstimator {
         // 7. The whole body registered to the frame, from this estimate and from the
         // last frame's registration, whichever explains the frame better.
         if cfg.register.enabled {
-            let frame = Frame {
-                points: &self.points,
-                mask: &self.mask,
+            let scene = Scene {
+                k: &k,
                 width: w,
                 height: h,
-                k: &k,
+                template: &tpl,
+                torso: &torso,
             };
-            self.reg.prepare(&frame, &cfg.register);
-            let geodesic = race.then(|| BodyPose::from_skeleton(&tpl, &skel)).flatten();
-            // Besides the tracked body and the geodesic one: the tracked body with every
-            // limb whose tip strayed taken from the geodesic estimate (an arm dropped
-            // from a T-pose within a frame, say, while the rest is tracked well).
-            let geo_for_hybrid = geodesic.filter(|_| cfg.register.race_hybrid);
-            let hybrid = self.prev_body.zip(geo_for_hybrid).and_then(|(prev, geo)| {
-                let posed = Posed::new(&tpl, &prev);
-                let mut h = prev;
-                let mut changed = false;
-                for l in Limb::ALL {
-                    let (seg, local) = tpl.tips[l.index()];
-                    if tips[l.index()].is_some_and(|m| {
-                        (posed.point(seg, &local) - m).norm() > cfg.register.race_gap
-                    }) {
-                        h = h.with_limb_of(&geo, l);
-                        changed = true;
-                    }
-                }
-                changed.then_some(h)
-            });
-            let mut starts: Vec<BodyPose> = [self.prev_body, hybrid, geodesic]
-                .into_iter()
-                .flatten()
-                .collect();
-            // A side-on body races from a standing pose, for every step, and without
-            // the tips: they were assigned to the limbs of the frontal body.
-            let side_on_cfg;
-            let (register_cfg, tips_now) = match geodesic.filter(|_| side_on) {
-                Some(g) => {
-                    starts.extend(side_on_starts(&g, &seg.centroid));
-                    side_on_cfg = crate::register::RegisterConfig {
-                        race_iterations: cfg.register.iterations,
-                        ..cfg.register.clone()
-                    };
-                    (&side_on_cfg, [None; 5])
-                }
-                None => (&cfg.register, tips),
-            };
-            match self.offered.take() {
-                Some(OfferedStart::Also(s)) => starts.extend(BodyPose::from_skeleton(&tpl, &s)),
-                Some(OfferedStart::Only(s)) => {
-                    if let Some(b) = BodyPose::from_skeleton(&tpl, &s) {
-                        starts = vec![b];
-                    }
-                }
-                None => {}
-            }
-            let best = self.reg.fit(
-                &frame,
-                &tpl,
-                &starts,
-                &tips_now,
-                &self.prev_hidden,
-                register_cfg,
-            );
-            if race {
-                self.debug.geodesic = Some(skel);
-            }
-            let mut registered = false;
-            if let Some(b) = best {
-                // Lengths are learned from frames whose limbs the camera sees well.
-                if self.cfg.calibrate_body {
-                    use crate::body::Segment::*;
-                    let seen = |segs: &[crate::body::Segment]| {
-                        segs.iter().map(|s| b.seen[s.index()]).sum::<f32>() / segs.len() as f32
-                    };
-                    let gate = cfg.register.length_seen;
-                    let arms = seen(&[LeftUpperArm, LeftForearm, RightUpperArm, RightForearm]);
-                    let legs = seen(&[LeftThigh, LeftShin, RightThigh, RightShin]);
-                    self.calib.refine([
-                        b.length_step[0].filter(|_| arms >= gate),
-                        b.length_step[1].filter(|_| legs >= gate),
-                    ]);
-                    for (steps, upper, fore) in [
-                        (b.arm_bone_steps[0], LeftUpperArm, LeftForearm),
-                        (b.arm_bone_steps[1], RightUpperArm, RightForearm),
-                    ] {
-                        if let Some(s) = steps.filter(|_| seen(&[upper, fore]) >= gate) {
-                            self.calib.refine_arm_bones(s);
-                        }
-                    }
-                    if arms >= gate {
-                        let rel = |s: crate::body::Segment| {
-                            let r = b.pose.rotation[Chest.index()].inverse()
-                                * b.pose.rotation[s.index()];
-                            let v = r.scaled_axis();
-                            [v.x, v.y, v.z]
-                        };
-                        self.calib.refine_collars(
-                            [rel(LeftCollar), rel(RightCollar)],
-                            cfg.register.collar_gain,
-                        );
-                    }
-                }
-                let fitted = Posed::new(&tpl, &b.pose).skeleton(&tpl);
-                if fitted.is_finite() {
-                    skel.joints = fitted.joints;
-                    // Confidence: how much of the joint's segment the camera sees where
-                    // the body puts it.
-                    for j in Joint::ALL {
-                        let seen = b.seen[crate::body::segment_of(j).index()];
-                        skel.confidence[j.index()] = (0.1 + 0.9 * seen).clamp(0.0, 1.0);
-                    }
-                    // The hand follows the fingertips seen, as in the seed's chains: a
-                    // capsule forearm cannot bend at the wrist, and its end lags a
-                    // quickly drawing hand.
-                    let posed = Posed::new(&tpl, &b.pose);
-                    for (l, hand, elbow) in [
-                        (Limb::LeftArm, Joint::LeftHand, Joint::LeftElbow),
-                        (Limb::RightArm, Joint::RightHand, Joint::RightElbow),
-                    ] {
-                        let (Some(ext), true) = (tips[l.index()], cfg.hand_behind_tip > 0.0) else {
-                            continue;
-                        };
-                        let ext_b = ext + ext.coords.normalize() * cfg.surface_offset(l);
-                        let (seg, local) = tpl.tips[l.index()];
-                        let tip = posed.point(seg, &local);
-                        if (tip - ext_b).norm() > cfg.register.tip_trust {
-                            continue;
-                        }
-                        if let Some(u) = (ext_b - skel[elbow]).try_normalize(1e-6) {
-                            skel.set(hand, ext_b - u * cfg.hand_behind_tip);
-                            // Its fingertips are in sight.
-                            let c = &mut skel.confidence[hand.index()];
-                            *c = c.max(0.9);
-                        }
-                    }
-                    self.prev_body = Some(b.pose);
-                    self.prev_hidden = crate::register::hidden_limbs(&b.seen);
-                    registered = true;
-                    self.debug.body = Some((b.pose, tpl));
-                    self.debug.register_passes = b.passes;
-                    self.debug.register_energy = b.energy / self.reg.data_len().max(1) as f32;
-                    self.debug.register_points = self.reg.data_len();
-                }
-            }
-            if !race {
-                if !registered {
-                    // Neither chains nor a registered body: the frame is lost.
-                    self.prev_body = None;
-                    return None;
-                }
-                // The chains were skipped: their state (the limbs' last fits, in the
-                // torso frame) follows the registered body.
-                for l in Limb::ALL {
-                    let (_, jm, je) = l.joints();
-                    let end = inv.apply(&skel[je]);
-                    self.limbs[l.index()] = Some(LimbState {
-                        mid: jm.map_or(end, |j| inv.apply(&skel[j])),
-                        end,
-                        extremity: tips[l.index()].map(|m| inv.apply(&m)),
-                        confidence: skel.confidence[je.index()],
-                    });
-                }
+            let side_on = side_on.then_some(seg.centroid);
+            if !self.register_body(&mut skel, &scene, cfg, &tips, race, side_on) {
+                return None;
             }
         }
         self.times.register = t5.elapsed().as_secs_f64();
@@ -1084,6 +931,155 @@ impl PoseEstimator {
         (fitc, conf)
     }
 
+    /// Step 7: the whole body registered to the frame, raced from the last frame's
+    /// body, from it with the strayed limbs of the geodesic estimate `skel` (when
+    /// `race`), from the geodesic estimate itself and, for a person perhaps side-on
+    /// (`side_on`: the person's centroid), from standing side-on bodies. The winner's
+    /// joints replace `skel`'s. False when the frame is lost: no chains this frame
+    /// (`race` false) and no registered body either.
+    fn register_body(
+        &mut self,
+        skel: &mut Skeleton,
+        scene: &Scene,
+        cfg: &PoseConfig,
+        tips: &[Option<Point3<f32>>; 5],
+        race: bool,
+        side_on: Option<Point3<f32>>,
+    ) -> bool {
+        let tpl = scene.template;
+        let frame = Frame {
+            points: &self.points,
+            mask: &self.mask,
+            width: scene.width,
+            height: scene.height,
+            k: scene.k,
+        };
+        self.reg.prepare(&frame, &cfg.register);
+        let geodesic = race.then(|| BodyPose::from_skeleton(tpl, skel)).flatten();
+        let hybrid = self
+            .prev_body
+            .zip(geodesic.filter(|_| cfg.register.race_hybrid))
+            .and_then(|(prev, geo)| hybrid_start(tpl, &prev, &geo, tips, cfg));
+        let mut starts: Vec<BodyPose> = [self.prev_body, hybrid, geodesic]
+            .into_iter()
+            .flatten()
+            .collect();
+        // A side-on body races from a standing pose, for every step, and without
+        // the tips: they were assigned to the limbs of the frontal body.
+        let side_on_cfg;
+        let (register_cfg, tips_now) = match geodesic.zip(side_on) {
+            Some((g, centroid)) => {
+                starts.extend(side_on_starts(&g, &centroid));
+                side_on_cfg = crate::register::RegisterConfig {
+                    race_iterations: cfg.register.iterations,
+                    ..cfg.register.clone()
+                };
+                (&side_on_cfg, [None; 5])
+            }
+            None => (&cfg.register, *tips),
+        };
+        match self.offered.take() {
+            Some(OfferedStart::Also(s)) => starts.extend(BodyPose::from_skeleton(tpl, &s)),
+            Some(OfferedStart::Only(s)) => {
+                if let Some(b) = BodyPose::from_skeleton(tpl, &s) {
+                    starts = vec![b];
+                }
+            }
+            None => {}
+        }
+        let best = self.reg.fit(
+            &frame,
+            tpl,
+            &starts,
+            &tips_now,
+            &self.prev_hidden,
+            register_cfg,
+        );
+        if race {
+            self.debug.geodesic = Some(*skel);
+        }
+        let mut registered = false;
+        if let Some(b) = best {
+            if self.cfg.calibrate_body {
+                self.learn_body(&b, cfg);
+            }
+            let fitted = Posed::new(tpl, &b.pose).skeleton(tpl);
+            if fitted.is_finite() {
+                skel.joints = fitted.joints;
+                // Confidence: how much of the joint's segment the camera sees where
+                // the body puts it.
+                for j in Joint::ALL {
+                    let seen = b.seen[crate::body::segment_of(j).index()];
+                    skel.confidence[j.index()] = (0.1 + 0.9 * seen).clamp(0.0, 1.0);
+                }
+                hands_at_fingertips(skel, &Posed::new(tpl, &b.pose), tpl, tips, cfg);
+                self.prev_body = Some(b.pose);
+                self.prev_hidden = crate::register::hidden_limbs(&b.seen);
+                registered = true;
+                self.debug.body = Some((b.pose, tpl.clone()));
+                self.debug.register_passes = b.passes;
+                self.debug.register_energy = b.energy / self.reg.data_len().max(1) as f32;
+                self.debug.register_points = self.reg.data_len();
+            }
+        }
+        if !race {
+            if !registered {
+                // Neither chains nor a registered body: the frame is lost.
+                self.prev_body = None;
+                return false;
+            }
+            // The chains were skipped: their state (the limbs' last fits, in the
+            // torso frame) follows the registered body.
+            let inv = scene.torso.inverse();
+            for l in Limb::ALL {
+                let (_, jm, je) = l.joints();
+                let end = inv.apply(&skel[je]);
+                self.limbs[l.index()] = Some(LimbState {
+                    mid: jm.map_or(end, |j| inv.apply(&skel[j])),
+                    end,
+                    extremity: tips[l.index()].map(|m| inv.apply(&m)),
+                    confidence: skel.confidence[je.index()],
+                });
+            }
+        }
+        true
+    }
+
+    /// The person's limb lengths (and collarbones' rest) learned from a registered
+    /// body, from frames whose limbs the camera sees well.
+    fn learn_body(&mut self, b: &crate::register::Fit, cfg: &PoseConfig) {
+        use crate::body::Segment::*;
+        let seen = |segs: &[crate::body::Segment]| {
+            segs.iter().map(|s| b.seen[s.index()]).sum::<f32>() / segs.len() as f32
+        };
+        let gate = cfg.register.length_seen;
+        let arms = seen(&[LeftUpperArm, LeftForearm, RightUpperArm, RightForearm]);
+        let legs = seen(&[LeftThigh, LeftShin, RightThigh, RightShin]);
+        self.calib.refine([
+            b.length_step[0].filter(|_| arms >= gate),
+            b.length_step[1].filter(|_| legs >= gate),
+        ]);
+        for (steps, upper, fore) in [
+            (b.arm_bone_steps[0], LeftUpperArm, LeftForearm),
+            (b.arm_bone_steps[1], RightUpperArm, RightForearm),
+        ] {
+            if let Some(s) = steps.filter(|_| seen(&[upper, fore]) >= gate) {
+                self.calib.refine_arm_bones(s);
+            }
+        }
+        if arms >= gate {
+            let rel = |s: crate::body::Segment| {
+                let r = b.pose.rotation[Chest.index()].inverse() * b.pose.rotation[s.index()];
+                let v = r.scaled_axis();
+                [v.x, v.y, v.z]
+            };
+            self.calib.refine_collars(
+                [rel(LeftCollar), rel(RightCollar)],
+                cfg.register.collar_gain,
+            );
+        }
+    }
+
     /// The joints filtered over time: still joints stop jittering with the sensor's
     /// noise, moving ones keep up.
     fn smoothed(&mut self, mut s: Skeleton, t: f64) -> Skeleton {
@@ -1237,4 +1233,73 @@ fn side_on_starts(geodesic: &BodyPose, centroid: &Point3<f32>) -> [BodyPose; 2] 
             rotation: [r; Segment::COUNT],
         }
     })
+}
+
+/// What the registration needs of the frame besides the estimator's own buffers.
+struct Scene<'a> {
+    k: &'a Intrinsics,
+    width: usize,
+    height: usize,
+    template: &'a BodyTemplate,
+    /// The torso frame of this frame's seed steps (torso frame → camera frame).
+    torso: &'a TorsoPose,
+}
+
+/// The tracked body `prev` with every limb whose tip strayed (lies farther than
+/// [`crate::register::RegisterConfig::race_gap`] from the geodesic maximum given to it)
+/// taken from the geodesic estimate `geo`: an arm dropped from a T-pose within a frame,
+/// say, while the rest is tracked well. None when no tip strayed.
+fn hybrid_start(
+    tpl: &BodyTemplate,
+    prev: &BodyPose,
+    geo: &BodyPose,
+    tips: &[Option<Point3<f32>>; 5],
+    cfg: &PoseConfig,
+) -> Option<BodyPose> {
+    let posed = Posed::new(tpl, prev);
+    let mut h = *prev;
+    let mut changed = false;
+    for l in Limb::ALL {
+        let (seg, local) = tpl.tips[l.index()];
+        if tips[l.index()]
+            .is_some_and(|m| (posed.point(seg, &local) - m).norm() > cfg.register.race_gap)
+        {
+            h = h.with_limb_of(geo, l);
+            changed = true;
+        }
+    }
+    changed.then_some(h)
+}
+
+/// The hands of a registered body moved to follow the fingertips seen (the arms'
+/// geodesic maxima `tips`), as in the seed's chains: a capsule forearm cannot bend at
+/// the wrist, and its end lags a quickly drawing hand. Only where the body's own tip
+/// lies within [`crate::register::RegisterConfig::tip_trust`] of the maximum.
+fn hands_at_fingertips(
+    skel: &mut Skeleton,
+    posed: &Posed,
+    tpl: &BodyTemplate,
+    tips: &[Option<Point3<f32>>; 5],
+    cfg: &PoseConfig,
+) {
+    for (l, hand, elbow) in [
+        (Limb::LeftArm, Joint::LeftHand, Joint::LeftElbow),
+        (Limb::RightArm, Joint::RightHand, Joint::RightElbow),
+    ] {
+        let (Some(ext), true) = (tips[l.index()], cfg.hand_behind_tip > 0.0) else {
+            continue;
+        };
+        let ext_b = ext + ext.coords.normalize() * cfg.surface_offset(l);
+        let (seg, local) = tpl.tips[l.index()];
+        let tip = posed.point(seg, &local);
+        if (tip - ext_b).norm() > cfg.register.tip_trust {
+            continue;
+        }
+        if let Some(u) = (ext_b - skel[elbow]).try_normalize(1e-6) {
+            skel.set(hand, ext_b - u * cfg.hand_behind_tip);
+            // Its fingertips are in sight.
+            let c = &mut skel.confidence[hand.index()];
+            *c = c.max(0.9);
+        }
+    }
 }
