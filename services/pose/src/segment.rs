@@ -347,9 +347,10 @@ impl Blob {
 impl Segmenter {
     /// Back-projects `depth` into `points` (z = 0 where there is no data, the depth is
     /// outside the band, or segmentation did not look) and marks the person's pixels in
-    /// `mask`. With `last_box`, the last frame's person box, it looks around that box
-    /// first ([`Window`]) and in the whole image only when the person found there is
-    /// not the tracked one or may go on beyond the window.
+    /// `mask`. With `last_box`, the last frame's person box, it looks within that box
+    /// and a margin around it first (the wall and floor beyond are neither
+    /// back-projected nor filled), and in the whole image only when the person found
+    /// there is not the tracked one or may go on beyond the window.
     #[allow(clippy::too_many_arguments)]
     pub fn run(
         &mut self,
