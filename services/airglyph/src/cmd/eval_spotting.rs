@@ -54,7 +54,8 @@ pub struct Args {
     /// Gestures per stream.
     #[arg(long, default_value_t = 20)]
     pub per_stream: usize,
-    /// Seconds of ordinary movement alone, to count insertions in.
+    /// Seconds of ordinary movement alone, to count insertions in (and which symbols
+    /// it passes for).
     #[arg(long, default_value_t = 300.0)]
     pub random_seconds: f32,
     /// Probability that the hand rests (0.1–0.5 s) before and after each gesture.
@@ -295,7 +296,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // Pure random movement.
     let mut r = ChaCha8Rng::seed_from_u64(args.seed ^ 0xABCD);
     let rm = random_movement(args.random_seconds, &cfg, &mut r);
-    let false_alarms = run_stream(&model, &scfg, &rm, &cfg)?.len();
+    let alarms = run_stream(&model, &scfg, &rm, &cfg)?;
+    let false_alarms = alarms.len();
+    // Which symbols ordinary movement passes for: the vocabulary's weak spots.
+    let mut by_label = std::collections::BTreeMap::<&str, usize>::new();
+    for g in &alarms {
+        *by_label.entry(g.label.as_str()).or_default() += 1;
+    }
     if args.json {
         println!(
             "{}",
@@ -310,7 +317,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
         println!(
             "{}",
-            json!({"random_movement_seconds": args.random_seconds, "insertions": false_alarms})
+            json!({
+                "random_movement_seconds": args.random_seconds,
+                "insertions": false_alarms,
+                "insertions_by_label": by_label,
+            })
         );
     } else {
         println!(
@@ -323,9 +334,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             total.insertions,
             100.0 * total.reliability
         );
+        let labels: Vec<String> = by_label
+            .iter()
+            .map(|(l, n)| format!("{n} × \"{l}\""))
+            .collect();
         println!(
-            "{:.0} s of random movement only: {false_alarms} gestures spotted (insertions)",
-            args.random_seconds
+            "{:.0} s of random movement only: {false_alarms} gestures spotted (insertions){}",
+            args.random_seconds,
+            if labels.is_empty() {
+                String::new()
+            } else {
+                format!(": {}", labels.join(", "))
+            }
         );
     }
     Ok(())
