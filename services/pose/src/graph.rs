@@ -54,6 +54,30 @@ impl SampleBox {
             .collect()
     }
 
+    /// All of `samples` in one box.
+    fn around(pos: &[Point3<f32>], samples: &[u32]) -> Self {
+        let (mut lo, mut hi) = (Vector3::repeat(f32::MAX), Vector3::repeat(f32::MIN));
+        for &q in samples {
+            lo = lo.inf(&pos[q as usize].coords);
+            hi = hi.sup(&pos[q as usize].coords);
+        }
+        Self {
+            range: 0..samples.len(),
+            lo,
+            hi,
+        }
+    }
+
+    /// Whether every point of this box is at least `d2` (squared) from every point of
+    /// `other`, with [`SampleBox::beyond`]'s margin.
+    #[inline]
+    fn apart(&self, other: &SampleBox, d2: f32) -> bool {
+        let gap = (self.lo - other.hi)
+            .sup(&(other.lo - self.hi))
+            .sup(&Vector3::zeros());
+        gap.norm_squared() > d2 * (1.0 + 1e-4)
+    }
+
     /// Whether every sample of the run is at least `d2` (squared) from `p`. The margin
     /// covers rounding: a run is skipped only when no sample in it can beat `d2`, so
     /// the search finds the very pair the exhaustive one does.
@@ -297,15 +321,19 @@ impl GeoGraph {
         if comps.is_empty() {
             return;
         }
-        // Map union-find roots to component indices (0 = largest).
-        let mut index_of_root = std::collections::HashMap::with_capacity(comps.len());
+        // Union-find roots to component indices (0 = largest), in `scratch`: the sizes
+        // are read.
+        self.scratch.fill(NONE);
         for (ci, &(_, r)) in comps.iter().enumerate() {
-            index_of_root.insert(r, ci as u32);
+            self.scratch[r as usize] = ci as u32;
         }
-        let mut members: Vec<Vec<u32>> = vec![Vec::new(); comps.len()];
+        let mut members: Vec<Vec<u32>> = comps
+            .iter()
+            .map(|&(size, _)| Vec::with_capacity(size as usize))
+            .collect();
         for a in 0..n {
-            let r = find(&mut self.uf, a as u32);
-            if let Some(&ci) = index_of_root.get(&r) {
+            let ci = self.scratch[find(&mut self.uf, a as u32) as usize];
+            if ci != NONE {
                 self.comp[a] = ci;
                 members[ci as usize].push(a as u32);
             }
@@ -327,12 +355,23 @@ impl GeoGraph {
         let probes: Vec<Vec<u32>> = members.iter().map(|m| sample(m, 40)).collect();
         let pos = &self.pos;
         let boxes: Vec<Vec<SampleBox>> = samples.iter().map(|s| SampleBox::cover(pos, s)).collect();
+        // Each component's samples in one box, and its probes in another: most pairs of
+        // components lie farther apart than the best join found so far, and are
+        // skipped whole.
+        let whole: Vec<SampleBox> = samples.iter().map(|s| SampleBox::around(pos, s)).collect();
+        let probe_box: Vec<SampleBox> = probes.iter().map(|s| SampleBox::around(pos, s)).collect();
         // The closest (probe of `c`, sample of `target`) pair nearer than `bound`
         // (squared), the first in probe and sample order of equally near ones.
         let closest = |c: usize, target: usize, bound: f32| -> (f32, u32, u32) {
             let mut best = (bound, NONE, NONE);
+            if whole[target].apart(&probe_box[c], bound) {
+                return best;
+            }
             for &p in &probes[c] {
                 let pp = pos[p as usize];
+                if whole[target].beyond(&pp, best.0) {
+                    continue;
+                }
                 for b in &boxes[target] {
                     if b.beyond(&pp, best.0) {
                         continue;
