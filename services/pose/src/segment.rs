@@ -435,11 +435,11 @@ impl Segmenter {
             ..Default::default()
         };
 
-        // Connected components split at depth jumps. Labels beyond the window are
-        // never read: the fill does not step onto a pixel without data.
-        for v in win.v0..=win.v1 {
-            self.labels[win.row(v)].fill(u32::MAX);
-        }
+        // Connected components split at depth jumps. Every label is cleared, beyond
+        // the window too: the fill does not step there, but the search for the body's
+        // parts looks at a pixel's right and lower neighbours, and another frame's
+        // label there would name a blob this frame does not have.
+        self.labels.fill(u32::MAX);
         self.filled.clear();
         let mut blobs: Vec<Blob> = Vec::new();
         let inv_f = 2.0 / (k.fx + k.fy);
@@ -1013,6 +1013,61 @@ mod tests {
             assert!(again.found && !again.windowed, "{bbox:?}");
             assert_eq!(mask_again, mask, "{bbox:?}");
         }
+    }
+
+    /// A wide-angle camera (106° across) before a standing cylinder (the person, 0.6 m
+    /// wide, 1.6 m tall, 2 m away) and a low bar 0.9 m away that runs from before the
+    /// cylinder's right side to the image's right border: a blob of its own, reaching
+    /// too far from the person to be a part of it, which a window around the cylinder
+    /// cuts.
+    fn cylinder_and_bar() -> (airglyph_core::DepthImage, Intrinsics) {
+        let k = Intrinsics {
+            fx: 60.0,
+            fy: 60.0,
+            ..Intrinsics::default().scaled_to(160, 120)
+        };
+        let mut img = airglyph_core::DepthImage::empty(k.width, k.height);
+        for v in 0..k.height {
+            for u in 0..k.width {
+                let ray = k.back_project(u as f32, v as f32, 1.0);
+                let (x, y) = (ray.x * 2.0, ray.y * 2.0);
+                if x.abs() < 0.3 && y.abs() < 0.8 {
+                    let z = 2.0 - (0.09 - x * x).max(0.0).sqrt();
+                    img.set(u, v, (z * 1000.0) as u16);
+                }
+                if ray.x > 0.13 && ray.y.abs() < 0.08 {
+                    img.set(u, v, 900);
+                }
+            }
+        }
+        (img, k)
+    }
+
+    #[test]
+    fn labels_of_an_earlier_frame_beyond_the_window_are_not_read() {
+        let (scene, k) = cylinder_and_bar();
+        // Noise: thousands of one-pixel blobs, labelled all over the image.
+        let mut noise = airglyph_core::DepthImage::empty(k.width, k.height);
+        let mut x: u32 = 7;
+        for p in noise.pixels_mut() {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            *p = 500 + (x % 4500) as u16;
+        }
+        let mut s = Segmenter::default();
+        let (whole, _, mask) = segment(&mut s, &scene, &k, None);
+        assert!(whole.found);
+        let bar = (0..k.width as usize)
+            .filter(|&u| mask[60 * k.width as usize + u])
+            .count();
+        assert!(bar < 30, "the bar is no part of the person");
+        segment(&mut s, &noise, &k, None);
+        // The window around the cylinder cuts the bar, which touches it: the search
+        // for the person's parts looks at the pixels beside the window's edge.
+        let (again, _, mask_again) = segment(&mut s, &scene, &k, Some(&whole));
+        assert!(again.found);
+        assert_eq!(mask_again, mask);
     }
 
     #[test]
