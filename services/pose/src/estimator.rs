@@ -394,6 +394,16 @@ impl PoseEstimator {
             &mut self.points,
             &mut self.mask,
         );
+        // Someone found far from the last frame's person is not the one tracked (or
+        // the camera lost them for long): the torso, limbs and body tracked belong
+        // elsewhere, and starting from them would lose this one.
+        if seg.found
+            && self
+                .prev_centroid
+                .is_some_and(|c| (seg.centroid - c).norm() > crate::segment::TRACKED)
+        {
+            self.lose_track();
+        }
         self.prev_floor = seg.floor;
         self.debug.floor = seg.floor;
         self.debug.windowed = seg.windowed;

@@ -230,7 +230,7 @@ const WINDOW_MARGIN: usize = 16;
 
 /// A blob whose centroid lies within this of the last frame's person (metres) is the
 /// tracked person.
-const TRACKED: f32 = 0.5;
+pub const TRACKED: f32 = 0.5;
 
 /// The camera-frame point of a pixel of depth `d` (millimetres) on the ray
 /// (`ray_x`, `ray_y`, 1); the origin (no data) outside the depth `band` (millimetres).

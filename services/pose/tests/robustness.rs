@@ -303,3 +303,71 @@ fn a_person_first_seen_side_on_is_found_once_they_turn_to_the_camera() {
         last * 100.0
     );
 }
+
+/// One estimator through scenes that change from frame to frame (a person here, then
+/// there, cut by the border, gone, noise, two people): the state it carries from the
+/// last frame (the window it segments first, the tracked body) must never make the
+/// next one panic, miss the person, or keep the last one's body.
+#[test]
+fn scenes_that_change_every_frame() {
+    let k = qvga();
+    let at = |lateral_m: f32, pose| SceneConfig {
+        placement: Placement {
+            lateral_m,
+            ..Placement::default()
+        },
+        background: Background::FloorAndWall,
+        sensor_noise: true,
+        ..scene(pose)
+    };
+    let (left, left_truth) = render(at(-0.8, ScriptedPose::Wave), 0);
+    let (right, right_truth) = render(at(0.8, ScriptedPose::Neutral), 0);
+    let (cut, _) = render(at(1.3, ScriptedPose::Wave), 0);
+    let empty = DepthImage::empty(k.width, k.height);
+    let mut noise = DepthImage::empty(k.width, k.height);
+    let mut x: u32 = 99;
+    for p in noise.pixels_mut() {
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        *p = 400 + (x % 5000) as u16;
+    }
+    let mut both = left.clone();
+    for (p, &q) in both.pixels_mut().iter_mut().zip(right.pixels()) {
+        if q > 0 && (*p == 0 || q < *p) {
+            *p = q;
+        }
+    }
+    // Each frame and where its one person's torso is (None: nobody, two people, or a
+    // person half out of the image, whose torso is found 0.2 m off even alone).
+    let (l, r, c) = (
+        Some(left_truth.skeleton[Joint::Torso]),
+        Some(right_truth.skeleton[Joint::Torso]),
+        None,
+    );
+    let sequence = [
+        (&left, true, l),
+        (&left, true, l),
+        (&right, true, r),
+        (&noise, false, None),
+        (&right, true, r),
+        (&cut, true, c),
+        (&left, true, l),
+        (&empty, false, None),
+        (&both, true, None),
+        (&noise, false, None),
+        (&both, true, None),
+        (&cut, true, c),
+        (&right, true, r),
+    ];
+    let mut est = PoseEstimator::new(k, PoseConfig::default());
+    for (i, (img, person, torso)) in sequence.iter().enumerate() {
+        let res = est.estimate(img.view());
+        check(&res);
+        assert_eq!(res.person_found, *person, "frame {i}");
+        if let Some(t) = torso {
+            let e = (res.skeleton[Joint::Torso] - t).norm();
+            assert!(e < 0.25, "frame {i}: torso off by {e} m");
+        }
+    }
+}
