@@ -228,6 +228,10 @@ impl Step {
 /// (scaled with the image): a hand drawing at 2 m/s moves 3–4 pixels a frame there.
 const WINDOW_MARGIN: usize = 16;
 
+/// A blob is no person when more than this many tenths of its rows' ends that border
+/// data border something nearer ([`Segmenter::behind_its_borders`]).
+const BEHIND_SHARE_TENTHS: usize = 6;
+
 /// A blob whose centroid lies within this of the last frame's person (metres) is the
 /// tracked person.
 pub const TRACKED: f32 = 0.5;
@@ -466,7 +470,9 @@ impl Segmenter {
         }
 
         // The largest blob that could be a person.
-        let mut best: Option<(f32, usize)> = None;
+        // The best of the blobs that stand before what borders them, and of all.
+        let (mut best_before, mut best): (Option<(f32, usize)>, Option<(f32, usize)>) =
+            (None, None);
         for (bi, b) in blobs.iter().enumerate() {
             if b.cut || b.area < cfg.min_person_area || b.area > cfg.max_person_area {
                 continue;
@@ -501,7 +507,21 @@ impl Segmenter {
             if best.is_none_or(|(s, _)| score > s) {
                 best = Some((score, bi));
             }
+            // A person stands before the background; a piece of wall enclosed by an arm,
+            // the floor and the image's border lies behind what borders it.
+            let before =
+                !self.behind_its_borders(points, w, &self.filled[b.spans.clone()], inv_f, cfg);
+            if before && best_before.is_none_or(|(s, _)| score > s) {
+                best_before = Some((score, bi));
+            }
         }
+        // A blob behind its borders keeps the place only when it is more than twice as
+        // large: a forearm raised before the chest stands before what borders it, the
+        // body behind it does not, and is still the person.
+        let best = match (best_before, best) {
+            (Some(f), Some(b)) if f.0 * 2.0 >= b.0 => Some(f),
+            (_, b) => b,
+        };
         mask.fill(false);
         if let Some((_, bi)) = best {
             let b = &blobs[bi];
@@ -535,6 +555,39 @@ impl Segmenter {
             seg.bbox = bbox;
         }
         seg
+    }
+
+    /// Whether most of the left and right ends of a blob's `spans` (those with a pixel
+    /// of data beyond them) border something nearer the camera across a depth jump:
+    /// the blob is seen through a gap of what lies before it.
+    fn behind_its_borders(
+        &self,
+        points: &[Point3<f32>],
+        w: usize,
+        spans: &[Span],
+        inv_f: f32,
+        cfg: &PoseConfig,
+    ) -> bool {
+        let step = Step {
+            inv_f,
+            jump: (cfg.blob_jump_px, cfg.blob_jump_min),
+        };
+        let (mut ends, mut behind) = (0usize, 0usize);
+        for s in spans {
+            let row = s.v as usize * w;
+            let (u0, u1) = (s.u0 as usize, s.u1 as usize);
+            let beside = [
+                (u0 > 0).then(|| (points[row + u0], points[row + u0 - 1])),
+                (u1 + 1 < w).then(|| (points[row + u1], points[row + u1 + 1])),
+            ];
+            for (p, q) in beside.into_iter().flatten() {
+                if q.z > 0.0 {
+                    ends += 1;
+                    behind += usize::from(q.z < p.z - step.reach(p.z));
+                }
+            }
+        }
+        ends > 0 && behind * 10 > ends * BEHIND_SHARE_TENTHS
     }
 
     /// `points` within `win` from `depth`, zero where there is no data or the depth is

@@ -371,3 +371,25 @@ fn scenes_that_change_every_frame() {
         }
     }
 }
+
+/// A T-pose by the image's right side, before floor and wall: its arm, the floor and
+/// the image's border enclose a piece of wall 0.8 m wide, a blob with more pixels than
+/// the person, not flat enough under the noise at 4 m to be told a wall by its shape.
+/// It lies behind what borders it; the person does not.
+#[test]
+fn a_piece_of_wall_enclosed_by_an_arm_is_no_person() {
+    let cfg = SceneConfig {
+        placement: Placement {
+            lateral_m: 0.8,
+            ..Placement::default()
+        },
+        background: Background::FloorAndWall,
+        sensor_noise: true,
+        ..scene(ScriptedPose::TPose)
+    };
+    let (img, truth) = render(cfg, 0);
+    let r = estimate_n(&img, qvga(), 2);
+    assert!(r.person_found);
+    let e = (r.skeleton[Joint::Torso] - truth.skeleton[Joint::Torso]).norm();
+    assert!(e < 0.2, "torso off by {e} m");
+}
