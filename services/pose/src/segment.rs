@@ -471,8 +471,8 @@ impl Segmenter {
 
         // The largest blob that could be a person.
         // The best of the blobs that stand before what borders them, and of all.
-        let (mut best_before, mut best): (Option<(f32, usize)>, Option<(f32, usize)>) =
-            (None, None);
+        let mut best_before: Option<(f32, usize)> = None;
+        let mut best: Option<(f32, usize)> = None;
         for (bi, b) in blobs.iter().enumerate() {
             if b.cut || b.area < cfg.min_person_area || b.area > cfg.max_person_area {
                 continue;
