@@ -628,11 +628,11 @@ impl PoseEstimator {
                 k: &k,
                 width: w,
                 height: h,
-                template: &tpl,
+                template: tpl,
                 torso: &torso,
             };
             let side_on = side_on.then_some(seg.centroid);
-            if !self.register_body(&mut skel, &scene, cfg, &tips, race, side_on) {
+            if !self.register_body(&mut skel, scene, cfg, &tips, race, side_on) {
                 return None;
             }
         }
@@ -874,36 +874,12 @@ impl PoseEstimator {
                 }
             }
         }
-        let l2_eff = if l2 > 0.0 { l2 } else { 0.0 };
-        let c0 = if l2 > 0.0 {
-            Chain::towards(root_p, mid_guess - root_p, ext_b, l1, l2_eff)
-        } else {
-            let d = (ext_b - root_p)
-                .try_normalize(1e-6)
-                .unwrap_or(torso.r * Vector3::y());
-            Chain {
-                root: root_p,
-                mid: root_p + d * l1,
-                end: root_p + d * l1,
-            }
-        };
+        let up = torso.r * Vector3::y();
+        let c0 = start_chain(root_p, mid_guess, ext_b, (l1, l2), up);
         cands.push(c0);
         if let Some(s) = prev {
-            let mid = torso.apply(&s.mid);
-            let end = torso.apply(&s.end);
-            let c = if l2 > 0.0 {
-                Chain::towards(root_p, mid - root_p, end, l1, l2)
-            } else {
-                let d = (end - root_p)
-                    .try_normalize(1e-6)
-                    .unwrap_or(torso.r * Vector3::y());
-                Chain {
-                    root: root_p,
-                    mid: root_p + d * l1,
-                    end: root_p + d * l1,
-                }
-            };
-            cands.push(c);
+            let (mid, end) = (torso.apply(&s.mid), torso.apply(&s.end));
+            cands.push(start_chain(root_p, mid, end, (l1, l2), up));
         }
         let mut best: Option<(Chain, f32)> = None;
         for c in cands {
@@ -950,13 +926,13 @@ impl PoseEstimator {
     fn register_body(
         &mut self,
         skel: &mut Skeleton,
-        scene: &Scene,
+        scene: Scene,
         cfg: &PoseConfig,
         tips: &[Option<Point3<f32>>; 5],
         race: bool,
         side_on: Option<Point3<f32>>,
     ) -> bool {
-        let tpl = scene.template;
+        let tpl = &scene.template;
         let frame = Frame {
             points: &self.points,
             mask: &self.mask,
@@ -1013,7 +989,8 @@ impl PoseEstimator {
             if self.cfg.calibrate_body {
                 self.learn_body(&b, cfg);
             }
-            let fitted = Posed::new(tpl, &b.pose).skeleton(tpl);
+            let posed = Posed::new(tpl, &b.pose);
+            let fitted = posed.skeleton(tpl);
             if fitted.is_finite() {
                 skel.joints = fitted.joints;
                 // Confidence: how much of the joint's segment the camera sees where
@@ -1022,11 +999,11 @@ impl PoseEstimator {
                     let seen = b.seen[crate::body::segment_of(j).index()];
                     skel.confidence[j.index()] = (0.1 + 0.9 * seen).clamp(0.0, 1.0);
                 }
-                hands_at_fingertips(skel, &Posed::new(tpl, &b.pose), tpl, tips, cfg);
+                hands_at_fingertips(skel, &posed, tpl, tips, cfg);
                 self.prev_body = Some(b.pose);
                 self.prev_hidden = crate::register::hidden_limbs(&b.seen);
                 registered = true;
-                self.debug.body = Some((b.pose, tpl.clone()));
+                self.debug.body = Some((b.pose, scene.template));
                 self.debug.register_passes = b.passes;
                 self.debug.register_energy = b.energy / self.reg.data_len().max(1) as f32;
                 self.debug.register_points = self.reg.data_len();
@@ -1245,12 +1222,34 @@ fn side_on_starts(geodesic: &BodyPose, centroid: &Point3<f32>) -> [BodyPose; 2] 
     })
 }
 
+/// A chain from `root` bent towards `mid` and reaching for `end`, with bones `l1` and
+/// `l2`; a limb of one bone (`l2` zero: the head) is a straight one towards `end`, or
+/// along `up` when `end` is the root.
+fn start_chain(
+    root: Point3<f32>,
+    mid: Point3<f32>,
+    end: Point3<f32>,
+    (l1, l2): (f32, f32),
+    up: Vector3<f32>,
+) -> Chain {
+    if l2 > 0.0 {
+        return Chain::towards(root, mid - root, end, l1, l2);
+    }
+    let d = (end - root).try_normalize(1e-6).unwrap_or(up);
+    Chain {
+        root,
+        mid: root + d * l1,
+        end: root + d * l1,
+    }
+}
+
 /// What the registration needs of the frame besides the estimator's own buffers.
 struct Scene<'a> {
     k: &'a Intrinsics,
     width: usize,
     height: usize,
-    template: &'a BodyTemplate,
+    /// This frame's body template; the registered body's debug view keeps it.
+    template: BodyTemplate,
     /// The torso frame of this frame's seed steps (torso frame → camera frame).
     torso: &'a TorsoPose,
 }

@@ -42,30 +42,18 @@ impl SampleBox {
     fn cover(pos: &[Point3<f32>], samples: &[u32]) -> Vec<Self> {
         (0..samples.len())
             .step_by(Self::RUN)
-            .map(|start| {
-                let range = start..(start + Self::RUN).min(samples.len());
-                let (mut lo, mut hi) = (Vector3::repeat(f32::MAX), Vector3::repeat(f32::MIN));
-                for &q in &samples[range.clone()] {
-                    lo = lo.inf(&pos[q as usize].coords);
-                    hi = hi.sup(&pos[q as usize].coords);
-                }
-                Self { range, lo, hi }
-            })
+            .map(|start| Self::of(pos, samples, start..(start + Self::RUN).min(samples.len())))
             .collect()
     }
 
-    /// All of `samples` in one box.
-    fn around(pos: &[Point3<f32>], samples: &[u32]) -> Self {
+    /// The samples `range` of `samples` in one box.
+    fn of(pos: &[Point3<f32>], samples: &[u32], range: std::ops::Range<usize>) -> Self {
         let (mut lo, mut hi) = (Vector3::repeat(f32::MAX), Vector3::repeat(f32::MIN));
-        for &q in samples {
+        for &q in &samples[range.clone()] {
             lo = lo.inf(&pos[q as usize].coords);
             hi = hi.sup(&pos[q as usize].coords);
         }
-        Self {
-            range: 0..samples.len(),
-            lo,
-            hi,
-        }
+        Self { range, lo, hi }
     }
 
     /// Whether every point of this box is at least `d2` (squared) from every point of
@@ -358,8 +346,14 @@ impl GeoGraph {
         // Each component's samples in one box, and its probes in another: most pairs of
         // components lie farther apart than the best join found so far, and are
         // skipped whole.
-        let whole: Vec<SampleBox> = samples.iter().map(|s| SampleBox::around(pos, s)).collect();
-        let probe_box: Vec<SampleBox> = probes.iter().map(|s| SampleBox::around(pos, s)).collect();
+        let whole: Vec<SampleBox> = samples
+            .iter()
+            .map(|s| SampleBox::of(pos, s, 0..s.len()))
+            .collect();
+        let probe_box: Vec<SampleBox> = probes
+            .iter()
+            .map(|s| SampleBox::of(pos, s, 0..s.len()))
+            .collect();
         // The closest (probe of `c`, sample of `target`) pair nearer than `bound`
         // (squared), the first in probe and sample order of equally near ones.
         let closest = |c: usize, target: usize, bound: f32| -> (f32, u32, u32) {

@@ -70,12 +70,7 @@ impl Window {
 
     /// `bbox` grown by `margin` pixels on every side, within the image.
     fn around(bbox: (u32, u32, u32, u32), margin: usize, w: usize, h: usize) -> Self {
-        let (u0, v0, u1, v1) = (
-            bbox.0 as usize,
-            bbox.1 as usize,
-            bbox.2 as usize,
-            bbox.3 as usize,
-        );
+        let (u0, v0, u1, v1) = corners(bbox);
         Self {
             u0: u0.saturating_sub(margin),
             v0: v0.saturating_sub(margin),
@@ -92,12 +87,7 @@ impl Window {
 
     /// Whether the box `bbox` reaches an edge of the window that is not the image's.
     fn cuts(&self, bbox: (u32, u32, u32, u32)) -> bool {
-        let (u0, v0, u1, v1) = (
-            bbox.0 as usize,
-            bbox.1 as usize,
-            bbox.2 as usize,
-            bbox.3 as usize,
-        );
+        let (u0, v0, u1, v1) = corners(bbox);
         (u0 <= self.u0 && self.u0 > 0)
             || (v0 <= self.v0 && self.v0 > 0)
             || (u1 >= self.u1 && self.u1 + 1 < self.w)
@@ -108,6 +98,16 @@ impl Window {
     fn row(&self, v: usize) -> std::ops::Range<usize> {
         v * self.w + self.u0..v * self.w + self.u1 + 1
     }
+}
+
+/// A pixel box's first and last column and row, as indices.
+fn corners(bbox: (u32, u32, u32, u32)) -> (usize, usize, usize, usize) {
+    (
+        bbox.0 as usize,
+        bbox.1 as usize,
+        bbox.2 as usize,
+        bbox.3 as usize,
+    )
 }
 
 /// Deterministic xorshift generator (the estimator must not depend on a global seed).
@@ -446,15 +446,17 @@ impl Segmenter {
         self.labels.fill(u32::MAX);
         self.filled.clear();
         let mut blobs: Vec<Blob> = Vec::new();
-        let inv_f = 2.0 / (k.fx + k.fy);
+        let step = Step {
+            inv_f: 2.0 / (k.fx + k.fy),
+            jump: (cfg.blob_jump_px, cfg.blob_jump_min),
+        };
         for v in win.v0..=win.v1 {
             for start in win.row(v) {
                 if points[start].z <= 0.0 || self.labels[start] != u32::MAX {
                     continue;
                 }
                 let label = blobs.len() as u32;
-                let jump = (cfg.blob_jump_px, cfg.blob_jump_min);
-                blobs.push(self.fill(points, w, h, start, label, inv_f, jump));
+                blobs.push(self.fill(points, w, h, start, label, step));
             }
         }
         // A blob larger than a person (a wall) is no person, nor part of one: its
@@ -469,8 +471,8 @@ impl Segmenter {
             }
         }
 
-        // The largest blob that could be a person.
-        // The best of the blobs that stand before what borders them, and of all.
+        // The largest blob that could be a person: the best of all, and of those that
+        // stand before what borders them.
         let mut best_before: Option<(f32, usize)> = None;
         let mut best: Option<(f32, usize)> = None;
         for (bi, b) in blobs.iter().enumerate() {
@@ -509,8 +511,7 @@ impl Segmenter {
             }
             // A person stands before the background; a piece of wall enclosed by an arm,
             // the floor and the image's border lies behind what borders it.
-            let before =
-                !self.behind_its_borders(points, w, &self.filled[b.spans.clone()], inv_f, cfg);
+            let before = !self.behind_its_borders(points, w, &self.filled[b.spans.clone()], step);
             if before && best_before.is_none_or(|(s, _)| score > s) {
                 best_before = Some((score, bi));
             }
@@ -565,13 +566,8 @@ impl Segmenter {
         points: &[Point3<f32>],
         w: usize,
         spans: &[Span],
-        inv_f: f32,
-        cfg: &PoseConfig,
+        step: Step,
     ) -> bool {
-        let step = Step {
-            inv_f,
-            jump: (cfg.blob_jump_px, cfg.blob_jump_min),
-        };
         let (mut ends, mut behind) = (0usize, 0usize);
         for s in spans {
             let row = s.v as usize * w;
@@ -626,8 +622,8 @@ impl Segmenter {
     }
 
     /// The blob of pixel `start`: its pixels labelled `label` by a flood fill over
-    /// 4-neighbours, a step from `p` to `q` allowed when their depths differ by less
-    /// than `max(jump.0 × footprint of p, jump.1)`, with its pixel count, box and area
+    /// 4-neighbours, a step from `p` to `q` allowed by `step`, with its pixel count, box
+    /// and area
     /// (the spans it took go on [`Segmenter::filled`] for the rest).
     ///
     /// The fill works on horizontal spans, not pixels: a span's pixels are visited in
@@ -636,7 +632,6 @@ impl Segmenter {
     /// which was most of the segmentation's cost). Every labelled pixel belongs to
     /// exactly one span and each of its four steps is tried once, so the blob is the
     /// pixel fill's, whatever the order.
-    #[allow(clippy::too_many_arguments)]
     fn fill(
         &mut self,
         points: &[Point3<f32>],
@@ -644,11 +639,9 @@ impl Segmenter {
         h: usize,
         start: usize,
         label: u32,
-        inv_f: f32,
-        jump: (f32, f32),
+        step: Step,
     ) -> Blob {
         let mut b = Blob::new(label);
-        let step = Step { inv_f, jump };
         // Local borrows: the compiler need not reload the buffers after every store.
         let (labels, spans, filled) = (&mut self.labels[..], &mut self.spans, &mut self.filled);
         let first = filled.len();
@@ -664,7 +657,7 @@ impl Segmenter {
                 span,
                 label,
             );
-            b.add_span(&points[row..row + w], span.v, u0, u1, inv_f);
+            b.add_span(&points[row..row + w], span.v, u0, u1, step.inv_f);
             filled.push(Span { v: span.v, u0, u1 });
             let from = row + u0 as usize..row + u1 as usize + 1;
             if span.v > 0 {
@@ -786,6 +779,7 @@ impl Segmenter {
 
     /// RANSAC for a floor-like plane (normal within 37° of the image's up) among the
     /// points of the lower two thirds of the image.
+    ///
     /// Its samples are back-projected from `depth` on their own, so the floor is the
     /// whole image's whatever the window; `self.ray_x` must be `depth`'s.
     fn find_floor(
@@ -1126,11 +1120,13 @@ mod tests {
     #[test]
     fn span_fill_finds_the_pixel_fills_blobs() {
         let (w, h) = (61, 47);
-        let jump = (20.0, 0.05);
-        let inv_f = 1.0 / 60.0;
+        let step = Step {
+            inv_f: 1.0 / 60.0,
+            jump: (20.0, 0.05),
+        };
         for seed in 1..40 {
             let points = scene(w, h, seed);
-            let want = pixel_fill(&points, w, h, Step { inv_f, jump });
+            let want = pixel_fill(&points, w, h, step);
             let mut seg = Segmenter {
                 labels: vec![u32::MAX; w * h],
                 ..Segmenter::default()
@@ -1140,7 +1136,7 @@ mod tests {
                 if points[start].z <= 0.0 || seg.labels[start] != u32::MAX {
                     continue;
                 }
-                let b = seg.fill(&points, w, h, start, label, inv_f, jump);
+                let b = seg.fill(&points, w, h, start, label, step);
                 assert_eq!(b.pixels, want.iter().filter(|&&l| l == label).count());
                 label += 1;
             }

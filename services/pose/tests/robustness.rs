@@ -21,6 +21,44 @@ fn scene(pose: ScriptedPose) -> SceneConfig {
     }
 }
 
+/// `pose` `lateral_m` to the side, before floor and wall, with sensor noise.
+fn in_the_room(lateral_m: f32, pose: ScriptedPose) -> SceneConfig {
+    SceneConfig {
+        placement: Placement {
+            lateral_m,
+            ..Placement::default()
+        },
+        background: Background::FloorAndWall,
+        sensor_noise: true,
+        ..scene(pose)
+    }
+}
+
+/// A frame of xorshift noise from `seed`, each pixel's depth (mm) made by `depth`.
+fn noise(seed: u32, depth: impl Fn(u32) -> u16) -> DepthImage {
+    let k = qvga();
+    let mut img = DepthImage::empty(k.width, k.height);
+    let mut x = seed;
+    for p in img.pixels_mut() {
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        *p = depth(x);
+    }
+    img
+}
+
+/// Two frames in one: each pixel the nearer of the two.
+fn nearer_of(a: &DepthImage, b: &DepthImage) -> DepthImage {
+    let mut img = a.clone();
+    for (p, &q) in img.pixels_mut().iter_mut().zip(b.pixels()) {
+        if q > 0 && (*p == 0 || q < *p) {
+            *p = q;
+        }
+    }
+    img
+}
+
 fn check(r: &PoseResult) {
     assert!(r.skeleton.is_finite(), "{r:?}");
     assert!(r
@@ -70,18 +108,13 @@ fn floor_and_wall_alone_have_no_person() {
 #[test]
 fn noise_garbage_and_wrong_sizes_do_not_panic() {
     let k = qvga();
-    let mut img = DepthImage::empty(k.width, k.height);
-    let mut x: u32 = 12345;
-    for p in img.pixels_mut() {
-        x ^= x << 13;
-        x ^= x >> 17;
-        x ^= x << 5;
-        *p = if x.is_multiple_of(3) {
+    let img = noise(12345, |x| {
+        if x.is_multiple_of(3) {
             0
         } else {
             (x % 9000) as u16
-        };
-    }
+        }
+    });
     estimate_n(&img, k, 2);
     // A frame of another size than the intrinsics, and a tiny one.
     let mut est = PoseEstimator::new(Intrinsics::default(), PoseConfig::default());
@@ -105,12 +138,7 @@ fn a_standing_person_is_found_and_roughly_right() {
 
 #[test]
 fn a_person_before_floor_and_wall_with_noise_is_found() {
-    let cfg = SceneConfig {
-        background: Background::FloorAndWall,
-        sensor_noise: true,
-        ..scene(ScriptedPose::TPose)
-    };
-    let (img, truth) = render(cfg, 0);
+    let (img, truth) = render(in_the_room(0.0, ScriptedPose::TPose), 0);
     let r = estimate_n(&img, qvga(), 2);
     assert!(r.person_found);
     let e = (r.skeleton[Joint::Torso] - truth.skeleton[Joint::Torso]).norm();
@@ -159,13 +187,9 @@ fn two_people_one_is_found() {
         },
         ..scene(ScriptedPose::TPose)
     };
-    let (mut img, ta) = render(a, 0);
+    let (ia, ta) = render(a, 0);
     let (ib, _) = render(b, 0);
-    for (p, &q) in img.pixels_mut().iter_mut().zip(ib.pixels()) {
-        if q > 0 && (*p == 0 || q < *p) {
-            *p = q;
-        }
-    }
+    let img = nearer_of(&ia, &ib);
     let r = estimate_n(&img, qvga(), 2);
     assert!(r.person_found);
     // The nearer, larger person is the one tracked.
@@ -311,33 +335,12 @@ fn a_person_first_seen_side_on_is_found_once_they_turn_to_the_camera() {
 #[test]
 fn scenes_that_change_every_frame() {
     let k = qvga();
-    let at = |lateral_m: f32, pose| SceneConfig {
-        placement: Placement {
-            lateral_m,
-            ..Placement::default()
-        },
-        background: Background::FloorAndWall,
-        sensor_noise: true,
-        ..scene(pose)
-    };
-    let (left, left_truth) = render(at(-0.8, ScriptedPose::Wave), 0);
-    let (right, right_truth) = render(at(0.8, ScriptedPose::Neutral), 0);
-    let (cut, _) = render(at(1.3, ScriptedPose::Wave), 0);
+    let (left, left_truth) = render(in_the_room(-0.8, ScriptedPose::Wave), 0);
+    let (right, right_truth) = render(in_the_room(0.8, ScriptedPose::Neutral), 0);
+    let (cut, _) = render(in_the_room(1.3, ScriptedPose::Wave), 0);
     let empty = DepthImage::empty(k.width, k.height);
-    let mut noise = DepthImage::empty(k.width, k.height);
-    let mut x: u32 = 99;
-    for p in noise.pixels_mut() {
-        x ^= x << 13;
-        x ^= x >> 17;
-        x ^= x << 5;
-        *p = 400 + (x % 5000) as u16;
-    }
-    let mut both = left.clone();
-    for (p, &q) in both.pixels_mut().iter_mut().zip(right.pixels()) {
-        if q > 0 && (*p == 0 || q < *p) {
-            *p = q;
-        }
-    }
+    let noise = noise(99, |x| 400 + (x % 5000) as u16);
+    let both = nearer_of(&left, &right);
     // Each frame and where its one person's torso is (None: nobody, two people, or a
     // person half out of the image, whose torso is found 0.2 m off even alone).
     let (l, r, c) = (
@@ -378,16 +381,7 @@ fn scenes_that_change_every_frame() {
 /// It lies behind what borders it; the person does not.
 #[test]
 fn a_piece_of_wall_enclosed_by_an_arm_is_no_person() {
-    let cfg = SceneConfig {
-        placement: Placement {
-            lateral_m: 0.8,
-            ..Placement::default()
-        },
-        background: Background::FloorAndWall,
-        sensor_noise: true,
-        ..scene(ScriptedPose::TPose)
-    };
-    let (img, truth) = render(cfg, 0);
+    let (img, truth) = render(in_the_room(0.8, ScriptedPose::TPose), 0);
     let r = estimate_n(&img, qvga(), 2);
     assert!(r.person_found);
     let e = (r.skeleton[Joint::Torso] - truth.skeleton[Joint::Torso]).norm();
