@@ -14,7 +14,18 @@ fn capture_replays_a_recording_to_another_process_bit_exact_in_order() {
     let (src, got) = (tmp.path().join("src"), tmp.path().join("got"));
     write_ramp_recording(&src, 100, 64, 48);
 
-    let (probe, rx) = start_probe(&p, &["--out", got.to_str().unwrap(), "--frames", "100"]);
+    // The probe stops 3 s after the last frame if a frame was lost on the way.
+    let (probe, rx) = start_probe(
+        &p,
+        &[
+            "--out",
+            got.to_str().unwrap(),
+            "--frames",
+            "100",
+            "--idle",
+            "3",
+        ],
+    );
     let capture = p
         .command("airglyph-capture")
         .args(["--source", &format!("recording:{}", src.display())])
@@ -24,13 +35,32 @@ fn capture_replays_a_recording_to_another_process_bit_exact_in_order() {
     let meta: Vec<serde_json::Value> = rx.iter().take(100).collect();
     stop(probe);
 
-    assert_eq!(meta.len(), 100, "every frame arrives");
+    // A subscriber that falls behind loses its oldest frames by design (safe overflow,
+    // two frames deep) rather than slowing the capture; the probe writes on a thread of
+    // its own so that it keeps up, but a loaded machine can still starve it for longer
+    // than two frames. So: whatever was lost is counted in the next frame's `dropped`,
+    // the newest frame always arrives, and every frame that arrives is the right one.
+    let sequence = |m: &serde_json::Value| m["sequence"].as_u64().unwrap();
+    let mut next = 0;
+    for m in &meta {
+        assert_eq!(
+            sequence(m),
+            next + m["dropped"].as_u64().unwrap(),
+            "in order, losses counted: {m}"
+        );
+        next = sequence(m) + 1;
+    }
+    assert_eq!(next, 100, "the last frame arrives");
+    assert!(
+        meta.len() >= 90,
+        "only {} of 100 frames arrived",
+        meta.len()
+    );
     let original = Recording::open(&src).unwrap();
     let received = Recording::open(&got).unwrap();
-    assert_eq!(received.len(), 100);
-    for (i, m) in meta.iter().enumerate() {
-        assert_eq!(m["sequence"], i as u64, "in order");
-        assert_eq!(m["dropped"], 0);
+    assert_eq!(received.len(), meta.len());
+    for (j, m) in meta.iter().enumerate() {
+        let i = sequence(m) as usize;
         let (capture_ns, publish_ns, receive_ns) = (
             m["capture_ns"].as_u64().unwrap(),
             m["publish_ns"].as_u64().unwrap(),
@@ -43,16 +73,19 @@ fn capture_replays_a_recording_to_another_process_bit_exact_in_order() {
             "the recorded time travels along"
         );
         assert_eq!(
-            received.read_frame(i).unwrap(),
+            received.read_frame(j).unwrap(),
             original.read_frame(i).unwrap(),
             "frame {i} bit-exact"
         );
     }
-    // Paced at 30 fps: 100 frames span about 3.3 s.
-    let span = meta[99]["capture_ns"].as_u64().unwrap() - meta[0]["capture_ns"].as_u64().unwrap();
+    // Paced at 30 fps by frames.csv: 100 frames span about 3.3 s.
+    let (first, last) = (&meta[0], &meta[meta.len() - 1]);
+    let span = last["capture_ns"].as_u64().unwrap() - first["capture_ns"].as_u64().unwrap();
+    let period = 1e9 / 30.0;
+    let intervals = (sequence(last) - sequence(first)) as f64;
     assert!(
-        (3_200_000_000..4_500_000_000).contains(&span),
-        "paced by frames.csv: {span} ns"
+        (0.97 * intervals * period..1.36 * intervals * period).contains(&(span as f64)),
+        "paced by frames.csv: {span} ns over {intervals} frame intervals"
     );
     assert!(p.shm_files().is_empty(), "left behind: {:?}", p.shm_files());
 }

@@ -3,7 +3,7 @@
 //! arrived, in what order, with which timestamps, bit for bit.
 
 use airglyph_core::recording::{RecordingInfo, RecordingWriter};
-use airglyph_core::{Intrinsics, Joint};
+use airglyph_core::{DepthImage, Intrinsics, Joint};
 use airglyph_ipc::clock::monotonic_ns;
 use airglyph_ipc::port::Message;
 use airglyph_ipc::{shutdown, DepthHeader, GestureEventMsg, Pipeline, Receiver, SkeletonMsg};
@@ -117,9 +117,29 @@ fn messages<T: Message>(
 
 fn depth(pipeline: &Pipeline, args: &Args) -> anyhow::Result<()> {
     let mut rx = pipeline.depth_receiver()?;
+    // Frames are written on a thread of their own: encoding a PNG can take longer than a
+    // frame's period on a loaded machine, and the depth service holds only two frames a
+    // subscriber, so writing in this loop would drop frames the pipeline delivered.
+    let (to_writer, frames) = std::sync::mpsc::channel::<(Intrinsics, DepthImage, u64)>();
+    let writer = args.out.clone().map(|dir| {
+        std::thread::spawn(move || -> anyhow::Result<()> {
+            let mut writer: Option<RecordingWriter> = None;
+            for (k, image, source_ns) in frames {
+                let w = match &mut writer {
+                    Some(w) => w,
+                    None => writer.insert(RecordingWriter::create(
+                        &dir,
+                        RecordingInfo::new(k, 30.0, "probe"),
+                        false,
+                    )?),
+                };
+                w.write_frame(image.view(), source_ns, None)?;
+            }
+            Ok(())
+        })
+    });
     // Tells the test we are subscribed.
     ready()?;
-    let mut writer: Option<RecordingWriter> = None;
     let mut received = 0u64;
     let mut last = Instant::now();
     while !shutdown::requested() && args.frames.is_none_or(|n| received < n) {
@@ -131,18 +151,8 @@ fn depth(pipeline: &Pipeline, args: &Args) -> anyhow::Result<()> {
         };
         last = Instant::now();
         let h = *frame.header();
-        if let Some(dir) = &args.out {
-            if writer.is_none() {
-                writer = Some(RecordingWriter::create(
-                    dir,
-                    RecordingInfo::new(h.intrinsics(), 30.0, "probe"),
-                    false,
-                )?);
-            }
-            writer
-                .as_mut()
-                .expect("created above")
-                .write_frame(frame.view(), h.source_ns, None)?;
+        if writer.is_some() {
+            to_writer.send((h.intrinsics(), frame.view().to_owned(), h.source_ns))?;
         }
         received += 1;
         let line = serde_json::json!({
@@ -152,6 +162,12 @@ fn depth(pipeline: &Pipeline, args: &Args) -> anyhow::Result<()> {
         });
         println!("{line}");
         std::io::stdout().flush()?;
+    }
+    drop(to_writer);
+    if let Some(writer) = writer {
+        writer
+            .join()
+            .map_err(|_| anyhow::anyhow!("the recording thread panicked"))??;
     }
     Ok(())
 }
