@@ -80,9 +80,50 @@ fn collect_writes_each_repetition_and_train_takes_the_file() {
             .arg("--out")
             .arg(&model),
     );
-    let m: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap();
+    let read = |path: &std::path::Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+    };
+    let mut m = read(&model);
     assert_eq!(m["labels"], serde_json::json!(["7", "L"]));
+
+    // Calibrating the label bars again keeps everything else of the model.
+    let again = tmp.path().join("again.json");
+    succeed(
+        p.command("airglyph")
+            .arg("train")
+            .arg("--recalibrate")
+            .arg(&model)
+            .arg("--data")
+            .arg(&data)
+            .arg("--out")
+            .arg(&again),
+    );
+    let mut a = read(&again);
+    for v in [&mut m, &mut a] {
+        v["spotting"]["verifier"]
+            .as_object_mut()
+            .unwrap()
+            .remove("label_bars");
+    }
+    assert_eq!(a, m, "only the label bars may change");
+    // Data of other labels cannot calibrate it.
+    let other = tmp.path().join("other.jsonl");
+    std::fs::write(
+        &other,
+        "{\"label\":\"x\",\"strokes\":[[[0,0],[1,0]]]}\n{\"label\":\"y\",\"strokes\":[[[0,0],[0,1]]]}\n",
+    )
+    .unwrap();
+    let err = fail(
+        p.command("airglyph")
+            .arg("train")
+            .arg("--recalibrate")
+            .arg(&model)
+            .arg("--data")
+            .arg(&other)
+            .arg("--out")
+            .arg(&again),
+    );
+    assert!(err.contains("labels differ from the data's"), "{err}");
 }
 
 #[test]

@@ -20,7 +20,7 @@
 
 use crate::data::{Sample, Trajectory};
 use crate::features::resample;
-use crate::spot::SpottedGesture;
+use crate::spot::{Candidate, SpottedGesture, Spotter};
 use crate::tracker::{skeleton_with_hand, HandFilter, TrackerConfig};
 use airglyph_core::Skeleton;
 use rand::Rng;
@@ -89,6 +89,31 @@ impl SyntheticStream {
     pub fn skeleton(&self, frame: usize, distance: f32) -> Skeleton {
         let p = self.points[frame];
         skeleton_with_hand(p[0], p[1], distance)
+    }
+
+    /// Feeds the stream through `spotter` as skeletons (frame i at i / fps seconds)
+    /// and returns what it spotted, the stream's end included.
+    pub fn spot(&self, spotter: &mut Spotter, cfg: &StreamConfig) -> Vec<SpottedGesture> {
+        self.spot_traced(spotter, cfg, |_| {})
+    }
+
+    /// [`Self::spot`], handing `trace` what the spotter traced (its scored
+    /// candidates, with [`Spotter::set_trace`]) after every frame.
+    pub fn spot_traced(
+        &self,
+        spotter: &mut Spotter,
+        cfg: &StreamConfig,
+        mut trace: impl FnMut(Vec<Candidate>),
+    ) -> Vec<SpottedGesture> {
+        let dt = (1e9 / cfg.fps as f64) as u64;
+        let mut out = Vec::new();
+        for i in 0..self.points.len() {
+            out.extend(spotter.push(&self.skeleton(i, cfg.distance), i as u64, i as u64 * dt));
+            trace(spotter.take_trace());
+        }
+        out.extend(spotter.finish());
+        trace(spotter.take_trace());
+        out
     }
 }
 
@@ -612,6 +637,20 @@ impl SpottingScore {
 /// Matches spotted gestures to the truth: a spotted gesture matches a drawn one when
 /// their frame intervals overlap by at least half of the shorter one.
 pub fn score(truth: &[TruthGesture], spotted: &[SpottedGesture]) -> SpottingScore {
+    matched(truth, spotted).0
+}
+
+/// The spotted gestures that match no drawn one (the insertions of [`score`]).
+pub fn insertions<'a>(
+    truth: &[TruthGesture],
+    spotted: &'a [SpottedGesture],
+) -> impl Iterator<Item = &'a SpottedGesture> {
+    let used = matched(truth, spotted).1;
+    spotted.iter().zip(used).filter(|(_, u)| !u).map(|(g, _)| g)
+}
+
+/// [`score`], and which spotted gestures were matched to a drawn one.
+fn matched(truth: &[TruthGesture], spotted: &[SpottedGesture]) -> (SpottingScore, Vec<bool>) {
     let mut used = vec![false; spotted.len()];
     let mut sc = SpottingScore {
         gestures: truth.len(),
@@ -648,7 +687,7 @@ pub fn score(truth: &[TruthGesture], spotted: &[SpottedGesture]) -> SpottingScor
     }
     sc.insertions = used.iter().filter(|u| !**u).count();
     sc.reliability = sc.correct as f64 / (sc.gestures + sc.insertions).max(1) as f64;
-    sc
+    (sc, used)
 }
 
 /// Convenience for a trajectory of body-frame points.

@@ -31,6 +31,8 @@ fn shape(kind: usize, rng: &mut ChaCha8Rng) -> Vec<[f32; 2]> {
                 let y = if seg as i32 % 2 == 0 { f } else { 1.0 - f };
                 (t, y)
             }
+            // A stroke down, bowed a little: what a straight reach looks like.
+            3 => (0.08 * (std::f32::consts::PI * t).sin(), t),
             // Square, clockwise from the top-left corner.
             _ => {
                 let k = (t * 4.0).min(3.999);
@@ -51,13 +53,18 @@ fn shape(kind: usize, rng: &mut ChaCha8Rng) -> Vec<[f32; 2]> {
     pts
 }
 
-const NAMES: [&str; 3] = ["circle", "zigzag", "square"];
+const NAMES: [&str; 4] = ["circle", "zigzag", "square", "stroke"];
 
 fn samples(per_class: usize, seed: u64) -> Vec<Sample> {
+    samples_of(3, per_class, seed)
+}
+
+/// Samples of the first `classes` of [`NAMES`].
+fn samples_of(classes: usize, per_class: usize, seed: u64) -> Vec<Sample> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut v = Vec::new();
     for i in 0..per_class {
-        for (k, name) in NAMES.iter().enumerate() {
+        for (k, name) in NAMES.iter().enumerate().take(classes) {
             v.push(Sample {
                 label: name.to_string(),
                 subject: format!("w{}", i % 5),
@@ -193,12 +200,7 @@ fn spotter_finds_gestures_in_a_stream_and_none_in_random_movement() {
     let mut rng = ChaCha8Rng::seed_from_u64(6);
     let stream = build_stream(&refs, &scfg, &mut rng);
     let mut spotter = Spotter::new(model.clone(), SpotterConfig::default()).unwrap();
-    let mut found = Vec::new();
-    for i in 0..stream.points.len() {
-        let sk = stream.skeleton(i, scfg.distance);
-        found.extend(spotter.push(&sk, i as u64, i as u64 * 33_333_333));
-    }
-    found.extend(spotter.finish());
+    let found = stream.spot(&mut spotter, &scfg);
     let sc = score(&stream.truth, &found);
     assert!(sc.reliability >= 0.8 && sc.insertions <= 2, "{sc:?}");
     // Each one found is reported where it was drawn: its frames cover most of the
@@ -217,16 +219,60 @@ fn spotter_finds_gestures_in_a_stream_and_none_in_random_movement() {
 
     let noise = random_movement(120.0, &scfg, &mut rng);
     let mut spotter = Spotter::new(model, SpotterConfig::default()).unwrap();
-    let mut spotted = Vec::new();
-    for i in 0..noise.points.len() {
-        let sk = noise.skeleton(i, scfg.distance);
-        spotted.extend(spotter.push(&sk, i as u64, i as u64 * 33_333_333));
-    }
-    spotted.extend(spotter.finish());
+    let spotted = noise.spot(&mut spotter, &scfg);
     // Ordinary movement has straight and curved reaches that can pass for a side of a
     // square or a zigzag's stroke: at most one false alarm in two minutes.
     assert!(
         spotted.len() <= 1,
         "gestures spotted in ordinary movement: {spotted:?}"
+    );
+}
+
+#[test]
+fn a_symbol_ordinary_movement_passes_for_gets_a_higher_bar() {
+    // A stroke is what a straight reach looks like; training calibrates the bar on
+    // the verifier's whole-gesture probability per label on streams of its samples.
+    let model = train(
+        &samples_of(4, 40, 4),
+        &small_config(ClassifierKind::Mlp),
+        &|_, _| {},
+    )
+    .unwrap();
+    let v = model.spotting.as_ref().unwrap().verifier.as_ref().unwrap();
+    let stroke = v.label_bars.get("stroke").copied().unwrap_or(0.0);
+    assert!(stroke > v.min_gesture_prob(), "bars {:?}", v.label_bars);
+
+    // On movement and writers of other seeds: fewer strokes in ordinary movement, and
+    // the drawn symbols found as well.
+    let scfg = StreamConfig::default();
+    let movement = random_movement(600.0, &scfg, &mut ChaCha8Rng::seed_from_u64(8));
+    let test = samples_of(4, 10, 5);
+    let refs: Vec<&Sample> = test.iter().collect();
+    let drawn = build_stream(&refs, &scfg, &mut ChaCha8Rng::seed_from_u64(6));
+    let spot = |label_bars: bool, stream: &airglyph_gesture::stream::SyntheticStream| {
+        let cfg = SpotterConfig {
+            label_bars,
+            ..SpotterConfig::default()
+        };
+        stream.spot(&mut Spotter::new(model.clone(), cfg).unwrap(), &scfg)
+    };
+    let strokes = |bars: bool| {
+        spot(bars, &movement)
+            .iter()
+            .filter(|g| g.label == "stroke")
+            .count()
+    };
+    let (without, with) = (strokes(false), strokes(true));
+    assert!(
+        with < without,
+        "strokes in 600 s of movement: {without} without the bars, {with} with"
+    );
+    let (before, after) = (
+        score(&drawn.truth, &spot(false, &drawn)),
+        score(&drawn.truth, &spot(true, &drawn)),
+    );
+    assert!(
+        after.correct + 1 >= before.correct && after.insertions <= before.insertions,
+        "without the bars {before:?}, with {after:?}"
     );
 }

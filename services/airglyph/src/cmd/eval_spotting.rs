@@ -110,18 +110,8 @@ fn run_traced(
 ) -> anyhow::Result<(Vec<SpottedGesture>, Vec<Candidate>)> {
     let mut sp = Spotter::new(model.clone(), *scfg)?;
     sp.set_trace(trace);
-    let mut out = Vec::new();
     let mut cands = Vec::new();
-    let dt = (1e9 / cfg.fps as f64) as u64;
-    for i in 0..points_stream.points.len() {
-        let sk = points_stream.skeleton(i, cfg.distance);
-        if let Some(g) = sp.push(&sk, i as u64, i as u64 * dt) {
-            out.push(g);
-        }
-        cands.extend(sp.take_trace());
-    }
-    out.extend(sp.finish());
-    cands.extend(sp.take_trace());
+    let out = points_stream.spot_traced(&mut sp, cfg, |c| cands.extend(c));
     Ok((out, cands))
 }
 

@@ -54,6 +54,13 @@ pub struct Args {
     /// part (HMMs and verifier).
     #[arg(long)]
     pub reuse_classifier: Option<PathBuf>,
+    /// Keep this model whole (classifier and spotting part) and only calibrate its
+    /// per-label bars again: the higher whole-gesture probability the spotter asks of
+    /// symbols that ordinary movement passes for often, found on synthetic streams of
+    /// the data (1–5 minutes; training does it too, so this is for models trained
+    /// before).
+    #[arg(long, conflicts_with_all = ["reuse_classifier", "no_spotting"])]
+    pub recalibrate: Option<PathBuf>,
 }
 
 /// The training configuration the arguments describe.
@@ -114,17 +121,32 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         bar.set_length(total);
         bar.set_position(done);
     };
-    let model = match &args.reuse_classifier {
-        None => train(&samples, &cfg, &progress)?,
-        Some(path) => {
-            let mut old = airglyph_gesture::Model::load(path)?;
-            let labels = airglyph_gesture::data::labels_of(&samples);
-            if labels != old.labels {
+    let model = match (&args.reuse_classifier, &args.recalibrate) {
+        (None, None) => train(&samples, &cfg, &progress)?,
+        (_, Some(path)) => {
+            let mut model = reusable(path, &samples)?;
+            let Some(verifier) = model.spotting.as_ref().and_then(|s| s.verifier.as_ref()) else {
                 anyhow::bail!(
-                    "{}: its labels differ from the data's; cannot reuse its classifier",
+                    "{}: it has no spotting verifier to calibrate; train its spotting part with --reuse-classifier",
                     path.display()
                 );
+            };
+            let before = verifier.label_bars.clone();
+            bar.set_message("calibrating the label bars");
+            let bars = airglyph_gesture::spot::calibrate_label_bars(
+                &model,
+                &samples,
+                airglyph_gesture::spot::CALIBRATION_SEED,
+                &progress,
+            );
+            eprintln!("label bars: {before:?} → {bars:?}");
+            if let Some(v) = model.spotting.as_mut().and_then(|s| s.verifier.as_mut()) {
+                v.label_bars = bars;
             }
+            model
+        }
+        (Some(path), None) => {
+            let mut old = reusable(path, &samples)?;
             bar.set_message("spotting");
             old.spotting = Some(airglyph_gesture::spot::SpottingModel::train(
                 &samples,
@@ -154,4 +176,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         std::fs::metadata(&args.out).map(|m| m.len()).unwrap_or(0)
     );
     Ok(())
+}
+
+/// A model whose parts are kept: its labels must be the data's.
+fn reusable(
+    path: &std::path::Path,
+    samples: &[airglyph_gesture::Sample],
+) -> anyhow::Result<airglyph_gesture::Model> {
+    let model = airglyph_gesture::Model::load(path)?;
+    if airglyph_gesture::data::labels_of(samples) != model.labels {
+        anyhow::bail!(
+            "{}: its labels differ from the data's; cannot reuse it",
+            path.display()
+        );
+    }
+    Ok(model)
 }

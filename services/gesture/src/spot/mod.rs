@@ -19,10 +19,12 @@
 //!    ([`RankBy`]); the winner is published once nothing better has come for
 //!    `hold_seconds` or the hand rests.
 
+mod calibrate;
 mod segmenter;
 mod threshold;
 mod verifier;
 
+pub use calibrate::{calibrate_label_bars, BAR_STEPS};
 pub use segmenter::Segmenter;
 pub use threshold::{sample_codes, LeeKim, Quantizer, ThresholdModel, REST_CODE, STREAM_SYMBOLS};
 pub use verifier::{
@@ -72,6 +74,18 @@ impl SpottingModel {
                     return Err("spotting verifier has the wrong dimensions".into());
                 }
             }
+            for (label, bar) in &v.label_bars {
+                if !v.classes.contains(label) {
+                    return Err(format!(
+                        "spotting verifier has a bar for label {label:?}, which the model does not have"
+                    ));
+                }
+                if !(0.0..=1.0).contains(bar) {
+                    return Err(format!(
+                        "spotting verifier's bar {bar} for label {label:?} is not a probability"
+                    ));
+                }
+            }
         }
         for m in &self.models {
             m.hmm
@@ -91,7 +105,8 @@ impl SpottingModel {
     /// Trains one banded HMM per label on the stream codes of the samples (each scaled
     /// so that its larger side is 1), and the verifier, which uses `classifier` (a model
     /// with the same labels; its spotting part is not used) and has `verifiers`
-    /// networks (at least one).
+    /// networks (at least one); then calibrates the verifier's per-label bars
+    /// ([`calibrate_label_bars`]).
     pub fn train(
         samples: &[Sample],
         classifier: &Model,
@@ -132,9 +147,19 @@ impl SpottingModel {
         // Seed 7 first: a one-network verifier is the one trained before ensembles.
         let seeds: Vec<u64> = (7..).take(verifiers.max(1)).collect();
         model.verifier = Some(Verifier::train(samples, classifier, &model, &seeds));
+        let mut whole = classifier.clone();
+        whole.spotting = Some(model.clone());
+        let bars = calibrate_label_bars(&whole, samples, CALIBRATION_SEED, &|_, _| {});
+        if let Some(v) = model.verifier.as_mut() {
+            v.label_bars = bars;
+        }
         model
     }
 }
+
+/// Seed of the streams the label bars are calibrated on: other streams than the
+/// verifier's (seeds 7…) and the evaluation's (1–3).
+pub const CALIBRATION_SEED: u64 = 101;
 
 /// What overlapping accepted candidates are ranked by: the classifier's confidence
 /// times the verifier's probability of…
@@ -190,6 +215,9 @@ pub struct SpotterConfig {
     /// Smallest verifier probability that the segment is a whole gesture (None: the
     /// verifier's own, [`Verifier::min_gesture_prob`]).
     pub min_gesture_prob: Option<f64>,
+    /// Whether the labels the model's calibration found ordinary movement passing for
+    /// must reach their higher bars ([`Verifier::label_bars`]).
+    pub label_bars: bool,
     /// How long after a candidate's end to wait for a longer, better one (seconds);
     /// a rest of `rest_seconds` after it decides at once.
     pub hold_seconds: f64,
@@ -213,6 +241,7 @@ impl Default for SpotterConfig {
             margin: None,
             min_score: 0.5,
             min_gesture_prob: None,
+            label_bars: true,
             // Held-out writers in synthetic streams, seeds 1–3, at 1.5 s and at 2.5 s:
             // digits 89.7, 91.1, 88.5 and 90.1, 91.1, 89.7 %; uppercase 81.6, 82.4, 83.2
             // and 84.7, 85.8, 85.9 %; all 36 78.0, 78.9, 76.8 and 81.5, 80.8, 80.8 %
@@ -293,13 +322,30 @@ pub struct Spotter {
     barrier: usize,
     hand: Hand,
     trace: Option<Vec<Candidate>>,
+    /// The smallest verifier probability of a whole gesture accepted, per label.
+    bars: Vec<f64>,
 }
 
 impl Spotter {
     pub fn new(model: Model, cfg: SpotterConfig) -> Result<Spotter, SpotError> {
         let sm = model.spotting.as_ref().ok_or(SpotError::NoSpottingModel)?;
         let lee_kim = LeeKim::new(sm);
+        // Without a verifier (a model trained without one), every segment the
+        // classifier is sure of passes: boundaries then rest on the breaks alone.
+        let bars = (0..model.labels.len())
+            .map(|class| {
+                sm.verifier.as_ref().map_or(0.0, |v| {
+                    let base = cfg.min_gesture_prob.unwrap_or(v.min_gesture_prob());
+                    if cfg.label_bars {
+                        v.bar(class, base)
+                    } else {
+                        base
+                    }
+                })
+            })
+            .collect();
         Ok(Spotter {
+            bars,
             tracker: HandTracker::new(cfg.tracker),
             seg: Segmenter::new(&cfg),
             lee_kim,
@@ -435,25 +481,17 @@ impl Spotter {
         input.posterior = post.iter().map(|&p| p as f32).collect();
         let ratio = self.lee_kim.ratio(&input.segment);
         input.ratio = ratio;
-        // Without a verifier (a model trained without one), every segment the
-        // classifier is sure of passes: boundaries then rest on the breaks alone.
         let class = (0..post.len())
             .max_by(|&a, &b| post[a].total_cmp(&post[b]))
             .unwrap_or(0);
-        let (p_gesture, p_label, min_gesture_prob) =
-            sm.verifier.as_ref().map_or((1.0, 1.0, 0.0), |v| {
-                let min = self.cfg.min_gesture_prob.unwrap_or(v.min_gesture_prob());
-                let probs = v.probs(&input);
-                (
-                    1.0 - probs[0],
-                    probs.get(class + 1).copied().unwrap_or(0.0),
-                    min,
-                )
-            });
+        let (p_gesture, p_label) = sm.verifier.as_ref().map_or((1.0, 1.0), |v| {
+            let probs = v.probs(&input);
+            (1.0 - probs[0], probs.get(class + 1).copied().unwrap_or(0.0))
+        });
         let score = post.get(class).copied().unwrap_or(0.0);
         let accepted = self.cfg.margin.is_none_or(|m| ratio > m)
             && score >= self.cfg.min_score
-            && p_gesture >= min_gesture_prob;
+            && p_gesture >= self.bars.get(class).copied().unwrap_or(0.0);
         Some(Candidate {
             start: s,
             end: e,

@@ -15,6 +15,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 
 /// Points of context the verifier sees on each side of a segment…
 pub const CONTEXT_POINTS: usize = 6;
@@ -126,6 +127,12 @@ pub struct Verifier {
     /// one, under `net`.
     #[serde(alias = "net", deserialize_with = "one_or_many")]
     pub nets: Vec<Mlp>,
+    /// Labels whose whole-gesture probability must reach more than
+    /// [`Verifier::min_gesture_prob`]: those ordinary movement passes for often (a
+    /// straight reach for a "1"), calibrated on streams of the training samples
+    /// ([`super::calibrate_label_bars`]). Empty in models trained before.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub label_bars: BTreeMap<String, f64>,
 }
 
 /// A network or a list of them.
@@ -184,6 +191,16 @@ impl Verifier {
         }
     }
 
+    /// The smallest probability of a whole gesture the spotter accepts for output
+    /// `class` (0-based label index) when the bar for every label is `base`: `base`,
+    /// or the label's calibrated bar if higher.
+    pub fn bar(&self, class: usize, base: f64) -> f64 {
+        self.classes
+            .get(class)
+            .and_then(|l| self.label_bars.get(l))
+            .map_or(base, |&b| b.max(base))
+    }
+
     /// Probabilities: [not a gesture, label 0, label 1, …].
     pub fn probs(&self, input: &VerifierInput) -> Vec<f64> {
         let mut f = Vec::with_capacity(self.dim());
@@ -215,6 +232,7 @@ impl Verifier {
             classes: classifier.labels.clone(),
             timing: TIMING_POINTS,
             nets: Vec::new(),
+            label_bars: BTreeMap::new(),
         };
         let lee_kim = LeeKim::new(spotting);
         shell.nets = seeds
@@ -442,6 +460,7 @@ mod tests {
             classes: vec!["a".into(), "b".into()],
             timing: TIMING_POINTS,
             nets: Vec::new(),
+            label_bars: BTreeMap::new(),
         };
         let dim = v.dim();
         v.nets = biases
@@ -533,5 +552,29 @@ mod tests {
         // Without times (or a still hand), the even profile.
         assert_eq!(timing_profile(&line, &[], 1), vec![0.5]);
         assert!(timing_profile(&line, &even, 0).is_empty());
+    }
+
+    #[test]
+    fn label_bars_raise_only_their_own_label_and_bad_ones_are_refused() {
+        let mut v = constant_verifier(&[[0.0, 0.0, 0.0]]);
+        v.label_bars.insert("b".into(), 0.6);
+        assert_eq!(v.bar(0, 0.3), 0.3);
+        assert_eq!(v.bar(1, 0.3), 0.6);
+        // A bar below the common one does not lower it.
+        assert_eq!(v.bar(1, 0.7), 0.7);
+        let model = |v: &Verifier| SpottingModel {
+            step: 0.1,
+            models: Vec::new(),
+            verifier: Some(v.clone()),
+        };
+        assert_eq!(model(&v).validate(), Ok(()));
+        let mut unknown = v.clone();
+        unknown.label_bars.insert("zz".into(), 0.5);
+        let e = model(&unknown).validate().unwrap_err();
+        assert!(e.contains("\"zz\"") && e.contains("does not have"), "{e}");
+        let mut broken = v.clone();
+        broken.label_bars.insert("a".into(), f64::NAN);
+        let e = model(&broken).validate().unwrap_err();
+        assert!(e.contains("not a probability"), "{e}");
     }
 }

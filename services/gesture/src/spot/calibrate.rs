@@ -1,0 +1,153 @@
+//! Per-label bars on the verifier's probability of a whole gesture, calibrated on
+//! synthetic streams of the training samples.
+//!
+//! Ordinary movement passes for some symbols far more often than for others: of the
+//! digits' false alarms, over half are a "1" (a straight reach), and those have a lower
+//! whole-gesture probability than the "1"s drawn (gesture README, "Where ordinary
+//! movement passes for a symbol"). One bar for every label either lets those through or
+//! rejects whole symbols of every label. So each label the calibration streams show
+//! ordinary movement passing for gets a bar of its own, raised step by step while the
+//! streams' reliability rises.
+//!
+//! The streams are drawn from the training samples, whose writers the verifier has
+//! seen; so the drawn symbols' probabilities are a little higher than an unseen
+//! writer's, and the bars are capped at [`BAR_STEPS`]' last.
+
+use super::{Spotter, SpotterConfig};
+use crate::data::Sample;
+use crate::model::Model;
+use crate::stream::{
+    build_stream, insertions, score, SpottingScore, StreamConfig, SyntheticStream,
+};
+use rand::seq::SliceRandom;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use std::collections::BTreeMap;
+
+/// The bars a label may get, tried in turn above the verifier's own.
+pub const BAR_STEPS: [f64; 4] = [0.4, 0.5, 0.6, 0.7];
+/// Samples drawn in the calibration streams (all of them when there are fewer)…
+const GESTURES: usize = 2000;
+/// …this many to a stream.
+const PER_STREAM: usize = 20;
+/// A label whose symbols ordinary movement passed for fewer times than this keeps the
+/// common bar: one or two are chance.
+const MIN_INSERTIONS: usize = 3;
+
+/// Progress of the calibration: (spotter runs done, runs at most).
+pub type Progress<'a> = &'a (dyn Fn(u64, u64) + Sync);
+
+/// The calibration's streams and what the spotter made of them.
+struct Streams {
+    streams: Vec<SyntheticStream>,
+    cfg: StreamConfig,
+}
+
+impl Streams {
+    fn new(model: &Model, samples: &[Sample], seed: u64) -> Self {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut chosen: Vec<&Sample> = samples
+            .iter()
+            .filter(|s| model.label_index(&s.label).is_some())
+            .collect();
+        chosen.shuffle(&mut rng);
+        chosen.truncate(GESTURES);
+        let cfg = StreamConfig::default();
+        let streams = chosen
+            .chunks(PER_STREAM)
+            .enumerate()
+            .map(|(i, c)| {
+                let mut r =
+                    ChaCha8Rng::seed_from_u64(seed.wrapping_mul(7919).wrapping_add(i as u64));
+                build_stream(c, &cfg, &mut r)
+            })
+            .collect();
+        Streams { streams, cfg }
+    }
+
+    /// The streams' score with `bars`, and how often each label was inserted.
+    fn run(
+        &self,
+        model: &Model,
+        bars: &BTreeMap<String, f64>,
+    ) -> (SpottingScore, BTreeMap<String, usize>) {
+        let mut model = model.clone();
+        if let Some(v) = model.spotting.as_mut().and_then(|s| s.verifier.as_mut()) {
+            v.label_bars = bars.clone();
+        }
+        self.streams
+            .par_iter()
+            .map(|s| {
+                let mut spotter = Spotter::new(model.clone(), SpotterConfig::default())
+                    .expect("calibrated models have a spotting part");
+                let spotted = s.spot(&mut spotter, &self.cfg);
+                let mut inserted = BTreeMap::new();
+                for g in insertions(&s.truth, &spotted) {
+                    *inserted.entry(g.label.clone()).or_insert(0) += 1;
+                }
+                (score(&s.truth, &spotted), inserted)
+            })
+            .reduce(
+                || (SpottingScore::default(), BTreeMap::new()),
+                |(mut a, mut ai), (b, bi)| {
+                    a.add(&b);
+                    for (l, n) in bi {
+                        *ai.entry(l).or_insert(0) += n;
+                    }
+                    (a, ai)
+                },
+            )
+    }
+}
+
+/// Bars for the labels ordinary movement passes for, calibrated on streams of
+/// `samples` (drawn from `seed`) spotted by `model` (which must have a verifier; its
+/// own bars are ignored). A label's bar is raised through [`BAR_STEPS`] and kept
+/// where the streams' reliability is highest, if higher than without it; labels are
+/// taken from the most inserted down.
+pub fn calibrate_label_bars(
+    model: &Model,
+    samples: &[Sample],
+    seed: u64,
+    progress: Progress,
+) -> BTreeMap<String, f64> {
+    let Some(base) = model
+        .spotting
+        .as_ref()
+        .and_then(|s| s.verifier.as_ref())
+        .map(|v| v.min_gesture_prob())
+    else {
+        return BTreeMap::new();
+    };
+    let streams = Streams::new(model, samples, seed);
+    let mut bars = BTreeMap::new();
+    let (mut best, inserted) = streams.run(model, &bars);
+    let mut labels: Vec<(String, usize)> = inserted
+        .into_iter()
+        .filter(|(_, n)| *n >= MIN_INSERTIONS)
+        .collect();
+    labels.sort_by(|a, b| b.1.cmp(&a.1).then_with(|| a.0.cmp(&b.0)));
+    let steps: Vec<f64> = BAR_STEPS.into_iter().filter(|&b| b > base).collect();
+    let total = (1 + labels.len() * steps.len()) as u64;
+    let mut done = 1;
+    progress(done, total);
+    for (label, _) in labels {
+        let mut chosen = None;
+        for &bar in &steps {
+            let mut trial = bars.clone();
+            trial.insert(label.clone(), bar);
+            let (s, _) = streams.run(model, &trial);
+            done += 1;
+            progress(done, total);
+            if s.reliability > best.reliability {
+                best = s;
+                chosen = Some(bar);
+            }
+        }
+        if let Some(bar) = chosen {
+            bars.insert(label, bar);
+        }
+    }
+    bars
+}
