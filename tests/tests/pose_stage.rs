@@ -1,6 +1,6 @@
 //! capture (synthetic person) → pose → a subscriber process, all real processes.
 
-use airglyph_system_tests::{signal, Isolated};
+use airglyph_system_tests::{signal, top, Isolated};
 use std::io::{BufRead, BufReader};
 use std::process::Stdio;
 use std::time::Duration;
@@ -35,6 +35,9 @@ fn skeletons_carry_their_frames_sequence_and_timestamps() {
         .map_while(Result::ok)
         .map(|l| serde_json::from_str(&l).unwrap())
         .collect();
+    // What the pose stage took and published, from its own stats (totals so far).
+    let stats = top(&p);
+    let count = |k: &str| stats["stages"]["pose"][k].as_u64().unwrap_or(u64::MAX);
     signal(&pose, libc::SIGTERM);
     assert!(
         pose.wait().unwrap().success(),
@@ -43,6 +46,16 @@ fn skeletons_carry_their_frames_sequence_and_timestamps() {
     let _ = probe.wait();
 
     assert!(!got.is_empty(), "skeletons arrive");
+    // A pose stage slower than the camera (a debug build on a loaded machine) skips
+    // frames, and counts them; every frame it takes gives a skeleton, and the
+    // subscriber receives each one.
+    assert_eq!(
+        count("frames_in") + count("frames_dropped"),
+        frames,
+        "every frame reaches pose or is counted lost: {stats}"
+    );
+    assert_eq!(count("frames_out"), count("frames_in"), "{stats}");
+    assert_eq!(got.len() as u64, count("frames_out"), "{stats}");
     let mut last_seq = None;
     for s in &got {
         let seq = s["sequence"].as_u64().unwrap();
