@@ -167,6 +167,9 @@ fn plot_frames(ev: &PoseEval, path: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The seed's per-joint error on its own data (e_j ≤ 4.1 cm, §16.5).
+const SEED_JOINT_CM: f64 = 4.1;
+
 /// Fig. 16.11: mean error of each joint.
 fn plot_joints(s: &Summary, path: &Path) -> anyhow::Result<()> {
     let vals: Vec<f64> = Joint::ALL
@@ -174,38 +177,58 @@ fn plot_joints(s: &Summary, path: &Path) -> anyhow::Result<()> {
         .map(|j| s.per_joint_cm[j.name()].max(0.0))
         .collect();
     let top = vals.iter().copied().fold(5.0, f64::max) * 1.1;
-    let root = BitMapBackend::new(path, (1000, 500)).into_drawing_area();
+    // Bars across, one a row, the head at the top: the joints' names read level
+    // beside them.
+    let row = |i: usize| Joint::COUNT - 1 - i;
+    let root = BitMapBackend::new(path, (800, 560)).into_drawing_area();
     root.fill(&WHITE).map_err(plot_err)?;
     let mut chart = ChartBuilder::on(&root)
         .caption("Mean error per joint", ("sans-serif", 22))
         .margin(12)
-        .x_label_area_size(90)
-        .y_label_area_size(50)
-        .build_cartesian_2d((0..Joint::COUNT).into_segmented(), 0f64..top)
+        .x_label_area_size(40)
+        .y_label_area_size(110)
+        .build_cartesian_2d(0f64..top, (0..Joint::COUNT).into_segmented())
         .map_err(plot_err)?;
     chart
         .configure_mesh()
-        .disable_x_mesh()
-        .y_desc("error (cm)")
-        .x_labels(Joint::COUNT)
-        .x_label_formatter(&|v| match v {
-            SegmentValue::CenterOf(i) if *i < Joint::COUNT => Joint::ALL[*i].name().to_string(),
+        .disable_y_mesh()
+        .x_desc("error (cm)")
+        .y_labels(Joint::COUNT)
+        .y_label_formatter(&|v| match v {
+            SegmentValue::CenterOf(i) if *i < Joint::COUNT => {
+                Joint::ALL[row(*i)].name().to_string()
+            }
             _ => String::new(),
         })
-        .x_label_style(
-            ("sans-serif", 12)
-                .into_font()
-                .transform(FontTransform::Rotate90),
-        )
+        .y_label_style(("sans-serif", 13))
         .draw()
         .map_err(plot_err)?;
     chart
         .draw_series(
-            Histogram::vertical(&chart)
+            Histogram::horizontal(&chart)
                 .style(BLUE.mix(0.7).filled())
-                .margin(6)
-                .data(vals.iter().enumerate().map(|(i, v)| (i, *v))),
+                .margin(4)
+                .data(vals.iter().enumerate().map(|(i, v)| (row(i), *v))),
         )
+        .map_err(plot_err)?;
+    // The seed's own figure for every joint.
+    chart
+        .draw_series(LineSeries::new(
+            [
+                (SEED_JOINT_CM, SegmentValue::Exact(0)),
+                (SEED_JOINT_CM, SegmentValue::Last),
+            ],
+            RED.stroke_width(2),
+        ))
+        .map_err(plot_err)?
+        .label(format!("seed: every joint within {SEED_JOINT_CM} cm"))
+        .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], RED.stroke_width(2)));
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::LowerRight)
+        .background_style(WHITE.mix(0.9))
+        .border_style(BLACK)
+        .draw()
         .map_err(plot_err)?;
     root.present()
         .with_context(|| format!("writing {}", path.display()))?;
