@@ -116,6 +116,11 @@ pub struct PoseConfig {
     /// The hand joint (palm centre) this far behind the arm's extremity (fingertips),
     /// towards the elbow, instead of at the fitted chain's end; 0 = the chain's end.
     pub hand_behind_tip: f32,
+    /// After the registration, each hand moves across its forearm to the centre of the
+    /// forearm's points within this radius (metres; 0 = off), set back along the
+    /// camera's ray by `hand_behind_surface` ([`crate::hands`]).
+    pub hand_points_radius: f32,
+    pub hand_behind_surface: f32,
     /// Cost of leaving a limb without a maximum in the assignment (metres of geodesic
     /// cost), and the weight of the distance to the limb's last extremity.
     pub unassigned_cost: f32,
@@ -219,6 +224,8 @@ impl Default for PoseConfig {
             surface_offset_leg: 0.065,
             surface_offset_head: 0.07,
             hand_behind_tip: 0.11,
+            hand_points_radius: 0.10,
+            hand_behind_surface: 0.018,
             unassigned_cost: 1.2,
             dominated_cost: 0.3,
             head_off_axis_weight: 5.0,

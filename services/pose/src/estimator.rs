@@ -985,6 +985,7 @@ impl PoseEstimator {
             self.debug.geodesic = Some(*skel);
         }
         let mut registered = false;
+        let mut hands = [None; 2];
         if let Some(b) = best {
             if self.cfg.calibrate_body {
                 self.learn_body(&b, cfg);
@@ -1000,6 +1001,14 @@ impl PoseEstimator {
                     skel.confidence[j.index()] = (0.1 + 0.9 * seen).clamp(0.0, 1.0);
                 }
                 hands_at_fingertips(skel, &posed, tpl, tips, cfg);
+                let frame = Frame {
+                    points: &self.points,
+                    mask: &self.mask,
+                    width: scene.width,
+                    height: scene.height,
+                    k: scene.k,
+                };
+                hands = crate::hands::hands_at_their_points(skel, &frame, tpl, &posed, cfg);
                 self.prev_body = Some(b.pose);
                 self.prev_hidden = crate::register::hidden_limbs(&b.seen);
                 registered = true;
@@ -1027,6 +1036,12 @@ impl PoseEstimator {
                     extremity: tips[l.index()].map(|m| inv.apply(&m)),
                     confidence: skel.confidence[je.index()],
                 });
+            }
+        }
+        // Only now, so that the limbs' states above keep the fit's hands.
+        for (j, h) in [Joint::LeftHand, Joint::RightHand].into_iter().zip(hands) {
+            if let Some(h) = h {
+                skel.set(j, h);
             }
         }
         true

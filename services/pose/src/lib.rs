@@ -136,6 +136,10 @@
 //! * The hand is placed a palm behind the fingertips seen, towards the elbow, not at
 //!   the chain's end (nor the registered forearm's, which cannot bend at the wrist), so
 //!   an arm length a little off does not shrink the strokes drawn.
+//! * Then [`hands`] moves each hand across its forearm to the centre of the points the
+//!   fitted body gives to that forearm near it, set back by half a hand's thickness:
+//!   the body model has no wrist, and a real hand turns there. Only the published
+//!   joints move; the tracker keeps the fit's.
 //! * Joints are smoothed over time by the One Euro filter (airglyph-core): still joints
 //!   stop jittering with the sensor's noise, moving ones keep up (its speed estimate
 //!   follows at 5 Hz, so the filter opens within a frame or two of a jump's start).
@@ -151,6 +155,7 @@ pub mod dt;
 mod estimator;
 pub mod geom;
 pub mod graph;
+pub mod hands;
 pub mod limbs;
 pub mod metrics;
 pub mod overlay;

@@ -331,7 +331,7 @@ pub struct Registration {
 
 /// A capsule of the posed body, camera frame.
 #[derive(Debug, Clone, Copy)]
-struct Placed {
+pub(crate) struct Placed {
     segment: Segment,
     a: Point3<f32>,
     ab: Vector3<f32>,
@@ -618,7 +618,7 @@ fn surface_distance<'a>(capsules: impl IntoIterator<Item = &'a Placed>, p: &Poin
         .fold(f32::INFINITY, f32::min)
 }
 
-fn place(t: &BodyTemplate, posed: &Posed) -> Vec<Placed> {
+pub(crate) fn place(t: &BodyTemplate, posed: &Posed) -> Vec<Placed> {
     t.capsules
         .iter()
         .map(|c| {
@@ -639,6 +639,21 @@ fn place(t: &BodyTemplate, posed: &Posed) -> Vec<Placed> {
             }
         })
         .collect()
+}
+
+/// Whether `segment`'s capsules hold the surface nearest `p` among the placed ones.
+/// Capsules whose bounding sphere lies beyond the segment's own surface are not
+/// measured.
+pub(crate) fn nearest_is(placed: &[Placed], p: &Point3<f32>, segment: Segment) -> bool {
+    let own = placed
+        .iter()
+        .filter(|c| c.segment == segment)
+        .map(|c| c.nearest(p).2)
+        .fold(f32::INFINITY, f32::min);
+    own.is_finite()
+        && placed.iter().all(|c| {
+            c.segment == segment || (p - c.centre).norm() - c.bound >= own || c.nearest(p).2 >= own
+        })
 }
 
 /// Whether a limb's tip (its geodesic maximum, as [`drop_borrowed_tips`] left them)

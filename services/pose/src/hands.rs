@@ -1,0 +1,222 @@
+//! The hands placed on the hands the camera sees, after the body is registered.
+//!
+//! The body model has no hand: its forearm capsule runs on to the fingertips, and its
+//! hand joint (the palm's centre) is a fixed point of the forearm. A real hand turns at
+//! the wrist, so from the true pose itself the fit's hands lie 4.5–4.9 cm from the
+//! truth, mostly across the forearm and too deep (pose README, "Measured"). The points
+//! the fitted body gives to a forearm near its hand are the hand's own, though: their
+//! centre, set back along the camera's ray by half a hand's thickness (the camera sees
+//! the hand's front), is where the palm is across the forearm. Along the forearm it is
+//! not (the wrist's and fingers' points weigh on it), so the hand moves only across.
+//!
+//! Only the published joints move: the tracked body, the limbs' states and the next
+//! frame's start are the fit's, so the tracker is not steered by this step.
+
+use crate::register::{nearest_is, place, Frame};
+use crate::{body::BodyTemplate, body::Posed, body::Segment, PoseConfig};
+use airglyph_core::{Joint, Skeleton};
+use nalgebra::{Point3, Vector3};
+
+/// Mean-shift steps of a hand towards the centre of its points.
+const STEPS: usize = 3;
+/// Fewer points than this near a hand (hidden, or out of the image) leave it where the
+/// fit put it.
+const MIN_POINTS: usize = 5;
+
+/// Where each hand (left, right) lies among its points, for the body `posed`
+/// registered to `frame`; None where the hand keeps the fit's place (too few points, or
+/// [`PoseConfig::hand_points_radius`] 0). `skel` holds the fitted hands and elbows.
+pub fn hands_at_their_points(
+    skel: &Skeleton,
+    frame: &Frame,
+    template: &BodyTemplate,
+    posed: &Posed,
+    cfg: &PoseConfig,
+) -> [Option<Point3<f32>>; 2] {
+    let radius = cfg.hand_points_radius;
+    if radius <= 0.0 {
+        return [None; 2];
+    }
+    let placed = place(template, posed);
+    [
+        (Joint::LeftHand, Joint::LeftElbow, Segment::LeftForearm),
+        (Joint::RightHand, Joint::RightElbow, Segment::RightForearm),
+    ]
+    .map(|(hand, elbow, forearm)| {
+        let start = skel[hand];
+        let axis = (start - skel[elbow]).try_normalize(1e-6)?;
+        // The forearm's points within reach of every step, found once: the hand moves
+        // by centimetres.
+        let own: Vec<Point3<f32>> = near_pixels(frame, &start, 1.5 * radius)
+            .filter(|p| nearest_is(&placed, p, forearm))
+            .collect();
+        let mut h = start;
+        for _ in 0..STEPS {
+            let (sum, n) = own
+                .iter()
+                .filter(|p| (*p - h).norm_squared() < radius * radius)
+                .fold((Vector3::zeros(), 0usize), |(s, n), p| {
+                    (s + p.coords, n + 1)
+                });
+            if n < MIN_POINTS {
+                break;
+            }
+            let centre = Point3::from(sum / n as f32);
+            let palm = centre + centre.coords.normalize() * cfg.hand_behind_surface;
+            let d = palm - h;
+            h += d - axis * d.dot(&axis);
+        }
+        (h != start).then_some(h)
+    })
+}
+
+/// The person's points within `reach` of `at`, searched in the image box its sphere
+/// projects into.
+fn near_pixels<'a>(
+    frame: &'a Frame,
+    at: &Point3<f32>,
+    reach: f32,
+) -> impl Iterator<Item = Point3<f32>> + 'a {
+    let (w, h) = (frame.width, frame.height);
+    let window = frame.k.project(at).filter(|_| at.z > reach).map(|(u, v)| {
+        let r = (reach * frame.k.fx.max(frame.k.fy) / (at.z - reach)).ceil();
+        let clamp = |x: f32, hi: usize| (x.max(0.0) as usize).min(hi);
+        (
+            clamp(u - r, w),
+            clamp(u + r + 1.0, w),
+            clamp(v - r, h),
+            clamp(v + r + 1.0, h),
+        )
+    });
+    let (u0, u1, v0, v1) = window.unwrap_or((0, 0, 0, 0));
+    let at = *at;
+    (v0..v1)
+        .flat_map(move |v| (u0..u1).map(move |u| v * w + u))
+        .filter(move |&i| frame.mask[i])
+        .map(move |i| frame.points[i])
+        .filter(move |p| p.z > 0.0 && (p - at).norm_squared() < reach * reach)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::body::BodyPose;
+    use airglyph_core::Intrinsics;
+    use nalgebra::Rotation3;
+
+    /// A body standing 2.5 m before the camera, arms hanging, and a camera image to
+    /// put points in.
+    fn standing() -> (BodyTemplate, Posed, Skeleton, Intrinsics) {
+        let cfg = PoseConfig::default();
+        let t = BodyTemplate::new(&cfg);
+        let r = Rotation3::from_basis_unchecked(&[Vector3::x(), -Vector3::y(), -Vector3::z()]);
+        let pose = BodyPose {
+            pelvis: Point3::new(0.0, 0.0, 2.5),
+            rotation: [r; Segment::COUNT],
+        };
+        let posed = Posed::new(&t, &pose);
+        let skel = posed.skeleton(&t);
+        (t, posed, skel, Intrinsics::default().scaled_to(320, 240))
+    }
+
+    /// Points on a grid over a disc of `radius` around `centre`, facing the camera.
+    fn disc(centre: Point3<f32>, radius: f32) -> Vec<Point3<f32>> {
+        let n = 12;
+        let mut out = Vec::new();
+        for i in -n..=n {
+            for j in -n..=n {
+                let (x, y) = (i as f32 / n as f32, j as f32 / n as f32);
+                if x * x + y * y <= 1.0 {
+                    out.push(centre + Vector3::new(x, y, 0.0) * radius);
+                }
+            }
+        }
+        out
+    }
+
+    /// Each point at its pixel (the nearest where two meet).
+    fn image(k: &Intrinsics, points: &[Point3<f32>]) -> (Vec<Point3<f32>>, Vec<bool>) {
+        let (w, h) = (k.width as usize, k.height as usize);
+        let mut img = vec![Point3::origin(); w * h];
+        let mut mask = vec![false; w * h];
+        for p in points {
+            let Some((u, v)) = k.project(p) else { continue };
+            let (u, v) = (u.round() as usize, v.round() as usize);
+            if u < w && v < h && (!mask[v * w + u] || p.z < img[v * w + u].z) {
+                img[v * w + u] = *p;
+                mask[v * w + u] = true;
+            }
+        }
+        (img, mask)
+    }
+
+    #[test]
+    fn a_hand_turned_at_the_wrist_is_found_across_its_forearm_and_only_there() {
+        let (t, posed, skel, k) = standing();
+        let cfg = PoseConfig::default();
+        let (hand, elbow) = (skel[Joint::LeftHand], skel[Joint::LeftElbow]);
+        let axis = (hand - elbow).normalize();
+        // The palm 4 cm outwards of where the fit put the hand (a wrist turned
+        // sideways), its front surface facing the camera.
+        let palm = hand + Vector3::new(0.04, 0.0, 0.0);
+        let surface = palm - Vector3::z() * cfg.hand_behind_surface;
+        let seen = disc(surface, 0.04);
+        let place_in = |points: &[Point3<f32>]| {
+            let (img, mask) = image(&k, points);
+            let frame = Frame {
+                points: &img,
+                mask: &mask,
+                width: k.width as usize,
+                height: k.height as usize,
+                k: &k,
+            };
+            hands_at_their_points(&skel, &frame, &t, &posed, &cfg)
+        };
+        let [left, right] = place_in(&seen);
+        let moved = left.expect("the left hand has its points") - hand;
+        // Across the forearm, outwards, most of the way; not along it.
+        assert!(moved.dot(&axis).abs() < 1e-4, "{moved:?}");
+        assert!(moved.x > 0.025 && moved.x < 0.045, "{moved:?}");
+        assert!(
+            moved.z.abs() < 0.01,
+            "set back to the palm's centre: {moved:?}"
+        );
+        // The right hand has no points near it: it stays where the fit put it.
+        assert_eq!(right, None);
+
+        // Points nearer the thigh than the forearm (a hanging hand beside the hip) are
+        // the thigh's: they do not pull the hand.
+        let (hip, knee) = (skel[Joint::LeftHip], skel[Joint::LeftKnee]);
+        let axis_there = hip + (knee - hip) * ((hand.y - hip.y) / (knee.y - hip.y));
+        let out = (hand - axis_there).normalize();
+        let thigh_surface = (0..200)
+            .map(|i| axis_there + out * (i as f32 * 0.001))
+            .find(|p| !nearest_is(&place(&t, &posed), p, Segment::LeftThigh))
+            .expect("the thigh's surface lies between its axis and the hand");
+        let beside = disc(thigh_surface - out * 0.01, 0.015);
+        assert!(beside
+            .iter()
+            .all(|p| (p - hand).norm() < cfg.hand_points_radius));
+        let mut with_thigh = seen.clone();
+        with_thigh.extend(beside);
+        assert_eq!(place_in(&with_thigh)[0], left);
+
+        // Off: nothing moves.
+        let off = PoseConfig {
+            hand_points_radius: 0.0,
+            ..cfg.clone()
+        };
+        let (img, mask) = image(&k, &seen);
+        let frame = Frame {
+            points: &img,
+            mask: &mask,
+            width: k.width as usize,
+            height: k.height as usize,
+            k: &k,
+        };
+        assert_eq!(
+            hands_at_their_points(&skel, &frame, &t, &posed, &off),
+            [None; 2]
+        );
+    }
+}
