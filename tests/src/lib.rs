@@ -17,9 +17,16 @@ pub struct Isolated {
 }
 
 /// The pipeline's iceoryx2 root folder goes with it (its /dev/shm files are the
-/// processes' to remove, and tests check that they did).
+/// processes' to remove, and tests check that they did). So do its processes: a test
+/// that fails half-way leaves its supervisor and stages running otherwise, and they
+/// would take the CPU from every test after it.
 impl Drop for Isolated {
     fn drop(&mut self) {
+        for pid in self.processes() {
+            // SAFETY: kill(2) on a process of this test's own pipeline, found by the
+            // environment it was started with.
+            unsafe { libc::kill(pid as i32, libc::SIGKILL) };
+        }
         let _ = std::fs::remove_dir_all(&self.root);
     }
 }
@@ -40,6 +47,20 @@ impl Isolated {
             .env("AIRGLYPH_IPC_PREFIX", &self.prefix)
             .env("RUST_LOG", "warn");
         cmd
+    }
+
+    /// The processes started for this pipeline (by their environment), still running.
+    pub fn processes(&self) -> Vec<u32> {
+        let mark = format!("AIRGLYPH_IPC_PREFIX={}", self.prefix);
+        let Ok(dir) = std::fs::read_dir("/proc") else {
+            return Vec::new();
+        };
+        dir.filter_map(|e| e.ok()?.file_name().to_str()?.parse::<u32>().ok())
+            .filter(|pid| {
+                std::fs::read(format!("/proc/{pid}/environ"))
+                    .is_ok_and(|env| env.split(|&b| b == 0).any(|var| var == mark.as_bytes()))
+            })
+            .collect()
     }
 
     /// The files of this pipeline under /dev/shm.

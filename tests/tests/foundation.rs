@@ -238,3 +238,58 @@ fn bad_sources_fail_with_a_clear_message() {
         .unwrap();
     assert!(String::from_utf8_lossy(&out.stderr).contains("unknown source \"kinect\""));
 }
+
+#[test]
+fn a_pipeline_left_running_by_a_failed_test_goes_with_its_isolation() {
+    // What a test that panics half-way leaves behind: a supervisor and its stages,
+    // never stopped. Dropping the test's `Isolated` must take them down, or they would
+    // take the CPU from every test after it.
+    let p = Isolated::new();
+    let mut supervisor = p
+        .command("airglyph")
+        .args(["run", "--source", "synthetic:poses"])
+        .stdout(Stdio::null())
+        .spawn()
+        .unwrap();
+    let deadline = Instant::now() + Duration::from_secs(10);
+    let stages = loop {
+        let found: Vec<u32> = ["capture", "pose", "gesture"]
+            .iter()
+            .flat_map(|s| children_named(supervisor.id(), &format!("airglyph-{s}")))
+            .collect();
+        if found.len() == 3 {
+            break found;
+        }
+        assert!(Instant::now() < deadline, "stages started: {found:?}");
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    assert!(p.processes().len() >= 4, "{:?}", p.processes());
+    drop(p);
+    let deadline = Instant::now() + Duration::from_secs(5);
+    let status = loop {
+        if let Some(status) = supervisor.try_wait().unwrap() {
+            break status;
+        }
+        if Instant::now() > deadline {
+            let _ = supervisor.kill();
+            panic!("the supervisor outlived its isolation");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    assert!(!status.success(), "killed, not finished: {status}");
+    let alive = |pid: &u32| {
+        std::fs::read_to_string(format!("/proc/{pid}/stat")).is_ok_and(|s| {
+            s.rsplit(')')
+                .next()
+                .is_some_and(|rest| !rest.trim_start().starts_with('Z'))
+        })
+    };
+    let deadline = Instant::now() + Duration::from_secs(5);
+    while stages.iter().any(alive) {
+        assert!(
+            Instant::now() < deadline,
+            "stages still running: {stages:?}"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
