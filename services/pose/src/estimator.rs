@@ -933,13 +933,7 @@ impl PoseEstimator {
         side_on: Option<Point3<f32>>,
     ) -> bool {
         let tpl = &scene.template;
-        let frame = Frame {
-            points: &self.points,
-            mask: &self.mask,
-            width: scene.width,
-            height: scene.height,
-            k: scene.k,
-        };
+        let frame = scene.frame(&self.points, &self.mask);
         self.reg.prepare(&frame, &cfg.register);
         let geodesic = race.then(|| BodyPose::from_skeleton(tpl, skel)).flatten();
         let hybrid = self
@@ -1001,13 +995,7 @@ impl PoseEstimator {
                     skel.confidence[j.index()] = (0.1 + 0.9 * seen).clamp(0.0, 1.0);
                 }
                 hands_at_fingertips(skel, &posed, tpl, tips, cfg);
-                let frame = Frame {
-                    points: &self.points,
-                    mask: &self.mask,
-                    width: scene.width,
-                    height: scene.height,
-                    k: scene.k,
-                };
+                let frame = scene.frame(&self.points, &self.mask);
                 hands = crate::hands::hands_at_their_points(skel, &frame, tpl, &posed, cfg);
                 self.prev_body = Some(b.pose);
                 self.prev_hidden = crate::register::hidden_limbs(&b.seen);
@@ -1267,6 +1255,22 @@ struct Scene<'a> {
     template: BodyTemplate,
     /// The torso frame of this frame's seed steps (torso frame → camera frame).
     torso: &'a TorsoPose,
+}
+
+impl<'a> Scene<'a> {
+    /// The person's points of this frame as the registration reads them.
+    fn frame<'p>(&self, points: &'p [Point3<f32>], mask: &'p [bool]) -> Frame<'p>
+    where
+        'a: 'p,
+    {
+        Frame {
+            points,
+            mask,
+            width: self.width,
+            height: self.height,
+            k: self.k,
+        }
+    }
 }
 
 /// The tracked body `prev` with every limb whose tip strayed (lies farther than

@@ -161,7 +161,7 @@ mod tests {
         let palm = hand + Vector3::new(0.04, 0.0, 0.0);
         let surface = palm - Vector3::z() * cfg.hand_behind_surface;
         let seen = disc(surface, 0.04);
-        let place_in = |points: &[Point3<f32>]| {
+        let place_in = |points: &[Point3<f32>], cfg: &PoseConfig| {
             let (img, mask) = image(&k, points);
             let frame = Frame {
                 points: &img,
@@ -170,9 +170,9 @@ mod tests {
                 height: k.height as usize,
                 k: &k,
             };
-            hands_at_their_points(&skel, &frame, &t, &posed, &cfg)
+            hands_at_their_points(&skel, &frame, &t, &posed, cfg)
         };
-        let [left, right] = place_in(&seen);
+        let [left, right] = place_in(&seen, &cfg);
         let moved = left.expect("the left hand has its points") - hand;
         // Across the forearm, outwards, most of the way; not along it.
         assert!(moved.dot(&axis).abs() < 1e-4, "{moved:?}");
@@ -199,24 +199,13 @@ mod tests {
             .all(|p| (p - hand).norm() < cfg.hand_points_radius));
         let mut with_thigh = seen.clone();
         with_thigh.extend(beside);
-        assert_eq!(place_in(&with_thigh)[0], left);
+        assert_eq!(place_in(&with_thigh, &cfg)[0], left);
 
         // Off: nothing moves.
         let off = PoseConfig {
             hand_points_radius: 0.0,
             ..cfg.clone()
         };
-        let (img, mask) = image(&k, &seen);
-        let frame = Frame {
-            points: &img,
-            mask: &mask,
-            width: k.width as usize,
-            height: k.height as usize,
-            k: &k,
-        };
-        assert_eq!(
-            hands_at_their_points(&skel, &frame, &t, &posed, &off),
-            [None; 2]
-        );
+        assert_eq!(place_in(&seen, &off), [None; 2]);
     }
 }
