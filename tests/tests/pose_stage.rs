@@ -37,7 +37,11 @@ fn skeletons_carry_their_frames_sequence_and_timestamps() {
         .collect();
     // What the pose stage took and published, from its own stats (totals so far).
     let stats = top(&p);
-    let count = |k: &str| stats["stages"]["pose"][k].as_u64().unwrap_or(u64::MAX);
+    let count = |k: &str| {
+        stats["stages"]["pose"][k]
+            .as_u64()
+            .unwrap_or_else(|| panic!("no pose {k} in {stats}"))
+    };
     signal(&pose, libc::SIGTERM);
     assert!(
         pose.wait().unwrap().success(),

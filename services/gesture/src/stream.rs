@@ -640,17 +640,9 @@ pub fn score(truth: &[TruthGesture], spotted: &[SpottedGesture]) -> SpottingScor
     matched(truth, spotted).0
 }
 
-/// The spotted gestures that match no drawn one (the insertions of [`score`]).
-pub fn insertions<'a>(
-    truth: &[TruthGesture],
-    spotted: &'a [SpottedGesture],
-) -> impl Iterator<Item = &'a SpottedGesture> {
-    let used = matched(truth, spotted).1;
-    spotted.iter().zip(used).filter(|(_, u)| !u).map(|(g, _)| g)
-}
-
-/// [`score`], and which spotted gestures were matched to a drawn one.
-fn matched(truth: &[TruthGesture], spotted: &[SpottedGesture]) -> (SpottingScore, Vec<bool>) {
+/// [`score`], and which spotted gestures were matched to a drawn one (those that were
+/// not are its insertions).
+pub fn matched(truth: &[TruthGesture], spotted: &[SpottedGesture]) -> (SpottingScore, Vec<bool>) {
     let mut used = vec![false; spotted.len()];
     let mut sc = SpottingScore {
         gestures: truth.len(),

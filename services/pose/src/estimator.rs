@@ -994,7 +994,7 @@ impl PoseEstimator {
                     let seen = b.seen[crate::body::segment_of(j).index()];
                     skel.confidence[j.index()] = (0.1 + 0.9 * seen).clamp(0.0, 1.0);
                 }
-                hands_at_fingertips(skel, &posed, tpl, tips, cfg);
+                crate::hands::hands_at_fingertips(skel, &posed, tpl, tips, cfg);
                 let frame = scene.frame(&self.points, &self.mask);
                 hands = crate::hands::hands_at_their_points(skel, &frame, tpl, &posed, cfg);
                 self.prev_body = Some(b.pose);
@@ -1297,37 +1297,4 @@ fn hybrid_start(
         }
     }
     changed.then_some(h)
-}
-
-/// The hands of a registered body moved to follow the fingertips seen (the arms'
-/// geodesic maxima `tips`), as in the seed's chains: a capsule forearm cannot bend at
-/// the wrist, and its end lags a quickly drawing hand. Only where the body's own tip
-/// lies within [`crate::register::RegisterConfig::tip_trust`] of the maximum.
-fn hands_at_fingertips(
-    skel: &mut Skeleton,
-    posed: &Posed,
-    tpl: &BodyTemplate,
-    tips: &[Option<Point3<f32>>; 5],
-    cfg: &PoseConfig,
-) {
-    for (l, hand, elbow) in [
-        (Limb::LeftArm, Joint::LeftHand, Joint::LeftElbow),
-        (Limb::RightArm, Joint::RightHand, Joint::RightElbow),
-    ] {
-        let (Some(ext), true) = (tips[l.index()], cfg.hand_behind_tip > 0.0) else {
-            continue;
-        };
-        let ext_b = ext + ext.coords.normalize() * cfg.surface_offset(l);
-        let (seg, local) = tpl.tips[l.index()];
-        let tip = posed.point(seg, &local);
-        if (tip - ext_b).norm() > cfg.register.tip_trust {
-            continue;
-        }
-        if let Some(u) = (ext_b - skel[elbow]).try_normalize(1e-6) {
-            skel.set(hand, ext_b - u * cfg.hand_behind_tip);
-            // Its fingertips are in sight.
-            let c = &mut skel.confidence[hand.index()];
-            *c = c.max(0.9);
-        }
-    }
 }

@@ -1,4 +1,6 @@
-//! The hands placed on the hands the camera sees, after the body is registered.
+//! Where the hand joints go once the body is registered: behind the fingertips seen
+//! ([`hands_at_fingertips`]), then across the forearm onto the hand's own points
+//! ([`hands_at_their_points`]).
 //!
 //! The body model has no hand: its forearm capsule runs on to the fingertips, and its
 //! hand joint (the palm's centre) is a fixed point of the forearm. A real hand turns at
@@ -9,11 +11,12 @@
 //! the hand's front), is where the palm is across the forearm. Along the forearm it is
 //! not (the wrist's and fingers' points weigh on it), so the hand moves only across.
 //!
-//! Only the published joints move: the tracked body, the limbs' states and the next
-//! frame's start are the fit's, so the tracker is not steered by this step.
+//! That second step moves only the published joints: the tracked body, the limbs'
+//! states and the next frame's start are the fit's, so the tracker is not steered by
+//! it.
 
 use crate::register::{nearest_is, place, Frame};
-use crate::{body::BodyTemplate, body::Posed, body::Segment, PoseConfig};
+use crate::{body::BodyTemplate, body::Posed, body::Segment, Limb, PoseConfig};
 use airglyph_core::{Joint, Skeleton};
 use nalgebra::{Point3, Vector3};
 
@@ -22,6 +25,39 @@ const STEPS: usize = 3;
 /// Fewer points than this near a hand (hidden, or out of the image) leave it where the
 /// fit put it.
 const MIN_POINTS: usize = 5;
+
+/// The hands of a registered body moved to follow the fingertips seen (the arms'
+/// geodesic maxima `tips`), as in the seed's chains: a capsule forearm cannot bend at
+/// the wrist, and its end lags a quickly drawing hand. Only where the body's own tip
+/// lies within [`crate::register::RegisterConfig::tip_trust`] of the maximum.
+pub fn hands_at_fingertips(
+    skel: &mut Skeleton,
+    posed: &Posed,
+    tpl: &BodyTemplate,
+    tips: &[Option<Point3<f32>>; 5],
+    cfg: &PoseConfig,
+) {
+    for (l, hand, elbow) in [
+        (Limb::LeftArm, Joint::LeftHand, Joint::LeftElbow),
+        (Limb::RightArm, Joint::RightHand, Joint::RightElbow),
+    ] {
+        let (Some(ext), true) = (tips[l.index()], cfg.hand_behind_tip > 0.0) else {
+            continue;
+        };
+        let ext_b = ext + ext.coords.normalize() * cfg.surface_offset(l);
+        let (seg, local) = tpl.tips[l.index()];
+        let tip = posed.point(seg, &local);
+        if (tip - ext_b).norm() > cfg.register.tip_trust {
+            continue;
+        }
+        if let Some(u) = (ext_b - skel[elbow]).try_normalize(1e-6) {
+            skel.set(hand, ext_b - u * cfg.hand_behind_tip);
+            // Its fingertips are in sight.
+            let c = &mut skel.confidence[hand.index()];
+            *c = c.max(0.9);
+        }
+    }
+}
 
 /// Where each hand (left, right) lies among its points, for the body `posed`
 /// registered to `frame`; None where the hand keeps the fit's place (too few points, or

@@ -645,11 +645,7 @@ pub(crate) fn place(t: &BodyTemplate, posed: &Posed) -> Vec<Placed> {
 /// Capsules whose bounding sphere lies beyond the segment's own surface are not
 /// measured.
 pub(crate) fn nearest_is(placed: &[Placed], p: &Point3<f32>, segment: Segment) -> bool {
-    let own = placed
-        .iter()
-        .filter(|c| c.segment == segment)
-        .map(|c| c.nearest(p).2)
-        .fold(f32::INFINITY, f32::min);
+    let own = surface_distance(placed.iter().filter(|c| c.segment == segment), p);
     own.is_finite()
         && placed.iter().all(|c| {
             c.segment == segment || (p - c.centre).norm() - c.bound >= own || c.nearest(p).2 >= own

@@ -16,9 +16,8 @@
 use super::{Spotter, SpotterConfig};
 use crate::data::Sample;
 use crate::model::Model;
-use crate::stream::{
-    build_stream, insertions, score, SpottingScore, StreamConfig, SyntheticStream,
-};
+use crate::stream::{build_stream, matched, SpottingScore, StreamConfig, SyntheticStream};
+use crate::train::Progress;
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -34,9 +33,6 @@ const PER_STREAM: usize = 20;
 /// A label whose symbols ordinary movement passed for fewer times than this keeps the
 /// common bar: one or two are chance.
 const MIN_INSERTIONS: usize = 3;
-
-/// Progress of the calibration: (spotter runs done, runs at most).
-pub type Progress<'a> = &'a (dyn Fn(u64, u64) + Sync);
 
 /// The calibration's streams and what the spotter made of them.
 struct Streams {
@@ -82,11 +78,12 @@ impl Streams {
                 let mut spotter = Spotter::new(model.clone(), SpotterConfig::default())
                     .expect("calibrated models have a spotting part");
                 let spotted = s.spot(&mut spotter, &self.cfg);
+                let (score, used) = matched(&s.truth, &spotted);
                 let mut inserted = BTreeMap::new();
-                for g in insertions(&s.truth, &spotted) {
+                for (g, _) in spotted.iter().zip(used).filter(|(_, used)| !used) {
                     *inserted.entry(g.label.clone()).or_insert(0) += 1;
                 }
-                (score(&s.truth, &spotted), inserted)
+                (score, inserted)
             })
             .reduce(
                 || (SpottingScore::default(), BTreeMap::new()),
@@ -103,7 +100,7 @@ impl Streams {
 
 /// Bars for the labels ordinary movement passes for, calibrated on streams of
 /// `samples` (drawn from `seed`) spotted by `model` (which must have a verifier; its
-/// own bars are ignored). A label's bar is raised through [`BAR_STEPS`] and kept
+/// own bars are ignored); `progress` counts spotter runs over the streams. A label's bar is raised through [`BAR_STEPS`] and kept
 /// where the streams' reliability is highest, if higher than without it; labels are
 /// taken from the most inserted down.
 pub fn calibrate_label_bars(
