@@ -74,6 +74,8 @@ impl Default for StreamConfig {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct TruthGesture {
     pub label: String,
+    /// Who wrote the sample drawn here (the data's subject).
+    pub subject: String,
     pub start: u64,
     pub end: u64,
 }
@@ -509,6 +511,7 @@ pub fn build_stream<R: Rng>(
         let last = m.points.len().saturating_sub(1) as u64;
         truth.push(TruthGesture {
             label: sample.label.clone(),
+            subject: sample.subject.clone(),
             start: first,
             end: last.max(first),
         });
@@ -637,17 +640,34 @@ impl SpottingScore {
 /// Matches spotted gestures to the truth: a spotted gesture matches a drawn one when
 /// their frame intervals overlap by at least half of the shorter one.
 pub fn score(truth: &[TruthGesture], spotted: &[SpottedGesture]) -> SpottingScore {
-    matched(truth, spotted).0
+    matched(truth, spotted).score
 }
 
-/// [`score`], and which spotted gestures were matched to a drawn one (those that were
-/// not are its insertions).
-pub fn matched(truth: &[TruthGesture], spotted: &[SpottedGesture]) -> (SpottingScore, Vec<bool>) {
+/// How a stream's spotted gestures matched its drawn ones.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Matching {
+    pub score: SpottingScore,
+    /// For each drawn gesture, the spotted gesture matched to it (none: deleted).
+    pub found: Vec<Option<usize>>,
+    /// For each spotted gesture, whether it matched a drawn one (if not, an insertion).
+    pub matched: Vec<bool>,
+}
+
+impl Matching {
+    /// Whether drawn gesture `i` was spotted with its own label.
+    pub fn correct(&self, truth: &[TruthGesture], spotted: &[SpottedGesture], i: usize) -> bool {
+        self.found[i].is_some_and(|g| spotted[g].label == truth[i].label)
+    }
+}
+
+/// [`score`], with what matched what.
+pub fn matched(truth: &[TruthGesture], spotted: &[SpottedGesture]) -> Matching {
     let mut used = vec![false; spotted.len()];
     let mut sc = SpottingScore {
         gestures: truth.len(),
         ..Default::default()
     };
+    let mut found_all = Vec::with_capacity(truth.len());
     for t in truth {
         let mut found = None;
         for (i, g) in spotted.iter().enumerate() {
@@ -676,10 +696,15 @@ pub fn matched(truth: &[TruthGesture], spotted: &[SpottedGesture]) -> (SpottingS
             }
             None => sc.deletions += 1,
         }
+        found_all.push(found);
     }
     sc.insertions = used.iter().filter(|u| !**u).count();
     sc.reliability = sc.correct as f64 / (sc.gestures + sc.insertions).max(1) as f64;
-    (sc, used)
+    Matching {
+        score: sc,
+        found: found_all,
+        matched: used,
+    }
 }
 
 /// Convenience for a trajectory of body-frame points.

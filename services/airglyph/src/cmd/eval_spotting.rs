@@ -7,7 +7,7 @@ use airglyph_gesture::data::{load_many, Sample};
 use airglyph_gesture::eval::{plot_timeline, Span};
 use airglyph_gesture::spot::Candidate;
 use airglyph_gesture::stream::{
-    build_stream, random_movement, score, SpottingScore, StreamConfig, SyntheticStream,
+    build_stream, matched, random_movement, SpottingScore, StreamConfig, SyntheticStream,
 };
 use airglyph_gesture::{Model, SpottedGesture, Spotter, SpotterConfig};
 use anyhow::bail;
@@ -16,6 +16,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde_json::json;
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 /// Spotting reliability on continuous streams of gestures and ordinary movement.
@@ -90,6 +91,21 @@ pub struct Args {
     #[arg(long, default_value_t = 30.0)]
     pub plot_seconds: f32,
 }
+
+/// How often the streams' symbols of one label were spotted with it.
+#[derive(Debug, Clone, Copy, Default, serde::Serialize)]
+struct LabelCount {
+    drawn: usize,
+    correct: usize,
+}
+
+impl LabelCount {
+    fn recall(&self) -> f64 {
+        self.correct as f64 / self.drawn.max(1) as f64
+    }
+}
+
+type ByLabel = BTreeMap<String, LabelCount>;
 
 fn run_stream(
     model: &Model,
@@ -250,7 +266,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             )
         })
         .collect();
-    let scores: Vec<anyhow::Result<(SpottingScore, usize, Vec<String>)>> = chunks
+    type StreamResult = (SpottingScore, ByLabel, usize, Vec<String>);
+    let scores: Vec<anyhow::Result<StreamResult>> = chunks
         .par_iter()
         .map(|(index, seed, c)| {
             let mut r = ChaCha8Rng::seed_from_u64(*seed);
@@ -268,15 +285,28 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             if let Some(path) = args.plot.as_ref().filter(|_| *index == args.plot_stream) {
                 plot(path, &s, &spotted, &cfg, args.plot_from, args.plot_seconds)?;
             }
-            Ok((score(&s.truth, &spotted), s.points.len(), dumped))
+            let m = matched(&s.truth, &spotted);
+            let mut by_label = ByLabel::new();
+            for (i, t) in s.truth.iter().enumerate() {
+                let e = by_label.entry(t.label.clone()).or_default();
+                e.drawn += 1;
+                e.correct += usize::from(m.correct(&s.truth, &spotted, i));
+            }
+            Ok((m.score, by_label, s.points.len(), dumped))
         })
         .collect();
     let mut total = SpottingScore::default();
+    let mut by_label = ByLabel::new();
     let mut frames = 0;
     let mut dump = Vec::new();
     for s in scores {
-        let (s, f, d) = s?;
+        let (s, b, f, d) = s?;
         total.add(&s);
+        for (l, n) in b {
+            let e = by_label.entry(l).or_default();
+            e.drawn += n.drawn;
+            e.correct += n.correct;
+        }
         frames += f;
         dump.extend(d);
     }
@@ -289,9 +319,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let alarms = run_stream(&model, &scfg, &rm, &cfg)?;
     let false_alarms = alarms.len();
     // Which symbols ordinary movement passes for: the vocabulary's weak spots.
-    let mut by_label = std::collections::BTreeMap::<&str, usize>::new();
+    let mut alarms_by_label = BTreeMap::<&str, usize>::new();
     for g in &alarms {
-        *by_label.entry(g.label.as_str()).or_default() += 1;
+        *alarms_by_label.entry(g.label.as_str()).or_default() += 1;
     }
     if args.json {
         println!(
@@ -303,6 +333,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 "deletions": total.deletions,
                 "insertions": total.insertions,
                 "reliability": total.reliability,
+                "by_label": by_label,
             })
         );
         println!(
@@ -310,7 +341,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             json!({
                 "random_movement_seconds": args.random_seconds,
                 "insertions": false_alarms,
-                "insertions_by_label": by_label,
+                "insertions_by_label": alarms_by_label,
             })
         );
     } else {
@@ -324,7 +355,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             total.insertions,
             100.0 * total.reliability
         );
-        let labels: Vec<String> = by_label
+        let mut hardest: Vec<(&String, &LabelCount)> = by_label.iter().collect();
+        hardest.sort_by(|a, b| a.1.recall().total_cmp(&b.1.recall()));
+        let hardest: Vec<String> = hardest
+            .iter()
+            .take(3)
+            .map(|(l, n)| format!("\"{l}\" {} of {}", n.correct, n.drawn))
+            .collect();
+        println!("found least often: {}", hardest.join(", "));
+        let labels: Vec<String> = alarms_by_label
             .iter()
             .map(|(l, n)| format!("{n} × \"{l}\""))
             .collect();
@@ -355,7 +394,7 @@ fn dump_lines(
     let truth = s.truth.iter().map(|t| {
         let seg = &filtered[t.start as usize..=t.end as usize];
         let alone = model.classify(&airglyph_gesture::stream::trajectory(seg));
-        json!({"stream": stream, "kind": "drawn", "label": t.label, "start": t.start,
+        json!({"stream": stream, "kind": "drawn", "label": t.label, "subject": t.subject, "start": t.start,
                "end": t.end, "alone": model.labels[alone.class], "alone_score": alone.score})
     });
     let cands = cands.iter().map(|c| {

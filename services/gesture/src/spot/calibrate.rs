@@ -78,12 +78,12 @@ impl Streams {
                 let mut spotter = Spotter::new(model.clone(), SpotterConfig::default())
                     .expect("calibrated models have a spotting part");
                 let spotted = s.spot(&mut spotter, &self.cfg);
-                let (score, used) = matched(&s.truth, &spotted);
+                let m = matched(&s.truth, &spotted);
                 let mut inserted = BTreeMap::new();
-                for (g, _) in spotted.iter().zip(used).filter(|(_, used)| !used) {
+                for (g, _) in spotted.iter().zip(&m.matched).filter(|(_, used)| !**used) {
                     *inserted.entry(g.label.clone()).or_insert(0) += 1;
                 }
-                (score, inserted)
+                (m.score, inserted)
             })
             .reduce(
                 || (SpottingScore::default(), BTreeMap::new()),

@@ -1,0 +1,167 @@
+//! The offline gesture commands on trajectories of the synthetic person's handwriting,
+//! with the shipped model: `airglyph eval-gestures --json --plots` and
+//! `airglyph eval-spotting --json` (and its summary in words).
+
+use airglyph_synth::glyphs::template;
+use airglyph_system_tests::{fail, succeed, Isolated};
+use std::path::{Path, PathBuf};
+
+fn shipped_model() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../models/unipen-36.json")
+}
+
+/// Trajectory JSONL: each label's built-in glyph `copies` times, each copy a little
+/// slanted (another "writer"), so the samples are not all one trajectory.
+fn write_glyphs(path: &Path, labels: &str, copies: usize) {
+    let mut lines = Vec::new();
+    for c in labels.chars() {
+        let glyph = template(c).expect("a built-in glyph");
+        for k in 0..copies {
+            let slant = 0.05 * k as f32;
+            let strokes: Vec<Vec<[f32; 2]>> = glyph
+                .strokes
+                .iter()
+                .map(|s| s.iter().map(|p| [p.x + slant * p.y, p.y]).collect())
+                .collect();
+            lines.push(
+                serde_json::json!({"label": c.to_string(), "subject": format!("w{k}"),
+                                   "strokes": strokes})
+                .to_string(),
+            );
+        }
+    }
+    std::fs::write(path, lines.join("\n") + "\n").unwrap();
+}
+
+fn json_lines(stdout: &[u8]) -> Vec<serde_json::Value> {
+    String::from_utf8_lossy(stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{e}: {l}")))
+        .collect()
+}
+
+#[test]
+fn eval_gestures_scores_every_sample_and_draws_its_confusion_matrix() {
+    let p = Isolated::new();
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("glyphs.jsonl");
+    write_glyphs(&data, "0123456789", 2);
+    let plots = tmp.path().join("plots");
+    let out = succeed(
+        p.command("airglyph")
+            .args(["eval-gestures", "--json", "--model"])
+            .arg(shipped_model())
+            .arg("--data")
+            .arg(&data)
+            .arg("--plots")
+            .arg(&plots),
+    );
+    let lines = json_lines(&out.stdout);
+    let r = &lines[0];
+    assert_eq!(r["classifier"], "mlp", "{r}");
+    assert_eq!(r["samples"], 20, "{r}");
+    // The synthetic person's own glyphs: the shipped model reads nearly all of them.
+    let acc = r["accuracy"].as_f64().unwrap();
+    assert!((0.8..=1.0).contains(&acc), "{r}");
+    // Every label of the model, a recall for those drawn (null for the others).
+    let recall = r["per_class_recall"].as_object().unwrap();
+    assert_eq!(recall.len(), 36, "{r}");
+    for (label, v) in recall {
+        let drawn = label.chars().all(|c| c.is_ascii_digit());
+        assert_eq!(v.is_f64(), drawn, "{label}: {v}");
+    }
+    let pngs: Vec<_> = std::fs::read_dir(&plots)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.path().extension().is_some_and(|x| x == "png"))
+        .collect();
+    assert!(
+        !pngs.is_empty(),
+        "no confusion matrix in {}",
+        plots.display()
+    );
+}
+
+#[test]
+fn eval_spotting_accounts_for_every_drawn_symbol_by_label() {
+    let p = Isolated::new();
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("glyphs.jsonl");
+    write_glyphs(&data, "0123456789", 2);
+    let run = |json: bool| {
+        let mut cmd = p.command("airglyph");
+        cmd.args(["eval-spotting", "--model"])
+            .arg(shipped_model())
+            .arg("--data")
+            .arg(&data)
+            .args(["--gestures", "12", "--per-stream", "6", "--seed", "3"])
+            .args(["--random-seconds", "20"]);
+        if json {
+            cmd.arg("--json");
+        }
+        succeed(&mut cmd)
+    };
+    let lines = json_lines(&run(true).stdout);
+    assert_eq!(lines.len(), 2, "{lines:?}");
+    let s = &lines[0];
+    let n = |k: &str| s[k].as_u64().unwrap_or_else(|| panic!("no {k} in {s}"));
+    assert_eq!(n("gestures"), 12, "{s}");
+    assert_eq!(
+        n("correct") + n("substitutions") + n("deletions"),
+        12,
+        "{s}"
+    );
+    let reliability = n("correct") as f64 / (n("gestures") + n("insertions")) as f64;
+    assert!((s["reliability"].as_f64().unwrap() - reliability).abs() < 1e-9);
+    // Every drawn symbol is counted under its own label, found or not.
+    let by_label = s["by_label"].as_object().unwrap();
+    let sum = |k: &str| -> u64 { by_label.values().map(|v| v[k].as_u64().unwrap()).sum() };
+    assert_eq!(sum("drawn"), 12, "{s}");
+    assert_eq!(sum("correct"), n("correct"), "{s}");
+    assert!(by_label
+        .keys()
+        .all(|l| l.len() == 1 && l.chars().all(|c| c.is_ascii_digit())));
+    // The shipped model finds most of its own glyphs in a stream.
+    assert!(n("correct") >= 8, "{s}");
+
+    let alarms = &lines[1];
+    assert_eq!(alarms["random_movement_seconds"], 20.0, "{alarms}");
+    let named: u64 = alarms["insertions_by_label"]
+        .as_object()
+        .unwrap()
+        .values()
+        .map(|v| v.as_u64().unwrap())
+        .sum();
+    assert_eq!(named, alarms["insertions"].as_u64().unwrap(), "{alarms}");
+
+    // In words: the same count, and the symbols found least often.
+    let text = String::from_utf8(run(false).stdout).unwrap();
+    assert!(
+        text.contains(&format!("{} correct", n("correct"))),
+        "{text}"
+    );
+    assert!(text.contains("found least often: \""), "{text}");
+}
+
+#[test]
+fn eval_spotting_refuses_data_without_a_label_the_model_knows() {
+    let p = Isolated::new();
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("lowercase.jsonl");
+    std::fs::write(
+        &data,
+        r#"{"label":"a","subject":"w","strokes":[[[0,0],[1,1],[2,0]]]}"#.to_string() + "\n",
+    )
+    .unwrap();
+    let err = fail(
+        p.command("airglyph")
+            .args(["eval-spotting", "--model"])
+            .arg(shipped_model())
+            .arg("--data")
+            .arg(&data),
+    );
+    assert!(
+        err.contains("no sample has a label the model knows") && err.contains("lowercase.jsonl"),
+        "{err}"
+    );
+}
