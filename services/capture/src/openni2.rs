@@ -322,12 +322,25 @@ impl Stream {
 impl Drop for Stream {
     fn drop(&mut self) {
         // SAFETY: created by oniDeviceCreateStream, destroyed once.
-        unsafe {
-            oniStreamStop(self.0);
-            oniStreamDestroy(self.0);
-        }
+        unsafe { oniStreamStop(self.0) };
+        // Two of OpenNI2's own drivers free a stream while a thread of theirs may still
+        // use it, unless it has first seen the stream stopped: the Dummy device's frame
+        // thread (stopping it only clears a flag, read after a 33 ms sleep), and a
+        // file's player thread (libOniFile's PlayerDevice::MainLoop walks its stream
+        // list without the lock the removal takes, in a busy loop at the file's end;
+        // stopped, the stream sends it to sleep 10 ms between walks). Destroying at
+        // once crashed the process (SIGSEGV in those threads) about one looping reopen
+        // in a hundred, and now and then a test that opened the Dummy device after
+        // another had closed it.
+        std::thread::sleep(Duration::from_millis(STREAM_SETTLE_MS));
+        // SAFETY: as above.
+        unsafe { oniStreamDestroy(self.0) };
     }
 }
+
+/// How long a stopped stream is left before it is destroyed: longer than any sleep of
+/// the driver threads that may still look at it (33 ms for the Dummy device).
+const STREAM_SETTLE_MS: u64 = 50;
 
 struct Recorder(OniRecorderHandle);
 
@@ -418,9 +431,8 @@ fn prepare_playback(uri: &str) -> Result<Playback, SourceError> {
 /// Field order is drop order: the recorder goes before the stream, the stream before
 /// the device.
 pub struct OpenNi2Source {
-    _recorder: Option<Recorder>,
-    stream: Stream,
-    _device: Device,
+    /// None only between closing the file and opening it again ([`Self::reopen`]).
+    handles: Option<Handles>,
     playback: Option<Playback>,
     uri: Option<String>,
     cam: CameraOptions,
@@ -432,6 +444,14 @@ pub struct OpenNi2Source {
     delivered: u64,
     /// (CLOCK_MONOTONIC, recorded µs) of the first frame of a real-time pass.
     epoch: Option<(u64, u64)>,
+}
+
+/// What OpenNI2 holds open for a source, in the order it must be released (the
+/// recorder before its stream, the stream before its device).
+struct Handles {
+    _recorder: Option<Recorder>,
+    stream: Stream,
+    _device: Device,
 }
 
 impl OpenNi2Source {
@@ -587,9 +607,11 @@ impl OpenNi2Source {
             _ => {}
         }
         let mut me = Self {
-            _recorder: recorder,
-            stream,
-            _device: device,
+            handles: Some(Handles {
+                _recorder: recorder,
+                stream,
+                _device: device,
+            }),
             playback,
             uri: uri.map(str::to_owned),
             cam: cam.clone(),
@@ -609,7 +631,7 @@ impl OpenNi2Source {
             }
             let mut ptr: *mut OniFrame = std::ptr::null_mut();
             // SAFETY: a frame is ready; released at once.
-            let rc = unsafe { oniStreamReadFrame(me.stream.0, &mut ptr) };
+            let rc = unsafe { oniStreamReadFrame(me.stream()?.0, &mut ptr) };
             check(rc, "skipping to the start frame")?;
             if !ptr.is_null() {
                 unsafe { oniFrameRelease(ptr) };
@@ -626,19 +648,28 @@ impl OpenNi2Source {
 
     /// Starts the file over: OpenNI2's seek hangs in this build, so reopen.
     fn reopen(&mut self) -> Result<(), SourceError> {
-        let uri = self.uri.clone();
-        // Drop the old stream and device before opening the file again.
-        let fresh = {
-            let cam = self.cam.clone();
-            let opts = self.opts.clone();
-            Self::open_inner(uri.as_deref(), &cam, &opts, None)?
-        };
-        *self = fresh;
+        // Close the file's player before opening the file again, as one would expect:
+        // with the old one still open, reopening crashed inside libOniFile more often
+        // (see `Drop for Stream`).
+        self.handles = None;
+        *self = Self::open_inner(
+            self.uri.clone().as_deref(),
+            &self.cam.clone(),
+            &self.opts.clone(),
+            None,
+        )?;
         Ok(())
     }
 
+    fn stream(&self) -> Result<&Stream, SourceError> {
+        self.handles
+            .as_ref()
+            .map(|h| &h.stream)
+            .ok_or_else(|| fatal("OpenNI2: the recording could not be opened again"))
+    }
+
     fn wait(&self, timeout_ms: c_int) -> Result<bool, SourceError> {
-        let mut handles = [self.stream.0];
+        let mut handles = [self.stream()?.0];
         let mut ready: c_int = -1;
         // SAFETY: one valid stream handle.
         let rc = unsafe { oniWaitForAnyStream(handles.as_mut_ptr(), 1, &mut ready, timeout_ms) };
@@ -869,7 +900,7 @@ impl DepthSource for OpenNi2Source {
         }
         let mut ptr: *mut OniFrame = std::ptr::null_mut();
         // SAFETY: the stream has a frame ready; we release it below.
-        let rc = unsafe { oniStreamReadFrame(self.stream.0, &mut ptr) };
+        let rc = unsafe { oniStreamReadFrame(self.stream()?.0, &mut ptr) };
         if rc != ONI_STATUS_OK || ptr.is_null() {
             return Err(SourceError::Skipped(format!(
                 "OpenNI2: reading a frame: {}",
