@@ -652,12 +652,7 @@ impl OpenNi2Source {
         // with the old one still open, reopening crashed inside libOniFile more often
         // (see `Drop for Stream`).
         self.handles = None;
-        *self = Self::open_inner(
-            self.uri.clone().as_deref(),
-            &self.cam.clone(),
-            &self.opts.clone(),
-            None,
-        )?;
+        *self = Self::open_inner(self.uri.as_deref(), &self.cam, &self.opts, None)?;
         Ok(())
     }
 

@@ -647,17 +647,10 @@ pub fn score(truth: &[TruthGesture], spotted: &[SpottedGesture]) -> SpottingScor
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Matching {
     pub score: SpottingScore,
-    /// For each drawn gesture, the spotted gesture matched to it (none: deleted).
-    pub found: Vec<Option<usize>>,
+    /// For each drawn gesture, whether it was spotted with its own label.
+    pub correct: Vec<bool>,
     /// For each spotted gesture, whether it matched a drawn one (if not, an insertion).
     pub matched: Vec<bool>,
-}
-
-impl Matching {
-    /// Whether drawn gesture `i` was spotted with its own label.
-    pub fn correct(&self, truth: &[TruthGesture], spotted: &[SpottedGesture], i: usize) -> bool {
-        self.found[i].is_some_and(|g| spotted[g].label == truth[i].label)
-    }
 }
 
 /// [`score`], with what matched what.
@@ -667,7 +660,7 @@ pub fn matched(truth: &[TruthGesture], spotted: &[SpottedGesture]) -> Matching {
         gestures: truth.len(),
         ..Default::default()
     };
-    let mut found_all = Vec::with_capacity(truth.len());
+    let mut correct = Vec::with_capacity(truth.len());
     for t in truth {
         let mut found = None;
         for (i, g) in spotted.iter().enumerate() {
@@ -685,10 +678,11 @@ pub fn matched(truth: &[TruthGesture], spotted: &[SpottedGesture]) -> Matching {
                 break;
             }
         }
+        let right = found.is_some_and(|i| spotted[i].label == t.label);
         match found {
             Some(i) => {
                 used[i] = true;
-                if spotted[i].label == t.label {
+                if right {
                     sc.correct += 1;
                 } else {
                     sc.substitutions += 1;
@@ -696,13 +690,13 @@ pub fn matched(truth: &[TruthGesture], spotted: &[SpottedGesture]) -> Matching {
             }
             None => sc.deletions += 1,
         }
-        found_all.push(found);
+        correct.push(right);
     }
     sc.insertions = used.iter().filter(|u| !**u).count();
     sc.reliability = sc.correct as f64 / (sc.gestures + sc.insertions).max(1) as f64;
     Matching {
         score: sc,
-        found: found_all,
+        correct,
         matched: used,
     }
 }

@@ -225,9 +225,10 @@ mod tests {
         let (hip, knee) = (skel[Joint::LeftHip], skel[Joint::LeftKnee]);
         let axis_there = hip + (knee - hip) * ((hand.y - hip.y) / (knee.y - hip.y));
         let out = (hand - axis_there).normalize();
+        let placed = place(&t, &posed);
         let thigh_surface = (0..200)
             .map(|i| axis_there + out * (i as f32 * 0.001))
-            .find(|p| !nearest_is(&place(&t, &posed), p, Segment::LeftThigh))
+            .find(|p| !nearest_is(&placed, p, Segment::LeftThigh))
             .expect("the thigh's surface lies between its axis and the hand");
         let beside = disc(thigh_surface - out * 0.01, 0.015);
         assert!(beside

@@ -105,8 +105,6 @@ impl LabelCount {
     }
 }
 
-type ByLabel = BTreeMap<String, LabelCount>;
-
 fn run_stream(
     model: &Model,
     scfg: &SpotterConfig,
@@ -266,7 +264,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             )
         })
         .collect();
-    type StreamResult = (SpottingScore, ByLabel, usize, Vec<String>);
+    // Per stream: its score, each drawn symbol's label and whether it was spotted
+    // right, its length in frames, its dump.
+    type StreamResult = (SpottingScore, Vec<(String, bool)>, usize, Vec<String>);
     let scores: Vec<anyhow::Result<StreamResult>> = chunks
         .par_iter()
         .map(|(index, seed, c)| {
@@ -286,26 +286,21 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 plot(path, &s, &spotted, &cfg, args.plot_from, args.plot_seconds)?;
             }
             let m = matched(&s.truth, &spotted);
-            let mut by_label = ByLabel::new();
-            for (i, t) in s.truth.iter().enumerate() {
-                let e = by_label.entry(t.label.clone()).or_default();
-                e.drawn += 1;
-                e.correct += usize::from(m.correct(&s.truth, &spotted, i));
-            }
-            Ok((m.score, by_label, s.points.len(), dumped))
+            let drawn = s.truth.iter().map(|t| t.label.clone()).zip(m.correct);
+            Ok((m.score, drawn.collect(), s.points.len(), dumped))
         })
         .collect();
     let mut total = SpottingScore::default();
-    let mut by_label = ByLabel::new();
+    let mut by_label = BTreeMap::<String, LabelCount>::new();
     let mut frames = 0;
     let mut dump = Vec::new();
     for s in scores {
-        let (s, b, f, d) = s?;
+        let (s, drawn, f, d) = s?;
         total.add(&s);
-        for (l, n) in b {
-            let e = by_label.entry(l).or_default();
-            e.drawn += n.drawn;
-            e.correct += n.correct;
+        for (label, right) in drawn {
+            let e = by_label.entry(label).or_default();
+            e.drawn += 1;
+            e.correct += usize::from(right);
         }
         frames += f;
         dump.extend(d);

@@ -100,9 +100,9 @@ impl Streams {
 
 /// Bars for the labels ordinary movement passes for, calibrated on streams of
 /// `samples` (drawn from `seed`) spotted by `model` (which must have a verifier; its
-/// own bars are ignored); `progress` counts spotter runs over the streams. A label's bar is raised through [`BAR_STEPS`] and kept
-/// where the streams' reliability is highest, if higher than without it; labels are
-/// taken from the most inserted down.
+/// own bars are ignored); `progress` counts spotter runs over the streams. A label's
+/// bar is raised through [`BAR_STEPS`] and kept where the streams' reliability is
+/// highest, if higher than without it; labels are taken from the most inserted down.
 pub fn calibrate_label_bars(
     model: &Model,
     samples: &[Sample],
