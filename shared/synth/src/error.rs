@@ -14,8 +14,9 @@ pub enum SynthError {
         path: PathBuf,
         source: std::io::Error,
     },
-    /// A file was read but its content is wrong; `line` is 1-based, 0 when unknown.
-    #[error("{}:{line}: {reason}", path.display())]
+    /// A file was read but its content is wrong; `line` is 1-based, 0 when the fault is
+    /// no one line's (then the message names none).
+    #[error("{}{}: {reason}", path.display(), at_line(*line))]
     Parse {
         path: PathBuf,
         line: usize,
@@ -32,8 +33,15 @@ pub enum SynthError {
     Recording(#[from] airglyph_core::recording::RecordingError),
 }
 
+fn at_line(line: usize) -> String {
+    if line == 0 {
+        String::new()
+    } else {
+        format!(":{line}")
+    }
+}
+
 impl SynthError {
-    #[allow(dead_code)]
     pub(crate) fn parse(path: impl Into<PathBuf>, line: usize, reason: impl Into<String>) -> Self {
         Self::Parse {
             path: path.into(),

@@ -31,7 +31,7 @@
 //! - [`Pose`] on the canonical skeleton ([`Bone`], 19 bones, T-pose reference): what
 //!   every motion source produces and every body consumes.
 //! - [`MotionSpec`]: scripted poses ([`ScriptedPose`], the hard cases of the seed
-//!   paper), BVH clips (three naming conventions, rest-pose offsets handled), and
+//!   paper), BVH clips (any naming convention, rest-pose offsets handled), and
 //!   air-drawing of symbols ([`DrawSpec`]) with ground-truth gesture boundaries.
 //! - [`raster::Raster`]: the z-buffer rasterizer; [`sensor`]: the Kinect-like noise.
 //! - [`write_recording`]: a whole recording on disk (airglyph-core's format, plus

@@ -1,17 +1,9 @@
-//! BVH motion capture: reading, naming conventions, resampling and retargeting onto the
-//! canonical skeleton.
+//! BVH motion capture: reading, resampling and retargeting onto the canonical skeleton.
 //!
-//! Three naming conventions are understood (detected from the joint names):
-//! - MotionBuilder-style, as in the CMU conversions: `Hips, LowerBack, Spine, Spine1,
-//!   Neck, Neck1, Head, LeftShoulder (collar), LeftArm, LeftForeArm, LeftHand,
-//!   LeftUpLeg, LeftLeg, LeftFoot, LeftToeBase, LHipJoint, …`
-//! - CMU ASF-style: `Hips, Chest, Chest2, Neck, Head, LeftCollar, LeftShoulder (upper
-//!   arm), LeftElbow, LeftWrist, LeftHip, LeftKnee, LeftAnkle, …`
-//! - Ab-style: `Hips, Ab, Chest, Neck, Head, LeftCollar, LeftShoulder, LeftElbow,
-//!   LeftWrist, LeftHip, LeftKnee, LeftAnkle, …`
-//!
-//! Fingers, thumbs, toes and helper joints (`LHipJoint`, `Neck1`, …) are read and
-//! ignored; any other name is refused, naming the file and line.
+//! Any naming convention is understood ([`naming`]): limbs by the words in their names,
+//! the spine by where the arms branch off. Joints that drive no canonical bone
+//! (fingers, toes, helpers such as `LHipJoint`, `lowerneck`, `lhand`, anything unknown)
+//! stay in the chain: their rotations still move what hangs below them.
 //!
 //! Retargeting works on world rotations relative to each skeleton's rest pose: for a
 //! canonical bone driven by BVH joint `s`, `W = G_s(t) · A`, where `G_s(t)` is the
@@ -19,8 +11,11 @@
 //! direction of the bone to its direction in the clip's rest pose. So a clip whose rest
 //! pose is an A-pose, or whose legs are spread, still drives a T-posed rig right: every
 //! bone points where the clip's bone points. The clip is turned so that its first frame
-//! faces the camera, its root translation is scaled by the ratio of hip heights, and it
-//! is resampled to the scene's frame rate (spherical blends between frames).
+//! faces the camera, its root translation is scaled by the ratio of hip heights (of
+//! torso lengths, for a clip without legs), and it is resampled to the scene's frame
+//! rate (spherical blends between frames).
+
+mod naming;
 
 use crate::canon::{frame_to_frame, shortest_arc, Bone, Pose, TposeSkeleton};
 use crate::error::SynthError;
@@ -30,7 +25,9 @@ use std::path::{Path, PathBuf};
 /// One joint of a BVH hierarchy.
 #[derive(Debug, Clone, PartialEq)]
 pub struct BvhJoint {
+    /// As written after `ROOT`/`JOINT` (the rest of that line: names may hold spaces).
     pub name: String,
+    /// Always an earlier joint.
     pub parent: Option<usize>,
     pub offset: Vector3<f32>,
     /// Channel kinds in file order; `channel_start` indexes a frame's values.
@@ -42,6 +39,7 @@ pub struct BvhJoint {
     pub line: usize,
 }
 
+/// What one channel of a joint moves.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Channel {
     Xposition,
@@ -52,132 +50,17 @@ pub enum Channel {
     Zrotation,
 }
 
-/// The naming conventions understood.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Convention {
-    MotionBuilder,
-    CmuAsf,
-    Ab,
-}
-
-impl Convention {
-    pub fn name(self) -> &'static str {
-        match self {
-            Convention::MotionBuilder => "MotionBuilder-style (LeftUpLeg/LeftLeg/LeftFoot)",
-            Convention::CmuAsf => "CMU ASF-style (LeftHip/LeftKnee/LeftAnkle/Chest/LeftCollar)",
-            Convention::Ab => "Ab-style (Ab/Chest/LeftCollar/LeftElbow/LeftWrist)",
-        }
-    }
-
-    fn detect(names: &[&str]) -> Convention {
-        let has = |n: &str| names.iter().any(|x| x.eq_ignore_ascii_case(n));
-        if has("LeftUpLeg") || has("LeftForeArm") || has("LeftArm") {
-            Convention::MotionBuilder
-        } else if has("Ab") {
-            Convention::Ab
-        } else {
-            Convention::CmuAsf
-        }
-    }
-
-    /// The canonical bone a joint name drives, `Ok(None)` for a known joint that is
-    /// ignored, `Err(())` for an unknown name.
-    fn map(self, name: &str, has_chest2: bool) -> Result<Option<Bone>, ()> {
-        use Bone::*;
-        let lower = name.to_ascii_lowercase();
-        let common = |n: &str| -> Option<Bone> {
-            Some(match n {
-                "hips" | "hip" | "pelvis" | "root" => Hips,
-                "neck" => Neck,
-                "head" => Head,
-                _ => return None,
-            })
-        };
-        if let Some(b) = common(&lower) {
-            return Ok(Some(b));
-        }
-        let side = |n: &str| -> Option<(bool, String)> {
-            for (p, left) in [("left", true), ("right", false)] {
-                if let Some(rest) = n.strip_prefix(p) {
-                    return Some((left, rest.to_string()));
-                }
-            }
-            None
-        };
-        let pick = |left: bool, l: Bone| if left { l } else { l.mirror() };
-        let mapped = match self {
-            Convention::MotionBuilder => match lower.as_str() {
-                "lowerback" => Some(Spine),
-                "spine1" => Some(Chest),
-                _ => side(&lower).and_then(|(left, rest)| {
-                    Some(pick(
-                        left,
-                        match rest.as_str() {
-                            "shoulder" => LeftCollar,
-                            "arm" => LeftUpperArm,
-                            "forearm" => LeftForearm,
-                            "hand" => LeftHand,
-                            "upleg" => LeftThigh,
-                            "leg" => LeftShin,
-                            "foot" => LeftFoot,
-                            _ => return None,
-                        },
-                    ))
-                }),
-            },
-            Convention::CmuAsf | Convention::Ab => match lower.as_str() {
-                "ab" | "abdomen" => Some(Spine),
-                "chest" if self == Convention::CmuAsf && has_chest2 => Some(Spine),
-                "chest" => Some(Chest),
-                "chest2" => Some(Chest),
-                _ => side(&lower).and_then(|(left, rest)| {
-                    Some(pick(
-                        left,
-                        match rest.as_str() {
-                            "collar" => LeftCollar,
-                            "shoulder" => LeftUpperArm,
-                            "elbow" => LeftForearm,
-                            "wrist" | "hand" => LeftHand,
-                            "hip" => LeftThigh,
-                            "knee" => LeftShin,
-                            "ankle" | "foot" => LeftFoot,
-                            _ => return None,
-                        },
-                    ))
-                }),
-            },
-        };
-        if mapped.is_some() {
-            return Ok(mapped);
-        }
-        let ignorable = [
-            "finger", "thumb", "toe", "index", "middle", "ring", "pinky", "hipjoint", "end", "nub",
-            "site",
-        ];
-        let extra: &[&str] = match self {
-            Convention::MotionBuilder => &["spine", "spine2", "spine3", "neck1", "neck2"],
-            Convention::CmuAsf => &["chest3", "chest4", "neck1", "neck2"],
-            Convention::Ab => &["neck1", "neck2"],
-        };
-        if ignorable.iter().any(|k| lower.contains(k)) || extra.contains(&lower.as_str()) {
-            Ok(None)
-        } else {
-            Err(())
-        }
-    }
-}
-
 /// A parsed BVH clip.
 #[derive(Debug, Clone)]
 pub struct BvhClip {
     pub path: PathBuf,
     pub joints: Vec<BvhJoint>,
     pub frame_time: f32,
-    /// Channel values, one row a frame, `channels` wide.
-    pub frames: Vec<Vec<f32>>,
+    /// Channel values of every frame, one after the other, `channels` a frame.
+    values: Vec<f32>,
     pub channels: usize,
-    pub convention: Convention,
-    /// BVH joint index driving each canonical bone.
+    /// BVH joint index driving each canonical bone (`None`: it follows its parent;
+    /// the hips, both upper arms and both forearms are always driven).
     pub drives: [Option<usize>; Bone::COUNT],
 }
 
@@ -246,6 +129,18 @@ impl<'a> Tokens<'a> {
     fn peek(&self) -> Option<&'a str> {
         self.toks.get(self.pos).map(|t| t.1)
     }
+
+    /// The words left on the current word's line, joined by single spaces (a joint's
+    /// name: `Bip01 L Thigh`).
+    fn rest_of_line(&mut self, what: &str) -> Result<String, SynthError> {
+        let line = self.line();
+        let mut words = vec![self.next(what)?];
+        while let Some(&(_, w)) = self.toks.get(self.pos).filter(|t| t.0 == line) {
+            words.push(w);
+            self.pos += 1;
+        }
+        Ok(words.join(" "))
+    }
 }
 
 impl BvhClip {
@@ -270,14 +165,20 @@ impl BvhClip {
         t.expect("Frames:")?;
         let line = t.line();
         let n = t.number("the frame count")?;
-        if n < 1.0 || n.fract() != 0.0 || n > 10_000_000.0 {
+        if n < 1.0 || n.fract() != 0.0 {
             return Err(SynthError::parse(
                 path,
                 line,
                 format!("frame count {n} must be a positive integer"),
             ));
         }
-        let n = n as usize;
+        if channels == 0 {
+            return Err(SynthError::parse(
+                path,
+                line,
+                "no joint has a channel: the file holds no motion",
+            ));
+        }
         t.expect("Frame")?;
         t.expect("Time:")?;
         let line = t.line();
@@ -289,103 +190,53 @@ impl BvhClip {
                 format!("frame time {frame_time} s is not plausible"),
             ));
         }
-        let mut frames = Vec::with_capacity(n);
-        for f in 0..n {
-            let mut row = Vec::with_capacity(channels);
-            for _ in 0..channels {
-                row.push(t.number(&format!("a channel value of frame {}", f + 1))?);
-            }
-            frames.push(row);
-        }
         // Some exporters write one frame more than they announce: whole extra frames
-        // are ignored, anything else is an error.
+        // are ignored, a frame short is an error. The count is checked against the
+        // values there are before anything is allocated for it.
+        let left = t.toks.len() - t.pos;
+        let n = n as usize;
+        if n.saturating_mul(channels) > left {
+            let f = left / channels + 1;
+            t.pos = t.toks.len();
+            return Err(t.err(format!(
+                "unexpected end of file, expected a channel value of frame {f} (the header announced {n} frames of {channels} values)"
+            )));
+        }
+        let mut values = Vec::with_capacity(n * channels);
+        for f in 0..n {
+            for _ in 0..channels {
+                values.push(t.number(&format!("a channel value of frame {}", f + 1))?);
+            }
+        }
         let extra = t.toks.len() - t.pos;
-        if !extra.is_multiple_of(channels.max(1)) || (channels == 0 && extra > 0) {
+        if !extra.is_multiple_of(channels) {
             return Err(t.err(format!(
                 "{extra} values after the {n} frames the header announced ({channels} channels each)"
             )));
         }
         for k in 0..extra {
-            t.number(&format!(
-                "a channel value after frame {}",
-                n + k / channels.max(1)
-            ))?;
+            t.number(&format!("a channel value after frame {}", n + k / channels))?;
         }
-        let names: Vec<&str> = joints.iter().map(|j: &BvhJoint| j.name.as_str()).collect();
-        let convention = Convention::detect(&names);
-        let has_chest2 = names.iter().any(|n| n.eq_ignore_ascii_case("chest2"));
-        let mut drives = [None; Bone::COUNT];
-        for (i, j) in joints.iter().enumerate() {
-            match convention.map(&j.name, has_chest2) {
-                Ok(Some(b)) => {
-                    if drives[b.index()].is_some() {
-                        return Err(SynthError::parse(
-                            path,
-                            j.line,
-                            format!("joint {:?} drives the {} a second time", j.name, b.name()),
-                        ));
-                    }
-                    drives[b.index()] = Some(i);
-                }
-                Ok(None) => {}
-                Err(()) => {
-                    return Err(SynthError::parse(
-                        path,
-                        j.line,
-                        format!(
-                            "unknown joint {:?} for the {} naming convention; rename it, or use MotionBuilder-style, CMU ASF-style or Ab-style names",
-                            j.name,
-                            convention.name()
-                        ),
-                    ))
-                }
-            }
-        }
-        use Bone::*;
-        for b in [
-            Hips,
-            LeftUpperArm,
-            LeftForearm,
-            RightUpperArm,
-            RightForearm,
-            LeftThigh,
-            LeftShin,
-            RightThigh,
-            RightShin,
-        ] {
-            if drives[b.index()].is_none() {
-                return Err(SynthError::parse(
-                    path,
-                    0,
-                    format!(
-                        "no joint drives the {} (naming convention: {})",
-                        b.name(),
-                        convention.name()
-                    ),
-                ));
-            }
-        }
-        if drives[Hips.index()] != Some(0) {
-            return Err(SynthError::parse(
-                path,
-                joints[0].line,
-                "the ROOT must be the hips",
-            ));
-        }
+        let drives =
+            naming::drives(&joints).map_err(|e| SynthError::parse(path, e.line, e.reason))?;
         Ok(Self {
             path: path.to_owned(),
             joints,
             frame_time,
-            frames,
+            values,
             channels,
-            convention,
             drives,
         })
     }
 
+    /// Frames in the clip.
+    pub fn frame_count(&self) -> usize {
+        self.values.len() / self.channels
+    }
+
     /// Clip length in seconds.
     pub fn duration(&self) -> f32 {
-        (self.frames.len().saturating_sub(1)) as f32 * self.frame_time
+        (self.frame_count().saturating_sub(1)) as f32 * self.frame_time
     }
 
     /// World rotations and positions of every joint in frame `f` (None: rest pose).
@@ -396,7 +247,7 @@ impl BvhClip {
             let mut local = UnitQuaternion::identity();
             let mut trans = Vector3::zeros();
             if let Some(f) = f {
-                let row = &self.frames[f];
+                let row = &self.values[f * self.channels..(f + 1) * self.channels];
                 for (k, c) in j.channels.iter().enumerate() {
                     let v = row[j.channel_start + k];
                     let axis = match c {
@@ -477,49 +328,79 @@ impl BvhClip {
     pub fn canonical_frames(&self, sk: &TposeSkeleton) -> Vec<Pose> {
         let (_, rest_pos) = self.forward(None);
         let dirs = self.rest_dirs();
-        // The clip's axes: up from hips to head (or chest), left from right to left hip.
-        let hips = rest_pos[0];
+        let at = |b: Bone| self.drives[b.index()];
+        let hips_joint = at(Bone::Hips).expect("the hips are always driven");
+        // The clip's axes: up from hips to head (or chest), left from the right hip (or
+        // upper arm, in a clip without legs) to the left one.
+        let hips = rest_pos[hips_joint];
         let top = [Bone::Head, Bone::Neck, Bone::Chest, Bone::Spine]
-            .iter()
-            .find_map(|b| self.drives[b.index()])
-            .map(|i| rest_pos[i])
-            .unwrap_or(hips + Vector3::y());
-        let lt = rest_pos[self.drives[Bone::LeftThigh.index()].unwrap_or(0)];
-        let rt = rest_pos[self.drives[Bone::RightThigh.index()].unwrap_or(0)];
-        let up = top - hips;
-        let left = lt - rt;
+            .into_iter()
+            .find(|&b| at(b).is_some());
+        let legs = match (at(Bone::LeftThigh), at(Bone::RightThigh)) {
+            (Some(l), Some(r)) => Some((l, r)),
+            _ => None,
+        };
+        let (l, r) = legs.unwrap_or_else(|| {
+            (
+                at(Bone::LeftUpperArm).expect("arms are always driven"),
+                at(Bone::RightUpperArm).expect("arms are always driven"),
+            )
+        });
+        let up = top
+            .and_then(at)
+            .map_or(Vector3::y(), |i| rest_pos[i] - hips);
+        let left = rest_pos[l] - rest_pos[r];
         let q0 = if up.norm() > 1e-6 && left.norm() > 1e-6 {
             frame_to_frame(&up, &left, &Vector3::y(), &Vector3::x())
         } else {
             UnitQuaternion::identity()
         };
         let q0i = q0.inverse();
-        // Standing hip height of the clip's skeleton: rest hips above its lowest point.
-        let (mut lo, mut hip_y) = (f32::INFINITY, 0.0);
-        for (i, j) in self.joints.iter().enumerate() {
-            let p = q0 * (rest_pos[i] - hips);
-            lo = lo.min(p.y);
-            for e in &j.end_sites {
-                lo = lo.min((q0 * (rest_pos[i] - hips + e)).y);
-            }
-            if i == 0 {
-                hip_y = p.y;
-            }
-        }
-        let src_h = (hip_y - lo).max(1e-6);
-        let scale = sk.head(Bone::Hips).y / src_h;
-        // The clip's floor: the lowest point it ever reaches (sampled).
-        let stride = (self.frames.len() / 200).max(1);
-        let mut floor = f32::INFINITY;
-        for f in (0..self.frames.len()).step_by(stride) {
-            let (rot, pos) = self.forward(Some(f));
+        let frames = self.frame_count();
+        let (scale, floor) = if legs.is_some() {
+            // Standing hip height of the clip's skeleton: rest hips above its lowest point.
+            let (mut lo, mut hip_y) = (f32::INFINITY, 0.0);
             for (i, j) in self.joints.iter().enumerate() {
-                floor = floor.min((q0 * pos[i]).y);
+                let p = q0 * (rest_pos[i] - hips);
+                lo = lo.min(p.y);
                 for e in &j.end_sites {
-                    floor = floor.min((q0 * (pos[i] + rot[i] * e)).y);
+                    lo = lo.min((q0 * (rest_pos[i] - hips + e)).y);
+                }
+                if i == hips_joint {
+                    hip_y = p.y;
                 }
             }
-        }
+            let src_h = (hip_y - lo).max(1e-6);
+            let scale = sk.head(Bone::Hips).y / src_h;
+            // The clip's floor: the lowest point it ever reaches (sampled).
+            let stride = (frames / 200).max(1);
+            let mut floor = f32::INFINITY;
+            for f in (0..frames).step_by(stride) {
+                let (rot, pos) = self.forward(Some(f));
+                for (i, j) in self.joints.iter().enumerate() {
+                    floor = floor.min((q0 * pos[i]).y);
+                    for e in &j.end_sites {
+                        floor = floor.min((q0 * (pos[i] + rot[i] * e)).y);
+                    }
+                }
+            }
+            (scale, floor)
+        } else {
+            // No legs to stand on: scaled by the torso's length, the hips where the
+            // body's stand in the first frame.
+            let src = top
+                .and_then(at)
+                .map_or(0.0, |i| (rest_pos[i] - hips).norm());
+            let dst = top.map_or(0.0, |b| (sk.head(b) - sk.head(Bone::Hips)).norm());
+            let scale = if src > 1e-6 && dst > 1e-6 {
+                dst / src
+            } else {
+                1.0
+            };
+            let (_, pos) = self.forward(Some(0));
+            let floor = (q0 * pos[hips_joint]).y - sk.head(Bone::Hips).y / scale;
+            (scale, floor)
+        };
         let align: Vec<UnitQuaternion<f32>> = Bone::ALL
             .iter()
             .map(|b| match dirs[b.index()] {
@@ -527,8 +408,8 @@ impl BvhClip {
                 None => UnitQuaternion::identity(),
             })
             .collect();
-        let mut out = Vec::with_capacity(self.frames.len());
-        for f in 0..self.frames.len() {
+        let mut out = Vec::with_capacity(frames);
+        for f in 0..frames {
             let (rot, pos) = self.forward(Some(f));
             let mut p = Pose::tpose(Point3::origin());
             for b in Bone::ALL {
@@ -541,7 +422,7 @@ impl BvhClip {
                 };
                 p.set(b, w);
             }
-            let r = q0 * pos[0];
+            let r = q0 * pos[hips_joint];
             p.root = Point3::new(r.x * scale, (r.y - floor) * scale, r.z * scale);
             out.push(p);
         }
@@ -581,7 +462,12 @@ fn parse_joint(
     channels: &mut usize,
 ) -> Result<(), SynthError> {
     let line = t.line();
-    let name = t.next("a joint name")?.to_string();
+    let mut name = t.rest_of_line("a joint name")?;
+    // `JOINT Name {` on one line.
+    if let Some(n) = name.strip_suffix(" {") {
+        name = n.to_string();
+        t.pos -= 1;
+    }
     if name == "{" {
         return Err(SynthError::parse(t.path, line, "joint without a name"));
     }
