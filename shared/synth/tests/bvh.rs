@@ -623,7 +623,10 @@ fn names_with_spaces_and_braces_on_the_joint_line_are_read() {
     );
     // `JOINT Bip01 Neck {` on one line.
     let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
-    let k = lines.iter().position(|l| l.ends_with("JOINT Bip01 Neck")).unwrap();
+    let k = lines
+        .iter()
+        .position(|l| l.ends_with("JOINT Bip01 Neck"))
+        .unwrap();
     lines[k].push_str(" {");
     lines.remove(k + 1);
     let fixed = lines.join("\n");
