@@ -296,6 +296,7 @@ impl PoseEstimator {
             skeleton: Skeleton {
                 joints: [Point3::origin(); Joint::COUNT],
                 confidence: [0.0; Joint::COUNT],
+                visible: [false; Joint::COUNT],
             },
         };
         let estimated = self.estimate_inner(depth);

@@ -4,7 +4,9 @@
 //! DIR/recording.toml     format version, size, fps, intrinsics, depth unit, source
 //! DIR/depth/000000.png   16-bit grayscale PNG, millimetres, 0 = no data
 //! DIR/frames.csv         index,capture_time_ns
-//! DIR/joints.csv         index, then x,y,z of the 16 joints (metres, camera frame); optional
+//! DIR/joints.csv         index, then x,y,z of the 16 joints (metres, camera frame), then
+//!                        whether each is in the camera's view (1/0; recordings written
+//!                        before 2026-12-04 lack these columns: all in view); optional
 //! ```
 //!
 //! Every error names the file, and the frame or line where there is one.
@@ -359,34 +361,44 @@ fn joints_header() -> String {
     h
 }
 
+/// The header with the visibility columns, which recordings have had since 2026-12-04.
+fn joints_header_with_visibility() -> String {
+    let mut h = joints_header();
+    for j in Joint::ALL {
+        h.push_str(&format!(",{}_visible", j.name()));
+    }
+    h
+}
+
 fn read_joints_csv(path: &Path) -> Result<Vec<Skeleton>, RecordingError> {
     let bad = |line, reason: String| RecordingError::Csv {
         path: path.to_owned(),
         line,
         reason,
     };
-    let header = joints_header();
+    let (plain, with_visibility) = (joints_header(), joints_header_with_visibility());
+    let mut columns = 0;
     let mut out = Vec::new();
     for (line, text) in read_lines(path)? {
         let text = text.trim();
         if line == 1 {
-            if text != header {
-                return Err(bad(1, format!("header must be {header:?}")));
-            }
+            columns = if text == with_visibility {
+                1 + 4 * Joint::COUNT
+            } else if text == plain {
+                1 + 3 * Joint::COUNT
+            } else {
+                return Err(bad(1, format!("header must be {with_visibility:?}")));
+            };
             continue;
         }
         if text.is_empty() {
             continue;
         }
         let fields: Vec<&str> = text.split(',').collect();
-        if fields.len() != 1 + 3 * Joint::COUNT {
+        if fields.len() != columns {
             return Err(bad(
                 line,
-                format!(
-                    "has {} fields, expected {}",
-                    fields.len(),
-                    1 + 3 * Joint::COUNT
-                ),
+                format!("has {} fields, expected {columns}", fields.len()),
             ));
         }
         if fields[0].trim().parse::<usize>().ok() != Some(out.len()) {
@@ -408,7 +420,23 @@ fn read_joints_csv(path: &Path) -> Result<Vec<Skeleton>, RecordingError> {
                 p[a] = v;
             }
         }
-        out.push(Skeleton::new(joints));
+        let mut skeleton = Skeleton::new(joints);
+        for (j, f) in fields.iter().skip(1 + 3 * Joint::COUNT).enumerate() {
+            skeleton.visible[j] = match f.trim() {
+                "1" => true,
+                "0" => false,
+                other => {
+                    return Err(bad(
+                        line,
+                        format!(
+                            "{}_visible is {other:?}, expected 1 or 0",
+                            Joint::ALL[j].name()
+                        ),
+                    ))
+                }
+            };
+        }
+        out.push(skeleton);
     }
     Ok(out)
 }
@@ -456,7 +484,7 @@ impl RecordingWriter {
         };
         let frames = open("frames.csv", "index,capture_time_ns")?;
         let joints = if with_joints {
-            Some(open("joints.csv", &joints_header())?)
+            Some(open("joints.csv", &joints_header_with_visibility())?)
         } else {
             None
         };
@@ -526,6 +554,9 @@ impl RecordingWriter {
             for p in &s.joints {
                 row.push_str(&format!(",{:.6},{:.6},{:.6}", p.x, p.y, p.z));
             }
+            for v in s.visible {
+                row.push_str(if v { ",1" } else { ",0" });
+            }
             let csv = self.dir.join("joints.csv");
             writeln!(w, "{row}")
                 .and_then(|_| w.flush())
@@ -555,6 +586,7 @@ mod tests {
         for i in 0..n {
             let mut s = Skeleton::new([Point3::new(i as f32, 0.5, 2.0); Joint::COUNT]);
             s.joints[3].y = -0.25;
+            s.visible[5] = i % 2 == 0;
             w.write_frame(
                 ramp(8, 6, i as u16).view(),
                 1_000 + i as u64 * 33_333_333,
@@ -576,7 +608,41 @@ mod tests {
             let s = rec.joints(i).unwrap();
             assert_eq!(s.joints[0], Point3::new(i as f32, 0.5, 2.0));
             assert_eq!(s.joints[3].y, -0.25);
+            assert_eq!(s.visible[5], i % 2 == 0);
+            assert_eq!(s.visible.iter().filter(|v| !**v).count(), i % 2);
         }
+    }
+
+    #[test]
+    fn joints_written_before_visibility_read_as_all_in_view() {
+        let tmp = tempfile::tempdir().unwrap();
+        write(tmp.path(), 2, true);
+        let csv = tmp.path().join("joints.csv");
+        // Drop the 16 visibility columns, as recordings before them were written.
+        let old: String = fs::read_to_string(&csv)
+            .unwrap()
+            .lines()
+            .map(|l| {
+                let f: Vec<&str> = l.split(',').collect();
+                f[..1 + 3 * Joint::COUNT].join(",") + "\n"
+            })
+            .collect();
+        fs::write(&csv, old).unwrap();
+        let rec = Recording::open(tmp.path()).unwrap();
+        assert!(rec.joints(0).unwrap().visible.iter().all(|v| *v));
+        // A visibility that is neither 1 nor 0 is named.
+        let tmp = tempfile::tempdir().unwrap();
+        let csv = tmp.path().join("joints.csv");
+        write(tmp.path(), 2, true);
+        let text = fs::read_to_string(&csv).unwrap();
+        let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+        lines[2] = lines[2].rsplit_once(',').unwrap().0.to_string() + ",yes";
+        fs::write(&csv, lines.join("\n")).unwrap();
+        let err = Recording::open(tmp.path()).unwrap_err().to_string();
+        assert!(
+            err.contains("joints.csv:3") && err.contains("right_foot_visible is \"yes\""),
+            "{err}"
+        );
     }
 
     #[test]

@@ -101,18 +101,25 @@ impl Joint {
 }
 
 /// The 16 joint positions of one frame (metres, camera frame) with a confidence in
-/// [0, 1] each.
+/// [0, 1] and a visibility each.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Skeleton {
     pub joints: [Point3<f32>; Joint::COUNT],
     pub confidence: [f32; Joint::COUNT],
+    /// Whether each joint is in the camera's view: inside the image and not behind
+    /// something that is not the person (a table, the image's border). A joint out of
+    /// view has confidence 0 and a position that is only a guess. A joint hidden by the
+    /// person's own body is in view: it is estimated, with a lower confidence.
+    pub visible: [bool; Joint::COUNT],
 }
 
 impl Skeleton {
+    /// Every joint in view, with confidence 1.
     pub fn new(joints: [Point3<f32>; Joint::COUNT]) -> Self {
         Self {
             joints,
             confidence: [1.0; Joint::COUNT],
+            visible: [true; Joint::COUNT],
         }
     }
 

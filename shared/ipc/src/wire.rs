@@ -136,7 +136,7 @@ impl LatencyChain {
 
 /// The skeleton of one depth frame.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("airglyph.SkeletonMsg.v1")]
+#[type_name("airglyph.SkeletonMsg.v2")]
 #[repr(C)]
 pub struct SkeletonMsg {
     pub sequence: u64,
@@ -147,7 +147,11 @@ pub struct SkeletonMsg {
     pub confidence: [f32; Joint::COUNT],
     /// 1 when a person was found; the joints are meaningless otherwise.
     pub person_found: u8,
-    pub _reserved: [u8; 7],
+    pub _pad: u8,
+    /// Bit `i` set: joint `i` ([`Joint::ALL`] order) is in the camera's view
+    /// ([`Skeleton::visible`]).
+    pub visible: u16,
+    pub _reserved: [u8; 4],
 }
 
 impl Default for SkeletonMsg {
@@ -159,7 +163,9 @@ impl Default for SkeletonMsg {
             joints: [[0.0; 3]; Joint::COUNT],
             confidence: [0.0; Joint::COUNT],
             person_found: 0,
-            _reserved: [0; 7],
+            _pad: 0,
+            visible: 0,
+            _reserved: [0; 4],
         }
     }
 }
@@ -180,6 +186,7 @@ impl SkeletonMsg {
         (self.person_found != 0).then(|| Skeleton {
             joints: self.joints.map(|[x, y, z]| Point3::new(x, y, z)),
             confidence: self.confidence,
+            visible: std::array::from_fn(|i| self.visible & (1 << i) != 0),
         })
     }
 
@@ -188,11 +195,17 @@ impl SkeletonMsg {
             Some(s) => {
                 self.joints = s.joints.map(|p| [p.x, p.y, p.z]);
                 self.confidence = s.confidence;
+                self.visible = s
+                    .visible
+                    .iter()
+                    .enumerate()
+                    .fold(0, |m, (i, v)| m | (u16::from(*v) << i));
                 self.person_found = 1;
             }
             None => {
                 self.joints = [[0.0; 3]; Joint::COUNT];
                 self.confidence = [0.0; Joint::COUNT];
+                self.visible = 0;
                 self.person_found = 0;
             }
         }
@@ -417,6 +430,8 @@ mod tests {
     fn skeleton_round_trips_and_nan_is_refused() {
         let mut s = Skeleton::new([Point3::new(0.1, 0.2, 2.0); Joint::COUNT]);
         s.confidence[3] = 0.5;
+        s.visible[11] = false;
+        s.visible[15] = false;
         let mut m = SkeletonMsg {
             chain: LatencyChain {
                 capture_ns: 1,
