@@ -19,6 +19,7 @@ pub fn motion(script: Option<&str>, repeat: bool) -> Result<MotionSpec, SourceEr
             symbols: DEMO_SYMBOLS.into(),
             samples: None,
             repeat: true,
+            rest: None,
         })),
         Some(s) => MotionSpec::parse(s, None, repeat)
             .map_err(|e| SourceError::Fatal(format!("synthetic: {e}"))),

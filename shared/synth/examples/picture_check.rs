@@ -1,6 +1,7 @@
 //! Renders the picture check of docs/synth/: colour-mapped depth of hard-case poses, a
 //! BVH frame and an air-drawing frame, with the ground-truth skeleton drawn on top
-//! (green = visible joint, red = hidden by another body part).
+//! (green = visible joint, orange = hidden by another body part, red = out of the
+//! camera's view: behind furniture; joints outside the image are not drawn).
 //!
 //! cargo run -p airglyph-synth --example picture_check -- [OUT_DIR] [--makehuman]
 //!
@@ -9,7 +10,8 @@
 
 use airglyph_core::{Joint, Skeleton};
 use airglyph_synth::{
-    Background, BodySpec, DrawSpec, FrameTruth, MotionSpec, SceneConfig, ScriptedPose, Synthesizer,
+    Background, BodySpec, Chair, DrawSpec, FrameTruth, MotionSpec, Placement, Posture, Prop,
+    SceneConfig, ScriptedPose, Synthesizer, Table,
 };
 use image::{Rgb, RgbImage};
 use std::path::PathBuf;
@@ -28,56 +30,104 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         BodySpec::Procedural(Default::default())
     };
     std::fs::create_dir_all(&out)?;
-    let mut shots: Vec<(String, MotionSpec, usize, Background, bool)> = ScriptedPose::ALL
+    let base = SceneConfig {
+        body: body.clone(),
+        ..SceneConfig::default()
+    };
+    let scene = |motion: MotionSpec| SceneConfig {
+        motion,
+        ..base.clone()
+    };
+    let mut shots: Vec<(String, SceneConfig, usize)> = ScriptedPose::ALL
         .iter()
-        .map(|p| {
-            (
-                p.name().to_string(),
-                MotionSpec::Pose(*p),
-                0,
-                Background::None,
-                false,
-            )
-        })
+        .map(|p| (p.name().to_string(), scene(MotionSpec::Pose(*p)), 0))
         .collect();
     shots.push((
         "noise-floor-wall".into(),
-        MotionSpec::Pose(ScriptedPose::Wave),
+        SceneConfig {
+            background: Background::FloorAndWall,
+            sensor_noise: true,
+            ..scene(MotionSpec::Pose(ScriptedPose::Wave))
+        },
         0,
-        Background::FloorAndWall,
-        true,
     ));
     let bvh = PathBuf::from("/usr/share/assimp/models/BVH/01_01.bvh");
     if bvh.exists() {
-        shots.push((
-            "bvh-01_01".into(),
-            MotionSpec::Bvh(bvh),
-            90,
-            Background::None,
-            false,
-        ));
+        shots.push(("bvh-01_01".into(), scene(MotionSpec::Bvh(bvh)), 90));
     } else {
         eprintln!("skipping the BVH frame: install assimp-testmodels");
     }
-    shots.push((
-        "draw-3".into(),
+    let draw = |symbols: &str| {
         MotionSpec::Draw(DrawSpec {
-            symbols: "3".into(),
+            symbols: symbols.into(),
             samples: None,
             repeat: false,
-        }),
-        usize::MAX,
-        Background::None,
-        false,
-    ));
-    for (name, motion, frame, background, noise) in shots {
-        let cfg = SceneConfig {
-            body: body.clone(),
-            motion,
-            background,
-            sensor_noise: noise,
-            ..SceneConfig::default()
-        };
+            rest: None,
+        })
+    };
+    shots.push(("draw-3".into(), scene(draw("3")), usize::MAX));
+    // The scenes of a camera at a desk or on a robot: near, from the waist up, seated
+    // behind a table, arms at rest, in a furnished room, through the sensor model.
+    let near = |distance_m: f32, cfg: SceneConfig| {
+        SceneConfig {
+            background: Background::Room,
+            sensor_noise: true,
+            placement: Placement {
+                distance_m,
+                ..cfg.placement
+            },
+            ..cfg
+        }
+        .framing_upper_body()
+    };
+    let seated = |cfg: SceneConfig, table: bool| {
+        let mut props = vec![Prop::Chair(Chair::default())];
+        if table {
+            props.push(Prop::Table(Table::default()));
+        }
+        SceneConfig {
+            posture: Posture::Seated {
+                seat_height_m: Chair::default().seat_height_m,
+            },
+            props,
+            ..cfg
+        }
+    };
+    for (name, cfg, frame) in [
+        (
+            "close-arms-at-sides",
+            near(1.2, scene(MotionSpec::Pose(ScriptedPose::ArmsAtSides))),
+            0,
+        ),
+        ("close-draw-3", near(1.2, scene(draw("3"))), usize::MAX),
+        (
+            "seated-desk-hands-on-table",
+            near(
+                1.4,
+                seated(scene(MotionSpec::Pose(ScriptedPose::HandsOnTable)), true),
+            ),
+            0,
+        ),
+        (
+            "seated-desk-draw-3",
+            near(1.4, seated(scene(draw("3")), true)),
+            usize::MAX,
+        ),
+        (
+            "seated-hands-on-thighs",
+            near(
+                1.0,
+                seated(scene(MotionSpec::Pose(ScriptedPose::HandsOnThighs)), false),
+            ),
+            0,
+        ),
+    ] {
+        match cfg {
+            Ok(cfg) => shots.push((name.into(), cfg, frame)),
+            Err(e) => eprintln!("{name}: {e}"),
+        }
+    }
+    for (name, cfg, frame) in shots {
         let mut synth = match Synthesizer::new(cfg) {
             Ok(s) => s,
             Err(e) => {
@@ -151,10 +201,12 @@ fn overlay(synth: &Synthesizer, depth: &[u16], truth: &FrameTruth, trail: &[Skel
     }
     for j in Joint::ALL {
         if let Some((u, v)) = px(&truth.skeleton.get(j)) {
-            let c = if truth.visible[j.index()] {
+            let c = if !truth.skeleton.visible[j.index()] {
+                Rgb([255, 0, 0])
+            } else if truth.visible[j.index()] {
                 Rgb([0, 255, 0])
             } else {
-                Rgb([255, 0, 0])
+                Rgb([255, 150, 0])
             };
             for dy in -2..=2 {
                 for dx in -2..=2 {

@@ -1,6 +1,7 @@
 //! Air-drawing: the right hand traces each symbol on a plane in front of the body by
 //! arm IK (written as the person sees it, so mirrored in the camera's view), at a natural speed (1–1.5 s a symbol, minimum-jerk timing), with idle and
-//! random non-gesture hand movement between symbols. The left arm hangs.
+//! random non-gesture hand movement between symbols. The left arm stays where the rest
+//! pose puts it (hanging, standing; on the table or the thighs, seated).
 //!
 //! Timeline of one symbol: idle at rest (0.4–1.0 s), in half the cases a random
 //! non-gesture movement (1–3 reaches to the face, the chest, the side …), a move to the
@@ -9,7 +10,7 @@
 use crate::canon::{Bone, Pose, TposeSkeleton};
 use crate::error::SynthError;
 use crate::glyphs::{self, Glyph};
-use crate::motion::{DrawSpec, GestureTruth};
+use crate::motion::{DrawSpec, GestureTruth, Setting};
 use crate::poses::{self, Side};
 use airglyph_core::Joint;
 use nalgebra::{Point2, Point3, Vector3};
@@ -54,6 +55,7 @@ impl Drawing {
     pub(crate) fn new(
         d: &DrawSpec,
         sk: &TposeSkeleton,
+        setting: Setting,
         fps: f32,
         seed: u64,
     ) -> Result<Self, SynthError> {
@@ -94,12 +96,17 @@ impl Drawing {
             ));
         }
         let h = poses::height(sk);
-        let rest = poses::neutral(sk);
+        let rest = d
+            .rest
+            .unwrap_or(setting.default_rest())
+            .pose_in(sk, setting.posture);
         let heads = sk.posed_heads(&rest);
         let rest_hand = sk.posed_point(&heads, &rest, Bone::RightHand, sk.joint(Joint::RightHand));
-        let shoulder = sk.joint(Joint::RightShoulder);
-        let chest = sk.joint(Joint::Torso);
-        let head = sk.joint(Joint::Head);
+        // Where the upper body is: the T-pose's, moved with the hips (seated).
+        let lift = rest.root - sk.head(Bone::Hips);
+        let shoulder = sk.joint(Joint::RightShoulder) + lift;
+        let chest = sk.joint(Joint::Torso) + lift;
+        let head = sk.joint(Joint::Head) + lift;
         let frames = |secs: f32| (secs * fps).round().max(1.0) as usize;
         let mut targets: Vec<Point3<f32>> = Vec::new();
         let mut gestures = Vec::new();
@@ -139,11 +146,15 @@ impl Drawing {
             }
             // The drawing plane: in front of the right shoulder, symbol 0.3–0.4 m tall.
             let size = h * rng.gen_range(0.17..0.23);
-            let centre = Point3::new(
+            let mut centre = Point3::new(
                 shoulder.x * 0.55 + rng.gen_range(-0.03..0.03),
                 shoulder.y - 0.1 * h + rng.gen_range(-0.03..0.03),
                 shoulder.z + 0.26 * h + rng.gen_range(-0.02..0.02),
             );
+            // Over a table, the symbol's foot clears the table top by a hand.
+            if let Some(top) = setting.table_m {
+                centre.y = centre.y.max(top + 0.1 + size / 2.0);
+            }
             // The person writes as they see it, on a pane in front of them: the symbol's
             // right is the person's right (−x), its down is −y. From the camera it
             // appears mirrored, as writing on a window does from outside.

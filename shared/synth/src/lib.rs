@@ -78,13 +78,15 @@ pub mod makehuman;
 pub mod motion;
 pub mod poses;
 pub mod raster;
+pub mod room;
 pub mod sensor;
 
 pub use body::{Affine, Body, ProceduralBody};
 pub use canon::{Bone, Pose, TposeSkeleton};
 pub use error::SynthError;
 pub use motion::{DrawSpec, GestureTruth, MotionSpec};
-pub use poses::ScriptedPose;
+pub use poses::{Posture, ScriptedPose};
+pub use room::{Background, Chair, Prop, Table};
 
 use airglyph_core::recording::{RecordingInfo, RecordingWriter};
 use airglyph_core::{DepthImage, DepthView, Intrinsics, Joint, Skeleton};
@@ -102,14 +104,17 @@ pub enum BodySpec {
     MakeHuman { assets: Option<PathBuf> },
 }
 
-/// What surrounds the person.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Background {
-    /// The person alone, as in the seed paper.
-    #[default]
-    None,
-    /// A floor under the person and a wall 1.5 m behind them.
-    FloorAndWall,
+impl BodySpec {
+    /// Builds or loads the body.
+    pub fn load(&self) -> Result<Body, SynthError> {
+        match self {
+            BodySpec::Procedural(p) => Body::procedural(p),
+            BodySpec::MakeHuman { assets } => {
+                let dir = assets.clone().unwrap_or_else(makehuman::default_assets_dir);
+                makehuman::load(&dir)
+            }
+        }
+    }
 }
 
 /// Where the person stands relative to the camera. The camera looks horizontally (then
@@ -159,6 +164,10 @@ pub struct SceneConfig {
     /// Apply the Kinect-like sensor model ([`sensor`]).
     pub sensor_noise: bool,
     pub background: Background,
+    /// Furniture where the person starts.
+    pub props: Vec<Prop>,
+    /// Standing, or seated (on a chair, when `props` has one at the seat's height).
+    pub posture: Posture,
     pub placement: Placement,
     pub seed: u64,
 }
@@ -172,9 +181,33 @@ impl Default for SceneConfig {
             fps: 30.0,
             sensor_noise: false,
             background: Background::None,
+            props: Vec::new(),
+            posture: Posture::Standing,
             placement: Placement::default(),
             seed: 0,
         }
+    }
+}
+
+impl SceneConfig {
+    /// This scene with the camera framing the person from the waist or the chest up, as
+    /// a camera on a desk, a screen or a robot sees someone near it: at the height of
+    /// their face (0.3 m below the top of the head, standing or seated as
+    /// [`SceneConfig::posture`] says) and tilted so that the top of the image passes
+    /// 0.12 m above the head at the person's distance. How much of the body the image
+    /// holds then follows from the distance and the lens.
+    pub fn framing_upper_body(mut self) -> Result<Self, SynthError> {
+        let body = self.body.load()?;
+        let sk = body.tpose();
+        let seated = ScriptedPose::Neutral.pose_in(sk, self.posture);
+        let top = sk.tail(Bone::Head).y + (seated.root.y - sk.head(Bone::Hips).y);
+        let k = &self.intrinsics;
+        let pl = &mut self.placement;
+        pl.camera_height_m = top - 0.3;
+        let above_axis = (k.cy / k.fy).atan();
+        let to_top = ((top + 0.12 - pl.camera_height_m) / pl.distance_m).atan();
+        pl.camera_tilt_deg = (above_axis - to_top).to_degrees();
+        Ok(self)
     }
 }
 
@@ -184,7 +217,10 @@ pub struct FrameTruth {
     pub index: usize,
     /// `index / fps` in nanoseconds.
     pub capture_ns: u64,
-    /// The 16 joints, camera frame, metres (confidence 1).
+    /// The 16 joints, camera frame, metres (confidence 1), each visible when it is in the
+    /// camera's view: inside the image and before everything around the person at its
+    /// pixel (a table, the floor, the walls). A joint hidden only by the person's own
+    /// body is in view: what a pose estimator should still estimate.
     pub skeleton: Skeleton,
     /// Per joint: it projects inside the image onto its own body part (no other part of
     /// the body hides it).
@@ -234,19 +270,38 @@ impl Synthesizer {
                 "placement {pl:?}: distances must be finite, 0.5–20 m to the person and ≥ 0.3 m to the wall"
             )));
         }
-        let body = match &cfg.body {
-            BodySpec::Procedural(p) => Body::procedural(p)?,
-            BodySpec::MakeHuman { assets } => {
-                let dir = assets.clone().unwrap_or_else(makehuman::default_assets_dir);
-                makehuman::load(&dir)?
+        for prop in &cfg.props {
+            if !prop.is_sane() {
+                return Err(SynthError::Config(format!(
+                    "{prop:?}: sizes must be finite, positive and under 5 m"
+                )));
             }
+            if pl.distance_m - prop.reach_m() < 0.4 {
+                return Err(SynthError::Config(format!(
+                    "{prop:?} reaches {:.2} m towards the camera, {:.2} m away: move the camera back (--distance)",
+                    prop.reach_m(),
+                    pl.distance_m
+                )));
+            }
+        }
+        if let Posture::Seated { seat_height_m } = cfg.posture {
+            if !(0.2..=1.0).contains(&seat_height_m) {
+                return Err(SynthError::Config(format!(
+                    "seat height {seat_height_m} m must be 0.2–1 m"
+                )));
+            }
+        }
+        let body = cfg.body.load()?;
+        let setting = motion::Setting {
+            posture: cfg.posture,
+            table_m: cfg.props.iter().find_map(|p| match p {
+                Prop::Table(t) => Some(t.height_m),
+                _ => None,
+            }),
         };
-        let motion = motion::Motion::new(&cfg.motion, body.tpose(), cfg.fps, cfg.seed)?;
+        let motion = motion::Motion::new(&cfg.motion, body.tpose(), setting, cfg.fps, cfg.seed)?;
         let camera = camera_from_body(pl);
-        let background = match cfg.background {
-            Background::None => None,
-            Background::FloorAndWall => Some(floor_and_wall(&cfg.intrinsics, pl)),
-        };
+        let background = room::render(&cfg.intrinsics, pl, cfg.background, &cfg.props);
         let n = (cfg.intrinsics.width * cfg.intrinsics.height) as usize;
         Ok(Self {
             cfg,
@@ -352,16 +407,21 @@ impl Synthesizer {
         );
         let joints = self.body.joints_from(&self.xf);
         let mut visible = [false; Joint::COUNT];
+        let mut in_view = [false; Joint::COUNT];
         for j in Joint::ALL {
             visible[j.index()] = self.joint_visible(j, &joints[j.index()]);
+            in_view[j.index()] = self.in_view(&joints[j.index()]);
         }
         if self.cfg.sensor_noise {
-            sensor::apply(&k, depth, self.cfg.seed, index);
+            sensor::SensorModel::default().apply(&k, depth, self.cfg.seed, index);
         }
         Ok(FrameTruth {
             index,
             capture_ns: (index as f64 * 1e9 / self.cfg.fps as f64).round() as u64,
-            skeleton: Skeleton::new(joints),
+            skeleton: Skeleton {
+                visible: in_view,
+                ..Skeleton::new(joints)
+            },
             visible,
             gesture: self.motion.gesture(index),
         })
@@ -375,6 +435,23 @@ impl Synthesizer {
             .render_into(index, img.pixels_mut())
             .expect("buffer sized from the intrinsics");
         (img, truth)
+    }
+
+    /// Inside the image and before the static scene at its pixel.
+    fn in_view(&self, p: &Point3<f32>) -> bool {
+        let k = &self.cfg.intrinsics;
+        let Some((u, v)) = k.project(p) else {
+            return false;
+        };
+        let (u, v) = (u.round(), v.round());
+        if u < 0.0 || v < 0.0 || u >= k.width as f32 || v >= k.height as f32 {
+            return false;
+        }
+        let behind = self
+            .background
+            .as_ref()
+            .map_or(0, |bg| bg[v as usize * k.width as usize + u as usize]);
+        behind == 0 || behind as f32 > p.z * 1000.0
     }
 
     fn joint_visible(&self, j: Joint, p: &Point3<f32>) -> bool {
@@ -427,36 +504,6 @@ pub fn camera_from_body(pl: &Placement) -> Affine {
         m: tilt * flip * ry,
         t: tilt * Vector3::new(pl.lateral_m, pl.camera_height_m, pl.distance_m),
     }
-}
-
-/// The floor (y = 0) and a wall behind the person, rendered analytically per pixel.
-fn floor_and_wall(k: &Intrinsics, pl: &Placement) -> Vec<u16> {
-    let c = camera_from_body(&Placement {
-        yaw_deg: 0.0,
-        ..*pl
-    });
-    // Camera centre and ray directions in the body frame.
-    let rt = c.m.transpose();
-    let origin = -(rt * c.t);
-    let wall_z = -pl.wall_behind_m;
-    let mut out = vec![0u16; (k.width * k.height) as usize];
-    for v in 0..k.height {
-        for u in 0..k.width {
-            let ray_cam = Vector3::new((u as f32 - k.cx) / k.fx, (v as f32 - k.cy) / k.fy, 1.0);
-            let d = rt * ray_cam;
-            let mut best = f32::INFINITY;
-            if d.y < -1e-6 {
-                best = best.min(-origin.y / d.y);
-            }
-            if d.z < -1e-6 {
-                best = best.min((wall_z - origin.z) / d.z);
-            }
-            if best.is_finite() && best > 0.0 && best < 8.0 {
-                out[(v * k.width + u) as usize] = (best * 1000.0).round() as u16;
-            }
-        }
-    }
-    out
 }
 
 /// What [`write_recording`] wrote.
@@ -532,6 +579,17 @@ fn describe(cfg: &SceneConfig) -> String {
                 .unwrap_or_default()
         ),
         MotionSpec::Draw(d) => format!("draw:{}", d.symbols),
+        MotionSpec::Rest => "rest".to_string(),
     };
-    format!("{body}/{motion}")
+    let mut out = format!("{body}/{motion}");
+    if let Posture::Seated { .. } = cfg.posture {
+        out.push_str("/seated");
+    }
+    for p in &cfg.props {
+        out.push_str(match p {
+            Prop::Table(_) => "/table",
+            Prop::Chair(_) => "/chair",
+        });
+    }
+    out
 }

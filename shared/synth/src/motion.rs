@@ -3,7 +3,7 @@
 use crate::canon::Pose;
 use crate::canon::TposeSkeleton;
 use crate::error::SynthError;
-use crate::poses::ScriptedPose;
+use crate::poses::{Posture, ScriptedPose};
 use std::path::PathBuf;
 
 /// What the person does.
@@ -18,16 +18,24 @@ pub enum MotionSpec {
     Bvh(PathBuf),
     /// Air-draws symbols with the right hand.
     Draw(DrawSpec),
+    /// Arms at rest, as between gestures: moves between the rest poses the posture and
+    /// the props allow ([`ScriptedPose::AT_REST`]: hanging, on the thighs, in the lap,
+    /// crossed, on a table when there is one), holding each for a few seconds; endless.
+    Rest,
 }
 
 impl MotionSpec {
-    /// Parses the command-line form: `poses`, `pose:NAME`, `draw:SYMBOLS` or a BVH file.
+    /// Parses the command-line form: `poses`, `rest`, `pose:NAME`, `draw:SYMBOLS` or a
+    /// BVH file.
     /// `samples` gives air-drawn symbols their shapes from a trajectory JSONL; `repeat`
     /// makes the drawing endless.
     pub fn parse(spec: &str, samples: Option<PathBuf>, repeat: bool) -> Result<Self, SynthError> {
         let bad = |m: String| SynthError::Config(format!("motion {spec:?}: {m}"));
         if spec == "poses" {
             return Ok(MotionSpec::Poses);
+        }
+        if spec == "rest" {
+            return Ok(MotionSpec::Rest);
         }
         if let Some(name) = spec.strip_prefix("pose:") {
             return ScriptedPose::from_name(name)
@@ -45,6 +53,7 @@ impl MotionSpec {
                 symbols: symbols.into(),
                 samples,
                 repeat,
+                rest: None,
             }));
         }
         let path = PathBuf::from(spec);
@@ -56,7 +65,7 @@ impl MotionSpec {
             return Ok(MotionSpec::Bvh(path));
         }
         Err(bad(
-            "expected poses, pose:NAME, draw:SYMBOLS or a .bvh file".into(),
+            "expected poses, rest, pose:NAME, draw:SYMBOLS or a .bvh file".into(),
         ))
     }
 }
@@ -73,6 +82,38 @@ pub struct DrawSpec {
     pub samples: Option<PathBuf>,
     /// Starts again after the last symbol: endless (the live demo).
     pub repeat: bool,
+    /// Where the arms rest between symbols; `None`: hanging when standing, on the table
+    /// or else on the thighs when seated.
+    pub rest: Option<ScriptedPose>,
+}
+
+/// Where the motion happens: what the person's posture and surroundings give the arms
+/// to rest on.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(crate) struct Setting {
+    pub posture: Posture,
+    /// The top of the table in front of the person, metres above the floor, if any.
+    pub table_m: Option<f32>,
+}
+
+impl Setting {
+    /// The rest poses that fit: no hands on a table that is not there.
+    fn rest_poses(self) -> Vec<ScriptedPose> {
+        ScriptedPose::AT_REST
+            .into_iter()
+            .filter(|p| *p != ScriptedPose::HandsOnTable || self.table_m.is_some())
+            .filter(|p| *p != ScriptedPose::Neutral || self.posture == Posture::Standing)
+            .collect()
+    }
+
+    /// Where arms rest between symbols unless told.
+    pub(crate) fn default_rest(self) -> ScriptedPose {
+        match (self.posture, self.table_m) {
+            (Posture::Standing, _) => ScriptedPose::Neutral,
+            (Posture::Seated { .. }, Some(_)) => ScriptedPose::HandsOnTable,
+            (Posture::Seated { .. }, None) => ScriptedPose::HandsOnThighs,
+        }
+    }
 }
 
 /// Standing still is never still: a slow seeded sway of the whole body (a few degrees
@@ -133,24 +174,53 @@ impl Motion {
     pub(crate) fn new(
         spec: &MotionSpec,
         sk: &TposeSkeleton,
+        setting: Setting,
         fps: f32,
         seed: u64,
     ) -> Result<Motion, SynthError> {
+        let posture = setting.posture;
         Ok(match spec {
-            MotionSpec::Pose(p) => Motion::Static(Box::new(p.pose(sk))),
+            MotionSpec::Pose(p) => Motion::Static(Box::new(p.pose_in(sk, posture))),
             MotionSpec::Poses => Motion::Cycle {
-                poses: ScriptedPose::ALL.iter().map(|p| p.pose(sk)).collect(),
+                poses: ScriptedPose::HARD_CASES
+                    .iter()
+                    .map(|p| p.pose_in(sk, posture))
+                    .collect(),
                 hold: (fps * 1.0).round().max(1.0) as usize,
                 blend: (fps * 0.5).round().max(1.0) as usize,
                 sway: Sway::new(seed, fps),
             },
+            MotionSpec::Rest => {
+                use rand::{Rng, SeedableRng};
+                let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x8E57);
+                let choice = setting.rest_poses();
+                let mut poses: Vec<Pose> = Vec::new();
+                let mut last = None;
+                while poses.len() < 32 {
+                    let k = rng.gen_range(0..choice.len());
+                    if Some(k) != last || choice.len() == 1 {
+                        poses.push(choice[k].pose_in(sk, posture));
+                        last = Some(k);
+                    }
+                }
+                Motion::Cycle {
+                    poses,
+                    hold: (fps * 2.5).round().max(1.0) as usize,
+                    blend: (fps * 1.0).round().max(1.0) as usize,
+                    sway: Sway::new(seed, fps),
+                }
+            }
             MotionSpec::Bvh(path) => {
                 let clip = crate::bvh::BvhClip::load(path)?;
-                Motion::Clip(clip.retarget(sk, fps))
+                let mut poses = clip.retarget(sk, fps);
+                for p in &mut poses {
+                    posture.apply(sk, p);
+                }
+                Motion::Clip(poses)
             }
-            MotionSpec::Draw(d) => {
-                Motion::Draw(Box::new(crate::draw::Drawing::new(d, sk, fps, seed)?))
-            }
+            MotionSpec::Draw(d) => Motion::Draw(Box::new(crate::draw::Drawing::new(
+                d, sk, setting, fps, seed,
+            )?)),
         })
     }
 

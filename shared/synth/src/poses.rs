@@ -25,10 +25,24 @@ pub enum ScriptedPose {
     Wave,
     /// Both arms forward and down, the hands in front of the belly.
     HandsInFront,
+    /// At rest: the arms hanging straight against the body's sides.
+    ArmsAtSides,
+    /// At rest: the palms on the thighs (on top of them when seated, on their front
+    /// when standing).
+    HandsOnThighs,
+    /// At rest: the hands on a table of the usual height
+    /// ([`crate::room::TABLE_HEIGHT_M`]) in front of the person.
+    HandsOnTable,
+    /// At rest: the hands together in the lap (or before the hips, standing).
+    HandsInLap,
+    /// At rest: the forearms crossed before the chest.
+    ArmsCrossed,
 }
 
 impl ScriptedPose {
-    pub const ALL: [ScriptedPose; 8] = [
+    /// The hard cases of the seed paper's evaluation, which the `poses` motion cycles
+    /// through.
+    pub const HARD_CASES: [ScriptedPose; 8] = [
         ScriptedPose::Neutral,
         ScriptedPose::TPose,
         ScriptedPose::PointAtCamera,
@@ -37,6 +51,32 @@ impl ScriptedPose {
         ScriptedPose::Sideways,
         ScriptedPose::Wave,
         ScriptedPose::HandsInFront,
+    ];
+
+    /// Where arms rest between gestures, which the `rest` motion moves between.
+    pub const AT_REST: [ScriptedPose; 6] = [
+        ScriptedPose::Neutral,
+        ScriptedPose::ArmsAtSides,
+        ScriptedPose::HandsOnThighs,
+        ScriptedPose::HandsOnTable,
+        ScriptedPose::HandsInLap,
+        ScriptedPose::ArmsCrossed,
+    ];
+
+    pub const ALL: [ScriptedPose; 13] = [
+        ScriptedPose::Neutral,
+        ScriptedPose::TPose,
+        ScriptedPose::PointAtCamera,
+        ScriptedPose::ArmAcrossTorso,
+        ScriptedPose::HandsNearFace,
+        ScriptedPose::Sideways,
+        ScriptedPose::Wave,
+        ScriptedPose::HandsInFront,
+        ScriptedPose::ArmsAtSides,
+        ScriptedPose::HandsOnThighs,
+        ScriptedPose::HandsOnTable,
+        ScriptedPose::HandsInLap,
+        ScriptedPose::ArmsCrossed,
     ];
 
     pub fn name(self) -> &'static str {
@@ -49,6 +89,11 @@ impl ScriptedPose {
             ScriptedPose::Sideways => "sideways",
             ScriptedPose::Wave => "wave",
             ScriptedPose::HandsInFront => "hands-in-front",
+            ScriptedPose::ArmsAtSides => "arms-at-sides",
+            ScriptedPose::HandsOnThighs => "hands-on-thighs",
+            ScriptedPose::HandsOnTable => "hands-on-table",
+            ScriptedPose::HandsInLap => "hands-in-lap",
+            ScriptedPose::ArmsCrossed => "arms-crossed",
         }
     }
 
@@ -56,11 +101,20 @@ impl ScriptedPose {
         Self::ALL.into_iter().find(|p| p.name() == name)
     }
 
-    /// The pose on the given body (facing +z of the body frame, i.e. the camera).
+    /// The pose on the given body, standing (facing +z of the body frame, i.e. the
+    /// camera).
     pub fn pose(self, sk: &TposeSkeleton) -> Pose {
+        self.pose_in(sk, Posture::Standing)
+    }
+
+    /// The pose on the given body in a posture: the legs and hips as the posture puts
+    /// them, the arms reaching for what is where in it (thighs, lap, table).
+    pub fn pose_in(self, sk: &TposeSkeleton, posture: Posture) -> Pose {
         let mut p = neutral(sk);
+        posture.apply(sk, &mut p);
+        let lift = p.root - sk.head(Bone::Hips);
         let h = height(sk);
-        let head = sk.joint(Joint::Head);
+        let head = sk.joint(Joint::Head) + lift;
         match self {
             ScriptedPose::Neutral => {}
             ScriptedPose::TPose => {
@@ -88,7 +142,8 @@ impl ScriptedPose {
                 );
             }
             ScriptedPose::ArmAcrossTorso => {
-                let target = sk.joint(Joint::LeftShoulder) + Vector3::new(-0.01, -0.07, 0.085) * h;
+                let target =
+                    sk.joint(Joint::LeftShoulder) + lift + Vector3::new(-0.01, -0.07, 0.085) * h;
                 arm_ik(
                     sk,
                     &mut p,
@@ -118,12 +173,119 @@ impl ScriptedPose {
             }
             ScriptedPose::HandsInFront => {
                 for (s, side) in [(1.0, Side::Left), (-1.0, Side::Right)] {
-                    let target = sk.joint(Joint::Pelvis) + Vector3::new(s * 0.05, 0.11, 0.16) * h;
+                    let target =
+                        sk.joint(Joint::Pelvis) + lift + Vector3::new(s * 0.05, 0.11, 0.16) * h;
                     arm_ik(sk, &mut p, side, target, &Vector3::new(s * 0.5, -1.0, -0.3));
+                }
+            }
+            ScriptedPose::ArmsAtSides => {
+                for (s, side) in [(1.0f32, Side::Left), (-1.0, Side::Right)] {
+                    let a = 4f32.to_radians();
+                    let up = Vector3::new(s * a.sin(), -a.cos(), 0.0);
+                    let b = 6f32.to_radians();
+                    let fore = Vector3::new(s * a.sin(), -b.cos(), b.sin());
+                    set_arm(&mut p, side, &up, &fore, &Vector3::new(s * 0.3, 0.0, -1.0));
+                }
+            }
+            ScriptedPose::HandsOnThighs => {
+                let heads = sk.posed_heads(&p);
+                for (s, side, thigh, shin) in [
+                    (1.0f32, Side::Left, Bone::LeftThigh, Bone::LeftShin),
+                    (-1.0, Side::Right, Bone::RightThigh, Bone::RightShin),
+                ] {
+                    // Halfway down the thigh, a hand's thickness off its surface: on top
+                    // of it seated, before it standing.
+                    let mid =
+                        heads[thigh.index()] + (heads[shin.index()] - heads[thigh.index()]) * 0.55;
+                    let out = match posture {
+                        Posture::Standing => Vector3::new(s * 0.01, 0.0, 0.075) * h / 1.75,
+                        Posture::Seated { .. } => Vector3::new(s * 0.01, 0.085, 0.0) * h / 1.75,
+                    };
+                    arm_ik(
+                        sk,
+                        &mut p,
+                        side,
+                        mid + out,
+                        &Vector3::new(s * 0.6, -0.3, -1.0),
+                    );
+                }
+            }
+            ScriptedPose::HandsOnTable => {
+                for (s, side) in [(1.0f32, Side::Left), (-1.0, Side::Right)] {
+                    let target = Point3::new(
+                        s * 0.17 * h / 1.75,
+                        crate::room::TABLE_HEIGHT_M + 0.03,
+                        p.root.z + 0.38 * h / 1.75,
+                    );
+                    arm_ik(sk, &mut p, side, target, &Vector3::new(s * 0.8, -1.0, -0.4));
+                }
+            }
+            ScriptedPose::HandsInLap => {
+                let pelvis = sk.joint(Joint::Pelvis) + lift;
+                let ahead = match posture {
+                    Posture::Standing => Vector3::new(0.0, -0.08, 0.12),
+                    Posture::Seated { .. } => Vector3::new(0.0, 0.03, 0.17),
+                };
+                for (s, side) in [(1.0f32, Side::Left), (-1.0, Side::Right)] {
+                    let target = pelvis + (ahead + Vector3::new(s * 0.03, 0.0, 0.0)) * h / 1.75;
+                    arm_ik(sk, &mut p, side, target, &Vector3::new(s * 0.5, -1.0, -0.3));
+                }
+            }
+            ScriptedPose::ArmsCrossed => {
+                // Each hand on the other arm's upper arm, the right forearm in front.
+                let heads = sk.posed_heads(&p);
+                for (side, other, depth) in [
+                    (Side::Left, Bone::RightUpperArm, 0.07f32),
+                    (Side::Right, Bone::LeftUpperArm, 0.12),
+                ] {
+                    let s = if side == Side::Left { 1.0 } else { -1.0 };
+                    let shoulder = heads[other.index()];
+                    let target = shoulder + Vector3::new(s * 0.045, -0.17, depth) * h / 1.75;
+                    arm_ik(sk, &mut p, side, target, &Vector3::new(s * 0.6, -1.0, -0.2));
                 }
             }
         }
         p
+    }
+}
+
+/// How the person holds their legs and hips.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Posture {
+    /// Standing on the floor, as the motion has it.
+    #[default]
+    Standing,
+    /// Sitting upright on a seat this high above the floor (metres): thighs forward,
+    /// shins down, feet on the floor; the upper body moves as the motion has it.
+    Seated { seat_height_m: f32 },
+}
+
+impl Posture {
+    /// Puts the legs and hips of `p` in this posture, keeping its heading and its upper
+    /// body's rotations.
+    pub fn apply(self, sk: &TposeSkeleton, p: &mut Pose) {
+        let Posture::Seated { seat_height_m } = self else {
+            return;
+        };
+        let fwd = p.get(Bone::Hips) * Vector3::z();
+        let heading = yaw(fwd.x.atan2(fwd.z));
+        let down_to_forward =
+            UnitQuaternion::from_axis_angle(&Vector3::x_axis(), -90f32.to_radians());
+        let shin_tilt = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), -6f32.to_radians());
+        for (s, thigh, shin, foot) in [
+            (1.0f32, Bone::LeftThigh, Bone::LeftShin, Bone::LeftFoot),
+            (-1.0, Bone::RightThigh, Bone::RightShin, Bone::RightFoot),
+        ] {
+            let splay = yaw(s * 7f32.to_radians());
+            p.set(thigh, heading * splay * down_to_forward);
+            p.set(shin, heading * splay * shin_tilt);
+            p.set(foot, heading * splay);
+        }
+        // The hips joint above the seat by the thigh's half thickness and the hip
+        // joints' drop below it.
+        let h = height(sk);
+        let drop = sk.head(Bone::Hips).y - sk.head(Bone::LeftThigh).y;
+        p.root.y = seat_height_m + 0.075 * h / 1.75 + drop;
     }
 }
 

@@ -11,6 +11,7 @@ fn draw(symbols: &str, samples: Option<std::path::PathBuf>, repeat: bool) -> Sce
             symbols: symbols.into(),
             samples,
             repeat,
+            rest: None,
         }),
         seed: 3,
         ..SceneConfig::default()

@@ -150,10 +150,11 @@ fn visible_joints_lie_inside_the_silhouette_behind_the_surface() {
                     p.z * 1000.0
                 );
             }
-            let min_seen = if pose == ScriptedPose::Sideways {
-                8
-            } else {
-                14
+            let min_seen = match pose {
+                ScriptedPose::Sideways => 8,
+                // The forearms hide the torso joint, one hand lies behind the other arm.
+                ScriptedPose::ArmsCrossed => 12,
+                _ => 14,
             };
             assert!(seen >= min_seen, "{pose:?}: only {seen} joints visible");
         }

@@ -3,7 +3,10 @@
 
 use airglyph_core::camera::Preset;
 use airglyph_core::Intrinsics;
-use airglyph_synth::{Background, BodySpec, MotionSpec, Placement, ProceduralBody, SceneConfig};
+use airglyph_synth::{
+    Background, BodySpec, Chair, MotionSpec, Placement, Posture, ProceduralBody, Prop, SceneConfig,
+    ScriptedPose, Table,
+};
 use anyhow::{bail, Context};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
@@ -13,11 +16,26 @@ pub struct Args {
     /// The body: `procedural` (built in) or `makehuman` (needs `scripts/fetch-assets`).
     #[arg(long, default_value = "procedural")]
     pub body: String,
-    /// What the person does: `poses` (the scripted poses in turn), `pose:NAME` (one of
-    /// neutral, t-pose, point-at-camera, arm-across-torso, hands-near-face, sideways,
-    /// wave, hands-in-front), `draw:SYMBOLS` (air-draw e.g. `draw:0123ABC`), or a BVH file.
+    /// What the person does: `poses` (the hard cases in turn), `rest` (arms at rest:
+    /// hanging, on the thighs, in the lap, crossed, on the table if there is one, a few
+    /// seconds each), `pose:NAME` (one of neutral, t-pose, point-at-camera,
+    /// arm-across-torso, hands-near-face, sideways, wave, hands-in-front, arms-at-sides,
+    /// hands-on-thighs, hands-on-table, hands-in-lap, arms-crossed), `draw:SYMBOLS`
+    /// (air-draw e.g. `draw:0123ABC`), or a BVH file (any CMU conversion, Mixamo, DAZ,
+    /// 3ds Max Biped names).
     #[arg(long, default_value = "poses")]
     pub motion: String,
+    /// With draw:SYMBOLS, where the arms rest between symbols (a pose name, e.g.
+    /// arms-at-sides); default: neutral standing, on the table or else on the thighs
+    /// seated.
+    #[arg(long, value_name = "POSE")]
+    pub rest: Option<String>,
+    /// The person sits on a chair (seat 0.46 m high) instead of standing.
+    #[arg(long)]
+    pub seated: bool,
+    /// A table (0.74 m high, 1.2 × 0.7 m) in front of the person, 0.22 m from their hips.
+    #[arg(long)]
+    pub table: bool,
     /// Frames to write (at most the clip's length); default: the whole clip or symbol
     /// list, 300 for endless motion.
     #[arg(long)]
@@ -28,7 +46,8 @@ pub struct Args {
     /// Apply the Kinect-like sensor model (quantization, noise, lost edge pixels).
     #[arg(long)]
     pub noise: bool,
-    /// `none` (the person alone) or `floor-wall`.
+    /// `none` (the person alone), `floor-wall` or `room` (floor, the wall behind, a wall
+    /// to the person's right and a cabinet to their left).
     #[arg(long, default_value = "none")]
     pub background: String,
     /// 640x480 or 320x240 (Kinect v1 optics), or any WxH scaled from the camera preset.
@@ -52,6 +71,17 @@ pub struct Args {
     /// Distance from the camera to the person, metres.
     #[arg(long, default_value_t = 2.7)]
     pub distance: f32,
+    /// Camera height above the floor, metres (ignored with --framing upper-body).
+    #[arg(long, default_value_t = 1.0)]
+    pub camera_height: f32,
+    /// Camera pitch down, degrees (ignored with --framing upper-body).
+    #[arg(long, default_value_t = 0.0)]
+    pub tilt: f32,
+    /// `fixed` (the camera at --camera-height, tilted --tilt) or `upper-body` (at the
+    /// person's face height, the top of the image just above their head: from the waist
+    /// or chest up at 0.8–1.5 m, like a camera on a desk, a screen or a robot).
+    #[arg(long, default_value = "fixed")]
+    pub framing: String,
     /// The person's turn to their left, degrees.
     #[arg(long, default_value_t = 0.0)]
     pub yaw: f32,
@@ -106,22 +136,59 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let background = match args.background.as_str() {
         "none" => Background::None,
         "floor-wall" | "floor-and-wall" => Background::FloorAndWall,
-        other => bail!("--background {other:?}: expected none or floor-wall"),
+        "room" => Background::Room,
+        other => bail!("--background {other:?}: expected none, floor-wall or room"),
     };
+    let mut motion = MotionSpec::parse(&args.motion, args.samples.clone(), false)?;
+    if let Some(name) = &args.rest {
+        let pose = ScriptedPose::from_name(name).with_context(|| {
+            let names: Vec<_> = ScriptedPose::AT_REST.iter().map(|p| p.name()).collect();
+            format!(
+                "--rest {name:?}: expected a pose, e.g. {}",
+                names.join(", ")
+            )
+        })?;
+        match &mut motion {
+            MotionSpec::Draw(d) => d.rest = Some(pose),
+            _ => bail!("--rest is for --motion draw:SYMBOLS"),
+        }
+    }
+    let mut props = Vec::new();
+    let posture = if args.seated {
+        let chair = Chair::default();
+        props.push(Prop::Chair(chair));
+        Posture::Seated {
+            seat_height_m: chair.seat_height_m,
+        }
+    } else {
+        Posture::Standing
+    };
+    if args.table {
+        props.push(Prop::Table(Table::default()));
+    }
     let cfg = SceneConfig {
         body,
-        motion: MotionSpec::parse(&args.motion, args.samples.clone(), false)?,
+        motion,
         intrinsics: intrinsics(&args.camera, &args.resolution)?,
         fps: args.fps,
         sensor_noise: args.noise,
         background,
+        props,
+        posture,
         placement: Placement {
             distance_m: args.distance,
+            camera_height_m: args.camera_height,
+            camera_tilt_deg: args.tilt,
             yaw_deg: args.yaw,
             follow: args.follow,
             ..Placement::default()
         },
         seed: args.seed,
+    };
+    let cfg = match args.framing.as_str() {
+        "fixed" => cfg,
+        "upper-body" => cfg.framing_upper_body()?,
+        other => bail!("--framing {other:?}: expected fixed or upper-body"),
     };
     // Learn the motion's length first, for the progress bar and the default count.
     let len = airglyph_synth::Synthesizer::new(cfg.clone())?.len();
