@@ -11,10 +11,12 @@ pub struct RegisterConfig {
     /// Person points for the data term: every one within `thin_px` of the silhouette's
     /// edge, the others on a grid of this stride.
     pub thin_px: f32,
+    /// See `thin_px`.
     pub interior_stride: usize,
     /// Gauss–Newton steps in all, and of them how many each start is given before the
     /// best one alone goes on.
     pub iterations: usize,
+    /// See `iterations`.
     pub race_iterations: usize,
     /// A run stops early once a step is smaller than this (metres and radians
     /// together).
@@ -23,6 +25,7 @@ pub struct RegisterConfig {
     pub sigma: f32,
     /// Weight of a silhouette or free-space residual against one data point's.
     pub silhouette_weight: f32,
+    /// See `silhouette_weight`.
     pub free_space_weight: f32,
     /// Beyond this (metres) the silhouette and free-space terms pull linearly (Huber).
     pub silhouette_scale: f32,
@@ -30,38 +33,42 @@ pub struct RegisterConfig {
     pub free_space_margin: f32,
     /// Weight of a limb tip's distance to its geodesic maximum, and its Cauchy scale.
     pub tip_weight: f32,
+    /// See `tip_weight`.
     pub tip_sigma: f32,
     /// A hand is placed behind the fingertips seen (as the seed's chains place it) when
     /// they lie this near the fitted body's fingertips; farther, the fit's hand stays.
     pub tip_trust: f32,
     /// A limb's tip that lies on another limb of the tracked body and at least this much
-    /// (metres) farther from its own is dropped ([`drop_borrowed_tips`]). 0 = off.
+    /// (metres) farther from its own is dropped. 0 = off.
     pub borrowed_tip_gap: f32,
     /// Weight of the head's and the chest's turn from their rest against their parent
     /// (per radian²): the head's turn about its own axis is not in the data at all.
     pub head_prior: f64,
+    /// See `head_prior`.
     pub chest_prior: f64,
+    /// See `head_prior`.
     pub abdomen_prior: f64,
     /// The collarbones' raising and bringing forward of the shoulders, against their
     /// rest turn (rotation vectors against the chest, left and right), which
-    /// [`crate::calibrate`] learns for the person.
+    /// the calibration learns for the person.
     pub collar_prior: f64,
+    /// See `collar_prior`.
     pub collar_rest: [[f32; 3]; 2],
     /// The share of the way to each well-seen frame's collarbone turns their rest moves.
     pub collar_gain: f32,
     /// Elbows and knees: weight of a twist and of a sideways bend (per radian²), of
     /// bending the wrong way beyond `hinge_slack` radians.
     pub hinge_twist_prior: f64,
+    /// See `hinge_twist_prior`.
     pub hinge_side_prior: f64,
+    /// See `hinge_twist_prior`.
     pub hinge_limit_prior: f64,
+    /// See `hinge_twist_prior`.
     pub hinge_slack: f32,
     /// Pull of upper arms and thighs towards hanging straight down, per squared radian:
     /// a limb the camera does not see (behind the body) has nothing else to keep it.
-    /// Scaled per limb by how hidden it was ([`hidden_limbs`]). At 0.3 (against 0):
-    /// CMU 01_01 / 01_03 4.26 / 4.33 → 4.06 / 4.09 cm mean error, with sensor noise
-    /// 94.9 / 93.3 → 96.8 / 95.5 % of joints within 10 cm; the demo's recording 33 → 34
-    /// symbols of 36 (32 before the gesture stage held its body frame steady). At 0.5
-    /// 01_03 with noise falls to 94.0 %, at 1.0 to 94.4 %.
+    /// Scaled per limb by how hidden it was last frame. Stronger pulls bend limbs the
+    /// camera half sees (pose NOTES, 2026-12-02).
     pub limb_rest_prior: f64,
     /// Σ w j² a limb pair's length gradient needs before it is trusted (j: metres a
     /// point moves per unit change of the length ratio).
@@ -71,28 +78,25 @@ pub struct RegisterConfig {
     pub length_seen: f32,
     /// When set, an arm's upper arm and forearm are learned apart (`bone_steps`) from
     /// frames whose normal equations of the two bones' length ratios have no eigenvalue
-    /// below this (Σ w j², as `length_evidence`). Off (None) by default: at 1.5, before
-    /// the gesture stage held its body frame steady, the demo named 34 symbols of 36
-    /// instead of 33 (the chest turns less with the drawing arm), but CMU 01_03 with
-    /// sensor noise loses a leg for about 100 frames (93.3 → 91.1 % of joints within
-    /// 10 cm), and the split it learns is biased
-    /// (0.92–0.97 on the MakeHuman body, whose truth is 1; 1.16 on the procedural body,
-    /// whose truth is 1.055). At 3.0 01_03 is as before and the demo back at 33.
+    /// below this (Σ w j², as `length_evidence`). Off (None) by default: the split it
+    /// learns is biased, and a sequence with noise lost a leg with it (pose NOTES).
     pub bone_evidence: Option<f64>,
     /// Every this many frames the seed's torso registration runs and the geodesic
     /// estimate races the tracked body; in between it races only when a limb tip lies
     /// farther than `race_gap` from the tracked body's (and off its surface, see
     /// `race_off_body`).
     pub redetect_every: usize,
+    /// See `redetect_every`.
     pub race_gap: f32,
     /// A strayed tip races only when it also lies this far off the tracked body's
-    /// surface ([`tips_strayed`]); 0 = wherever it lies.
+    /// surface; 0 = wherever it lies.
     pub race_off_body: f32,
     /// Also race the tracked body with its strayed limbs taken from the geodesic
     /// estimate.
     pub race_hybrid: bool,
     /// Levenberg–Marquardt damping: relative (of the diagonal) and absolute.
     pub damping: f64,
+    /// See `damping`.
     pub damping_abs: f64,
     /// The body's shape (bone lengths come from the configuration).
     pub shape: Shape,

@@ -27,6 +27,7 @@ mod energy;
 mod priors;
 mod sampling;
 mod solver;
+mod starts;
 #[cfg(test)]
 mod tests;
 mod tips;
@@ -34,6 +35,7 @@ mod tips;
 pub(crate) use capsules::{nearest_is, place};
 pub use config::RegisterConfig;
 pub use priors::hidden_limbs;
+pub use starts::{starts, OfferedStart};
 pub use tips::{drop_borrowed_tips, tips_strayed};
 
 use crate::body::{BodyPose, BodyTemplate, Segment};

@@ -14,9 +14,8 @@ use nalgebra::Vector3;
 /// elbow forward). Upper arms and thighs hidden last frame are pulled towards hanging
 /// down ([`RegisterConfig::limb_rest_prior`], scaled by [`hidden_limbs`]): a limb behind
 /// the body is held by nothing else and would stay where the last frame that saw it (or
-/// a wrong start) left it. Pulling every limb alike (0.1) bent an arm raised to draw and
-/// turned its collar (the demo fell from 33 symbols of 36 to 29); pulling the hidden ones
-/// only leaves the drawing arm alone.
+/// a wrong start) left it. Pulling every limb alike bent an arm raised to draw and
+/// turned its collar; pulling the hidden ones only leaves the drawing arm alone.
 pub(super) fn add_joint_priors(
     h: &mut Normal,
     g: &mut Gradient,

@@ -42,7 +42,7 @@ const ON_SURFACE: f32 = 0.03;
 /// the last frame's body, and well away from its own. The geodesic assignment can give
 /// an arm hidden behind the body a maximum of the other arm (a bent elbow before the
 /// chest); its tip term then pulled the hidden arm out to that point, and the race kept
-/// the arm there for frames (CMU 01_01: a hand 45–80 cm off for 5–10 frames at a time).
+/// the arm there for frames.
 pub fn drop_borrowed_tips(
     t: &BodyTemplate,
     tracked: &BodyPose,
