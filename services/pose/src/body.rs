@@ -11,7 +11,7 @@
 //! torso's shape can never change from frame to frame.
 //!
 //! The template's numbers were measured on the MakeHuman body of airglyph-synth standing
-//! (`cargo run --release -p airglyph-pose --example body_shape -- mh pose:neutral`): the
+//! (`examples/fit_template.rs`): the
 //! radius of each limb around its bone, the torso's cross-sections in the pelvis frame,
 //! the joints' places. Arm and leg lengths scale with the person's
 //! (`calibrate.rs`).

@@ -15,11 +15,11 @@ use crate::hands::{hands_at_fingertips, hands_at_their_points};
 use crate::register::{
     drop_borrowed_tips, hidden_limbs, starts, tips_strayed, Fit, Frame, OfferedStart, Registration,
 };
-use crate::segment::{Plane, Segmenter, TRACKED};
+use crate::segment::{Plane, Segmentation, Segmenter, TRACKED};
 use crate::smooth::Smoother;
 use crate::torso::{
-    anchored_at_head_top, facing_from_feet, keypoints, TorsoEstimator, TorsoPoints, TorsoPose,
-    TorsoStart,
+    anchored_at_head_top, facing_from_feet, keypoints, TorsoEstimator, TorsoFit, TorsoPoints,
+    TorsoPose, TorsoStart,
 };
 use airglyph_core::{DepthView, Intrinsics, Joint, Skeleton};
 use nalgebra::{Point3, Vector3};
@@ -277,320 +277,522 @@ impl PoseEstimator {
     /// The steps of one frame on the work image `depth` of camera `k`: the skeleton, or
     /// None when no person is found.
     fn estimate_frame(&mut self, depth: DepthView, k: Intrinsics) -> Option<Skeleton> {
-        let (w, h) = (depth.width() as usize, depth.height() as usize);
+        let size = (depth.width() as usize, depth.height() as usize);
         if k.validate().is_err() {
             return None;
         }
         // The settings with the person's limb lengths as learned so far.
-        let cfg_owned = if self.cfg.calibrate.enabled {
+        let cfg = &if self.cfg.calibrate.enabled {
             self.calib.apply(&self.cfg)
         } else {
             self.cfg.clone()
         };
-        let cfg = &cfg_owned;
         self.debug = Debug {
             work_size: (depth.width(), depth.height()),
             ..Debug::default()
         };
-        let (s, t) = (&mut self.scratch, &mut self.tracking);
-        let t0 = Instant::now();
+        let (s, t, d) = (&mut self.scratch, &mut self.tracking, &mut self.debug);
+        let mut lap = Lap(Instant::now());
 
         // 1. The person's pixels.
-        let seg = s.segmenter.run(
-            &depth,
-            &k,
-            &cfg.segment,
-            t.floor,
-            t.centroid,
-            t.bbox,
-            &mut s.points,
-            &mut s.mask,
-        );
-        // Someone found far from the last frame's person is not the one tracked (or
-        // the camera lost them for long): the torso, limbs and body tracked belong
-        // elsewhere, and starting from them would lose this one.
-        if seg.found
-            && t.centroid
-                .is_some_and(|c| (seg.centroid - c).norm() > TRACKED)
-        {
-            *t = Tracking::default();
-        }
-        t.floor = seg.floor;
-        self.debug.floor = seg.floor;
-        self.debug.windowed = seg.windowed;
-        let t1 = Instant::now();
-        self.times.segment = (t1 - t0).as_secs_f64();
-        t.bbox = seg.found.then_some(seg.bbox);
+        let seg = segment(s, t, &depth, &k, cfg, d);
+        self.times.segment = lap.lap();
         if !seg.found {
             return None;
         }
-        t.centroid = Some(seg.centroid);
-
-        // 2. The torso: distance transform + PCA, then model registration, or the
-        // tracked body's torso.
-        let up_hint = seg.floor.map(|p| p.n).unwrap_or(-Vector3::y());
-        let (start, detecting) = t.torso_start(cfg);
-        let fit = s
-            .torso
-            .fit(&s.points, &s.mask, w, h, &cfg.torso, start, up_hint)?;
-        // Found afresh with a narrow torso core: perhaps side-on, which the seed's torso
-        // step takes for a frontal chest (see `register::starts`).
-        let side_on = t.body.is_none()
-            && fit
-                .core_half_width
-                .is_some_and(|w| w < cfg.torso.side_on_half_width);
-        let mut torso = fit.pose;
-        self.debug.torso_residual = fit.residual;
-        self.debug.torso_reinit = fit.reinitialised;
-        let torso_conf = if fit.residual.is_finite() {
-            (1.0 - fit.residual / (2.0 * cfg.torso.icp_reinit_residual)).clamp(0.2, 1.0)
-        } else {
-            0.2
-        };
-        t.torso = Some(torso);
-        self.debug.torso_pose = Some(torso);
-        let mut kp = keypoints(&torso, &cfg.torso);
-        let t2 = Instant::now();
-        self.times.torso = (t2 - t1).as_secs_f64();
-
-        // 3. The geodesic graph, rooted at the torso centre.
-        s.graph.build(&s.points, &s.mask, w, h, &k, &cfg.graph);
-        self.debug.nodes = s.graph.node_count();
-        self.debug.bridges = s.graph.bridges.len();
-        self.debug.joins = s.graph.joins.len();
-        let root = match s.graph.nearest_node(&k, &Point3::from(torso.t), 24) {
-            Some(a) => a,
-            None => {
-                // A known torso came without the distance transform's core pixel: the
-                // rare frame whose torso lies off the graph pays for it here.
-                let core = fit.core_pixel.or_else(|| {
-                    let init = s
-                        .torso
-                        .initial_pose(&s.points, &s.mask, w, h, &cfg.torso, up_hint);
-                    init.map(|(_, core)| core)
-                })?;
-                let a = s.graph.node_of_pixel[core];
-                (a != NONE && s.graph.comp[a as usize] != NONE).then_some(a)?
-            }
-        };
-        let t3 = Instant::now();
-        self.times.graph = (t3 - t2).as_secs_f64();
-
+        // 2. The torso.
+        let mut torso = torso(s, t, &seg, size, cfg, d)?;
+        self.times.torso = lap.lap();
+        // 3. The geodesic graph, rooted at the torso joint.
+        let root = graph(s, &k, size, &torso, cfg, d)?;
+        self.times.graph = lap.lap();
         // 4. The geodesic maxima.
         let maxima = s.geodesic.maxima(&s.graph, root, &cfg.geodesic);
-        self.debug.maxima = maxima
+        d.maxima = maxima
             .iter()
             .map(|&m| s.graph.pixel_of_node[m as usize])
             .collect();
-        let t4 = Instant::now();
-        self.times.geodesic = (t4 - t3).as_secs_f64();
-
-        // The torso model cannot tell front from back, nor well a quarter turn; the feet
-        // can: toes point where the person faces.
-        if cfg.torso.feet_facing {
-            if let Some(turned) = facing_from_feet(&torso, &maxima, &s.graph, &s.geodesic) {
-                torso = turned;
-                t.torso = Some(torso);
-                kp = keypoints(&torso, &cfg.torso);
-            }
-        }
-        let tracked_torso = torso;
-
-        // 5. The maxima given to the limbs by least total cost.
-        let inv = torso.inverse();
-        let LimbCosts {
-            cost,
-            cuts,
-            lengths,
-            mut paths,
-        } = limb_costs(
-            &s.graph,
-            &s.geodesic,
-            &maxima,
-            &Limb::ALL.map(|l| *kp.root_of(l)),
-            &inv,
-            &t.limbs.map(|l| l.and_then(|l| l.extremity)),
-            cfg,
-            &mut s.path,
-        );
-        let assignment = assign(&cost, cfg.assign.unassigned_cost);
-        self.debug.cost = cost;
-        self.debug.maxima_dist = maxima
-            .iter()
-            .map(|&m| s.geodesic.dist(m) as f32 * 1e-3)
-            .collect();
-        self.debug.assignment = assignment;
+        self.times.geodesic = lap.lap();
+        turn_to_the_feet(s, t, &mut torso, &maxima, cfg);
+        // 5. The maxima given to the limbs (the head's holding the torso's height), and
+        // the limbs' tips checked against the tracked body.
+        let tpl = BodyTemplate::new(cfg);
+        let assigned = assign_limbs(s, t, &maxima, &mut torso, size, &tpl, cfg, d);
         // Without registration, the limbs' geodesic lengths measure the person.
         if !cfg.register.enabled {
             for l in Limb::ALL {
-                if let Some(mi) = assignment[l.index()] {
-                    self.calib.measure(&self.cfg, l, lengths[mi][l.index()]);
+                if let Some(mi) = assigned.limb[l.index()] {
+                    let length = assigned.lengths[mi][l.index()];
+                    self.calib.measure(&self.cfg, l, length);
                 }
             }
         }
-        // The head's top holds the torso's height (the next frame's torso step starts
-        // from the torso before this).
-        if let (Some(mi), true) = (
-            assignment[Limb::Head.index()],
-            cfg.torso.head_top_height > 0.0,
-        ) {
-            let top = maxima[mi] as usize;
-            let px = s.graph.pixel_of_node[top] as usize;
-            let (pixel, size) = ((px % w, px / w), (w, h));
-            anchored_at_head_top(&mut torso, &inv, &s.graph.pos[top], pixel, size, &cfg.torso);
-            self.debug.torso_pose = Some(torso);
-            kp = keypoints(&torso, &cfg.torso);
-        }
-        // The registered torso may have slid along its axis, which closest points do
-        // not pin; the next frame starts no farther from the torso region's centre
-        // than a torso can be, or the slide would be carried on for good.
-        // A known torso measured no region this frame: the last offset measured stands.
-        if let Some(pca) = fit.pca {
-            let mut offset = tracked_torso.r.inverse() * (tracked_torso.t - pca.t);
-            let lim = cfg.torso.max_offset;
-            if lim > 0.0 {
-                offset.y = offset.y.clamp(-lim, lim);
-            }
-            t.torso_offset = Some(offset);
-        }
-
-        // The limbs' tips, and whether the seed's chains are needed this frame: the
-        // geodesic estimate races the tracked body when detecting, when nothing is
-        // tracked, or when a limb tip lies far from the tracked body's and off its
-        // surface; otherwise the registration alone follows the body from the last frame.
-        let tpl = BodyTemplate::new(cfg);
-        let mut tips = [None; 5];
-        for l in Limb::ALL {
-            if let Some(mi) = assignment[l.index()] {
-                tips[l.index()] = Some(s.graph.pos[maxima[mi] as usize]);
-            }
-        }
-        if let (Some(prev), true) = (t.body, cfg.register.enabled) {
-            drop_borrowed_tips(&tpl, &prev, &mut tips, &cfg.register);
-        }
-        let race = !cfg.register.enabled
-            || detecting
-            || t.body
-                .is_none_or(|prev| tips_strayed(&tpl, &prev, &tips, &cfg.register));
-        self.debug.raced = race;
-
-        // 6. The seed's skeleton: the torso's key points, a two-joint chain per limb.
-        let mut skel = Skeleton::new([Point3::origin(); Joint::COUNT]);
-        for (j, p) in TorsoPoints::<()>::JOINTS.into_iter().zip(kp.to_array()) {
-            skel.set(j, p);
-            skel.confidence[j.index()] = torso_conf;
-        }
-        let f = 0.5 * (k.fx + k.fy);
-        for l in Limb::ALL.into_iter().filter(|_| race) {
-            let li = l.index();
-            let (_, jm, je) = l.joints();
-            let found = assignment[li].map(|mi| {
-                let path = &paths[mi];
-                (&path[..=cuts[mi][li].min(path.len() - 1)], maxima[mi])
-            });
-            let root = *kp.root_of(l);
-            let (graph, geo) = (&s.graph, &s.geodesic);
-            let limb = limb_chain(
-                l,
-                root,
-                found,
-                &torso,
-                t.limbs[li],
-                cfg,
-                f,
-                graph,
-                geo,
-                &mut s.marks,
-            );
-            t.limbs[li] = Some(limb.state);
-            if let Some(targets) = limb.targets {
-                self.debug.targets[li] = targets;
-            }
-            if let Some(jm) = jm {
-                skel.set(jm, limb.chain.mid);
-                skel.confidence[jm.index()] = limb.confidence;
-            }
-            skel.set(je, limb.chain.end);
-            skel.confidence[je.index()] = limb.confidence;
-        }
-        let t5 = Instant::now();
-        self.times.limbs = (t5 - t4).as_secs_f64();
-
-        // 7. The whole body registered to the frame, from this estimate and from the
-        // last frame's registration, whichever explains the frame better.
-        if cfg.register.enabled {
+        // 6. The seed's skeleton: the torso's key points and, when it races the tracked
+        // body, a chain per limb.
+        let seed = chains(s, t, &torso, &maxima, &assigned, &k, cfg, d);
+        self.times.limbs = lap.lap();
+        // 7. The whole body registered to the frame, from the last frame's body and
+        // from the seed's estimate when it races, whichever explains the frame better.
+        let skeleton = if cfg.register.enabled {
             let frame = Frame {
                 points: &s.points,
                 mask: &s.mask,
-                width: w,
-                height: h,
+                width: size.0,
+                height: size.1,
                 k: &k,
             };
-            s.registration.prepare(&frame, &cfg.register);
-            let geodesic = race.then(|| BodyPose::from_skeleton(&tpl, &skel)).flatten();
-            let side_on = side_on.then_some(seg.centroid);
+            let side_on = torso.side_on.then_some(seg.centroid);
             let offered = self.offered.take();
-            let starts = starts(&tpl, t.body, geodesic, &tips, side_on, offered, cfg);
-            let best = s.registration.fit(
-                &frame,
-                &tpl,
-                &starts.poses,
-                &starts.tips,
-                &t.hidden,
-                &starts.cfg,
-            );
-            if race {
-                self.debug.geodesic = Some(skel);
-            }
-            let mut placed = None;
-            if let Some(b) = best {
-                if self.cfg.calibrate.enabled {
-                    self.calib.learn(&b, cfg);
-                }
-                placed = fitted_joints(&b, &tpl, &tips, &frame, cfg);
-                if placed.is_some() {
-                    t.body = Some(b.pose);
-                    t.hidden = hidden_limbs(&b.seen);
-                    self.debug.register_passes = b.passes;
-                    let points = s.registration.data_len();
-                    self.debug.register_energy = b.energy / points.max(1) as f32;
-                    self.debug.register_points = points;
-                    self.debug.body = Some((b.pose, tpl));
-                }
-            }
-            match placed {
-                Some((fitted, hands)) => {
-                    // The chains were skipped: their state (the limbs' last fits, in the
-                    // torso frame) follows the registered body, its hands as fitted.
-                    if !race {
-                        t.limbs = crate::chains::following(&fitted, &tips, &torso);
-                    }
-                    skel = fitted;
-                    for (j, h) in [Joint::LeftHand, Joint::RightHand].into_iter().zip(hands) {
-                        if let Some(h) = h {
-                            skel.set(j, h);
-                        }
-                    }
-                }
-                None if !race => {
-                    // Neither chains nor a registered body: the frame is lost.
-                    t.body = None;
-                    return None;
-                }
-                None => {}
-            }
-        }
-        self.times.register = t5.elapsed().as_secs_f64();
+            let calib = self.cfg.calibrate.enabled.then_some(&mut self.calib);
+            let body = Body {
+                template: tpl,
+                side_on,
+                offered,
+            };
+            let reg = &mut s.registration;
+            register_body(reg, &frame, t, &seed, &torso.pose, body, calib, cfg, d)?
+        } else {
+            seed.skeleton
+        };
+        self.times.register = lap.lap();
 
         // The paths are done with: hand their buffers to the overlay as pixels.
+        let mut paths = assigned.paths;
         for path in &mut paths {
             for a in path.iter_mut() {
                 *a = s.graph.pixel_of_node[*a as usize];
             }
         }
-        self.debug.paths = paths;
-        Some(skel)
+        d.paths = paths;
+        Some(skeleton)
     }
+}
+
+/// Seconds between laps.
+struct Lap(Instant);
+
+impl Lap {
+    /// Seconds since the last lap (or the start).
+    fn lap(&mut self) -> f64 {
+        let now = Instant::now();
+        let dt = (now - self.0).as_secs_f64();
+        self.0 = now;
+        dt
+    }
+}
+
+/// Step 1: the person's pixels (into `s.points` and `s.mask`). A person found far from
+/// the last frame's is not the one tracked (or the camera lost them for long): the
+/// torso, limbs and body tracked belong elsewhere, and starting from them would lose
+/// this one, so tracking starts afresh.
+fn segment(
+    s: &mut Scratch,
+    t: &mut Tracking,
+    depth: &DepthView,
+    k: &Intrinsics,
+    cfg: &PoseConfig,
+    d: &mut Debug,
+) -> Segmentation {
+    let seg = s.segmenter.run(
+        depth,
+        k,
+        &cfg.segment,
+        t.floor,
+        t.centroid,
+        t.bbox,
+        &mut s.points,
+        &mut s.mask,
+    );
+    if seg.found
+        && t.centroid
+            .is_some_and(|c| (seg.centroid - c).norm() > TRACKED)
+    {
+        *t = Tracking::default();
+    }
+    t.floor = seg.floor;
+    d.floor = seg.floor;
+    d.windowed = seg.windowed;
+    t.bbox = seg.found.then_some(seg.bbox);
+    if seg.found {
+        t.centroid = Some(seg.centroid);
+    }
+    seg
+}
+
+/// The torso of this frame, as the later steps move it.
+struct Torso {
+    /// The torso step's fit.
+    fit: TorsoFit,
+    /// The torso frame now (turned to the feet, held at the head's height).
+    pose: TorsoPose,
+    /// Its key points, camera frame.
+    keypoints: TorsoPoints<Point3<f32>>,
+    /// The torso key points' confidence.
+    confidence: f32,
+    /// Whether the seed's torso step ran in full (no tracked body to take it from).
+    detecting: bool,
+    /// Found afresh with a narrow torso core: perhaps side-on, which the seed's torso
+    /// step takes for a frontal chest (see `register::starts`).
+    side_on: bool,
+    /// Which way is up: the floor's normal, or the camera's up.
+    up_hint: Vector3<f32>,
+}
+
+impl Torso {
+    fn set_pose(&mut self, pose: TorsoPose, cfg: &PoseConfig) {
+        self.pose = pose;
+        self.keypoints = keypoints(&pose, &cfg.torso);
+    }
+}
+
+/// Step 2: the torso, by distance transform, PCA and model registration, or the
+/// tracked body's.
+fn torso(
+    s: &mut Scratch,
+    t: &mut Tracking,
+    seg: &Segmentation,
+    (w, h): (usize, usize),
+    cfg: &PoseConfig,
+    d: &mut Debug,
+) -> Option<Torso> {
+    let up_hint = seg.floor.map(|p| p.n).unwrap_or(-Vector3::y());
+    let (start, detecting) = t.torso_start(cfg);
+    let fit = s
+        .torso
+        .fit(&s.points, &s.mask, w, h, &cfg.torso, start, up_hint)?;
+    let side_on = t.body.is_none()
+        && fit
+            .core_half_width
+            .is_some_and(|w| w < cfg.torso.side_on_half_width);
+    d.torso_residual = fit.residual;
+    d.torso_reinit = fit.reinitialised;
+    let confidence = if fit.residual.is_finite() {
+        (1.0 - fit.residual / (2.0 * cfg.torso.icp_reinit_residual)).clamp(0.2, 1.0)
+    } else {
+        0.2
+    };
+    t.torso = Some(fit.pose);
+    d.torso_pose = Some(fit.pose);
+    Some(Torso {
+        fit,
+        pose: fit.pose,
+        keypoints: keypoints(&fit.pose, &cfg.torso),
+        confidence,
+        detecting,
+        side_on,
+        up_hint,
+    })
+}
+
+/// Step 3: the geodesic graph over the person's pixels, and its node at the torso joint
+/// (the root).
+fn graph(
+    s: &mut Scratch,
+    k: &Intrinsics,
+    (w, h): (usize, usize),
+    torso: &Torso,
+    cfg: &PoseConfig,
+    d: &mut Debug,
+) -> Option<u32> {
+    s.graph.build(&s.points, &s.mask, w, h, k, &cfg.graph);
+    d.nodes = s.graph.node_count();
+    d.bridges = s.graph.bridges.len();
+    d.joins = s.graph.joins.len();
+    if let Some(a) = s.graph.nearest_node(k, &Point3::from(torso.pose.t), 24) {
+        return Some(a);
+    }
+    // A known torso came without the distance transform's core pixel: the rare frame
+    // whose torso lies off the graph pays for it here.
+    let core = torso.fit.core_pixel.or_else(|| {
+        let init = s
+            .torso
+            .initial_pose(&s.points, &s.mask, w, h, &cfg.torso, torso.up_hint);
+        init.map(|(_, core)| core)
+    })?;
+    let a = s.graph.node_of_pixel[core];
+    (a != NONE && s.graph.comp[a as usize] != NONE).then_some(a)
+}
+
+/// The torso model cannot tell front from back, nor well a quarter turn; the feet can:
+/// toes point where the person faces. The torso is turned when they say so.
+fn turn_to_the_feet(
+    s: &Scratch,
+    t: &mut Tracking,
+    torso: &mut Torso,
+    maxima: &[u32],
+    cfg: &PoseConfig,
+) {
+    if !cfg.torso.feet_facing {
+        return;
+    }
+    if let Some(turned) = facing_from_feet(&torso.pose, maxima, &s.graph, &s.geodesic) {
+        torso.set_pose(turned, cfg);
+        t.torso = Some(turned);
+    }
+}
+
+/// Step 5's result.
+struct Assigned {
+    /// Per limb, the maximum given to it (index into the maxima).
+    limb: [Option<usize>; 5],
+    /// Per maximum and limb: where its path is cut for the limb, and the geodesic
+    /// length from the limb's root ([`LimbCosts`]).
+    cuts: Vec<[usize; 5]>,
+    lengths: Vec<[f32; 5]>,
+    /// Per maximum, its path back to the torso joint.
+    paths: Vec<Vec<u32>>,
+    /// Per limb, its tip: the maximum given to it, unless it lies on another limb of
+    /// the tracked body.
+    tips: [Option<Point3<f32>>; 5],
+    /// Whether the seed's estimate races the tracked body: when detecting, when nothing
+    /// is tracked, or when a limb tip lies far from the tracked body's and off its
+    /// surface; otherwise the registration alone follows the body from the last frame.
+    race: bool,
+}
+
+/// Step 5: the maxima given to the limbs by least total cost; the torso held at the
+/// head's height; the limbs' tips, and whether the seed's estimate races the tracked
+/// body.
+#[allow(clippy::too_many_arguments)]
+fn assign_limbs(
+    s: &mut Scratch,
+    t: &mut Tracking,
+    maxima: &[u32],
+    torso: &mut Torso,
+    (w, h): (usize, usize),
+    tpl: &BodyTemplate,
+    cfg: &PoseConfig,
+    d: &mut Debug,
+) -> Assigned {
+    let tracked_torso = torso.pose;
+    let inv = torso.pose.inverse();
+    let LimbCosts {
+        cost,
+        cuts,
+        lengths,
+        paths,
+    } = limb_costs(
+        &s.graph,
+        &s.geodesic,
+        maxima,
+        &Limb::ALL.map(|l| *torso.keypoints.root_of(l)),
+        &inv,
+        &t.limbs.map(|l| l.and_then(|l| l.extremity)),
+        cfg,
+        &mut s.path,
+    );
+    let limb = assign(&cost, cfg.assign.unassigned_cost);
+    d.cost = cost;
+    d.maxima_dist = maxima
+        .iter()
+        .map(|&m| s.geodesic.dist(m) as f32 * 1e-3)
+        .collect();
+    d.assignment = limb;
+    // The head's top holds the torso's height (the next frame's torso step starts from
+    // the torso before this).
+    if let (Some(mi), true) = (limb[Limb::Head.index()], cfg.torso.head_top_height > 0.0) {
+        let top = maxima[mi] as usize;
+        let px = s.graph.pixel_of_node[top] as usize;
+        let mut pose = torso.pose;
+        let head_top = &s.graph.pos[top];
+        anchored_at_head_top(
+            &mut pose,
+            &inv,
+            head_top,
+            (px % w, px / w),
+            (w, h),
+            &cfg.torso,
+        );
+        d.torso_pose = Some(pose);
+        torso.set_pose(pose, cfg);
+    }
+    // The registered torso may have slid along its axis, which closest points do not
+    // pin; the next frame starts no farther from the torso region's centre than a torso
+    // can be, or the slide would be carried on for good. A known torso measured no
+    // region this frame: the last offset measured stands.
+    if let Some(pca) = torso.fit.pca {
+        let mut offset = tracked_torso.r.inverse() * (tracked_torso.t - pca.t);
+        let lim = cfg.torso.max_offset;
+        if lim > 0.0 {
+            offset.y = offset.y.clamp(-lim, lim);
+        }
+        t.torso_offset = Some(offset);
+    }
+    let mut tips = [None; 5];
+    for l in Limb::ALL {
+        if let Some(mi) = limb[l.index()] {
+            tips[l.index()] = Some(s.graph.pos[maxima[mi] as usize]);
+        }
+    }
+    if let (Some(prev), true) = (t.body, cfg.register.enabled) {
+        drop_borrowed_tips(tpl, &prev, &mut tips, &cfg.register);
+    }
+    let race = !cfg.register.enabled
+        || torso.detecting
+        || t.body
+            .is_none_or(|prev| tips_strayed(tpl, &prev, &tips, &cfg.register));
+    d.raced = race;
+    Assigned {
+        limb,
+        cuts,
+        lengths,
+        paths,
+        tips,
+        race,
+    }
+}
+
+/// Step 6's result: the seed's estimate.
+struct Seed {
+    /// The torso's key points and, when racing, the chains' joints.
+    skeleton: Skeleton,
+    /// The limbs' tips ([`Assigned::tips`]).
+    tips: [Option<Point3<f32>>; 5],
+    /// Whether it races the tracked body ([`Assigned::race`]).
+    race: bool,
+}
+
+/// Step 6: the seed's skeleton: the torso's key points and, when racing, a two-joint
+/// chain per limb fitted to its target points.
+#[allow(clippy::too_many_arguments)]
+fn chains(
+    s: &mut Scratch,
+    t: &mut Tracking,
+    torso: &Torso,
+    maxima: &[u32],
+    assigned: &Assigned,
+    k: &Intrinsics,
+    cfg: &PoseConfig,
+    d: &mut Debug,
+) -> Seed {
+    let mut skel = Skeleton::new([Point3::origin(); Joint::COUNT]);
+    for (j, p) in TorsoPoints::<()>::JOINTS
+        .into_iter()
+        .zip(torso.keypoints.to_array())
+    {
+        skel.set(j, p);
+        skel.confidence[j.index()] = torso.confidence;
+    }
+    let f = 0.5 * (k.fx + k.fy);
+    for l in Limb::ALL.into_iter().filter(|_| assigned.race) {
+        let li = l.index();
+        let (_, jm, je) = l.joints();
+        let found = assigned.limb[li].map(|mi| {
+            let path = &assigned.paths[mi];
+            (
+                &path[..=assigned.cuts[mi][li].min(path.len() - 1)],
+                maxima[mi],
+            )
+        });
+        let root = *torso.keypoints.root_of(l);
+        let (graph, geo, marks) = (&s.graph, &s.geodesic, &mut s.marks);
+        let prev = t.limbs[li];
+        let limb = limb_chain(l, root, found, &torso.pose, prev, cfg, f, graph, geo, marks);
+        t.limbs[li] = Some(limb.state);
+        if let Some(targets) = limb.targets {
+            d.targets[li] = targets;
+        }
+        if let Some(jm) = jm {
+            skel.set(jm, limb.chain.mid);
+            skel.confidence[jm.index()] = limb.confidence;
+        }
+        skel.set(je, limb.chain.end);
+        skel.confidence[je.index()] = limb.confidence;
+    }
+    Seed {
+        skeleton: skel,
+        tips: assigned.tips,
+        race: assigned.race,
+    }
+}
+
+/// What step 7 fits besides the frame and the seed's estimate.
+struct Body {
+    /// This frame's body template (the person's limb lengths).
+    template: BodyTemplate,
+    /// The person's centroid, when perhaps side-on.
+    side_on: Option<Point3<f32>>,
+    /// A start offered from outside.
+    offered: Option<OfferedStart>,
+}
+
+/// Step 7: the whole body registered to the frame; its skeleton, with the hands placed
+/// on their points. The tracked body and the limbs' states follow the fit (when the
+/// chains were skipped), the person's size learns from it (`calib`). None when the frame
+/// is lost: no chains this frame and no registered body either.
+#[allow(clippy::too_many_arguments)]
+fn register_body(
+    reg: &mut Registration,
+    frame: &Frame,
+    t: &mut Tracking,
+    seed: &Seed,
+    torso: &TorsoPose,
+    body: Body,
+    calib: Option<&mut BodyCalibration>,
+    cfg: &PoseConfig,
+    d: &mut Debug,
+) -> Option<Skeleton> {
+    let tpl = body.template;
+    reg.prepare(frame, &cfg.register);
+    let geodesic = seed
+        .race
+        .then(|| BodyPose::from_skeleton(&tpl, &seed.skeleton))
+        .flatten();
+    let starts = starts(
+        &tpl,
+        t.body,
+        geodesic,
+        &seed.tips,
+        body.side_on,
+        body.offered,
+        cfg,
+    );
+    let best = reg.fit(
+        frame,
+        &tpl,
+        &starts.poses,
+        &starts.tips,
+        &t.hidden,
+        &starts.cfg,
+    );
+    if seed.race {
+        d.geodesic = Some(seed.skeleton);
+    }
+    let mut placed = None;
+    if let Some(b) = best {
+        if let Some(calib) = calib {
+            calib.learn(&b, cfg);
+        }
+        placed = fitted_joints(&b, &tpl, &seed.tips, frame, cfg);
+        if placed.is_some() {
+            t.body = Some(b.pose);
+            t.hidden = hidden_limbs(&b.seen);
+            d.register_passes = b.passes;
+            let points = reg.data_len();
+            d.register_energy = b.energy / points.max(1) as f32;
+            d.register_points = points;
+            d.body = Some((b.pose, tpl));
+        }
+    }
+    let Some((mut skel, hands)) = placed else {
+        if seed.race {
+            return Some(seed.skeleton);
+        }
+        // Neither chains nor a registered body: the frame is lost.
+        t.body = None;
+        return None;
+    };
+    // The chains were skipped: their state (the limbs' last fits, in the torso frame)
+    // follows the registered body, its hands as fitted.
+    if !seed.race {
+        t.limbs = crate::chains::following(&skel, &seed.tips, torso);
+    }
+    for (j, h) in [Joint::LeftHand, Joint::RightHand].into_iter().zip(hands) {
+        if let Some(h) = h {
+            skel.set(j, h);
+        }
+    }
+    Some(skel)
 }
 
 /// `depth` reduced by `factor`, each pixel the nearest depth of its block (into

@@ -5,7 +5,7 @@
 //! The body model has no hand: its forearm capsule runs on to the fingertips, and its
 //! hand joint (the palm's centre) is a fixed point of the forearm. A real hand turns at
 //! the wrist, so even from the true pose itself the fit's hands lie off the truth,
-//! mostly across the forearm and too deep (pose README). The points
+//! mostly across the forearm and too deep (pose NOTES). The points
 //! the fitted body gives to a forearm near its hand are the hand's own, though: their
 //! centre, set back along the camera's ray by half a hand's thickness (the camera sees
 //! the hand's front), is where the palm is across the forearm. Along the forearm it is

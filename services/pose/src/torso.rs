@@ -183,7 +183,7 @@ pub struct TorsoFit {
     pub pca: Option<TorsoPose>,
     /// Half the width of the person's mask across the core pixel's row, metres, when
     /// the torso was looked for afresh: narrower for a person side-on than for one
-    /// facing the camera or turned away (pose README).
+    /// facing the camera or turned away (pose NOTES).
     pub core_half_width: Option<f32>,
 }
 
