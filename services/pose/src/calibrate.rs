@@ -11,7 +11,7 @@
 //!
 //! Once the articulated registration runs, it refines the lengths instead: one ratio a
 //! limb pair for the whole reach and, for the arms only and when
-//! [`crate::config::RegisterConfig::bone_evidence`] is set, the split between upper arm
+//! [`crate::config::LengthsConfig::bone_evidence`] is set, the split between upper arm
 //! and forearm, from the frames whose bent elbow tells the two bones apart (a straight
 //! limb cannot; legs are rarely seen bent enough, so they keep one ratio).
 
@@ -219,7 +219,7 @@ impl BodyCalibration {
         cfg.body.forearm = f * a * k.powf(-u / (u + f));
         cfg.body.thigh = base.body.thigh * l;
         cfg.body.shin = base.body.shin * l;
-        cfg.register.collar_rest = self.collars;
+        cfg.register.priors.collar_rest = self.collars;
         cfg
     }
 
@@ -231,7 +231,7 @@ impl BodyCalibration {
         let seen = |segs: &[Segment]| {
             segs.iter().map(|s| b.seen[s.index()]).sum::<f32>() / segs.len() as f32
         };
-        let gate = cfg.register.length_seen;
+        let gate = cfg.register.lengths.seen;
         let arms = seen(&[LeftUpperArm, LeftForearm, RightUpperArm, RightForearm]);
         let legs = seen(&[LeftThigh, LeftShin, RightThigh, RightShin]);
         self.refine([
@@ -254,7 +254,7 @@ impl BodyCalibration {
             };
             self.refine_collars(
                 [rel(LeftCollar), rel(RightCollar)],
-                cfg.register.collar_gain,
+                cfg.register.lengths.collar_gain,
             );
         }
     }

@@ -9,7 +9,10 @@ pub use crate::chains::ChainConfig;
 pub use crate::geodesic::GeodesicConfig;
 pub use crate::graph::GraphConfig;
 pub use crate::hands::HandsConfig;
-pub use crate::register::RegisterConfig;
+pub use crate::register::{
+    EnergyConfig, LengthsConfig, PriorsConfig, RaceConfig, RegisterConfig, SamplingConfig,
+    SolverConfig,
+};
 pub use crate::segment::SegmentConfig;
 pub use crate::smooth::SmoothingConfig;
 pub use crate::torso::{TorsoConfig, TorsoPoints};

@@ -65,12 +65,12 @@ struct Tracking {
 impl Tracking {
     /// Where this frame's torso step starts, and whether it runs in full (detecting):
     /// while the registration tracks the body, its torso needs no registration of its
-    /// own; every [`crate::config::RegisterConfig::redetect_every`] frames the seed's
+    /// own; every [`crate::config::RaceConfig::redetect_every`] frames the seed's
     /// torso step runs in full, so the geodesic start stays independent of the
     /// tracking.
     fn torso_start(&mut self, cfg: &PoseConfig) -> (TorsoStart, bool) {
         self.frames_tracked += 1;
-        let redetect = self.frames_tracked >= cfg.register.redetect_every.max(1);
+        let redetect = self.frames_tracked >= cfg.register.race.redetect_every.max(1);
         let tracked = (!redetect)
             .then(|| self.body.and_then(|b| crate::torso::of_body(&b, cfg)))
             .flatten();

@@ -34,6 +34,9 @@ pub struct HandsConfig {
     pub points_radius: f32,
     /// See `points_radius`.
     pub behind_surface: f32,
+    /// A hand is placed behind the fingertips seen (as the seed's chains place it) when
+    /// they lie this near the fitted body's fingertips; farther, the fit's hand stays.
+    pub tip_trust: f32,
 }
 
 impl Default for HandsConfig {
@@ -42,6 +45,7 @@ impl Default for HandsConfig {
             behind_tip: 0.11,
             points_radius: 0.10,
             behind_surface: 0.018,
+            tip_trust: 0.12,
         }
     }
 }
@@ -55,7 +59,7 @@ const MIN_POINTS: usize = 5;
 /// The hands of a registered body moved to follow the fingertips seen (the arms'
 /// geodesic maxima `tips`), as in the seed's chains: a capsule forearm cannot bend at
 /// the wrist, and its end lags a quickly drawing hand. Only where the body's own tip
-/// lies within [`crate::register::RegisterConfig::tip_trust`] of the maximum.
+/// lies within [`HandsConfig::tip_trust`] of the maximum.
 pub fn hands_at_fingertips(
     skel: &mut Skeleton,
     posed: &Posed,
@@ -73,7 +77,7 @@ pub fn hands_at_fingertips(
         let ext_b = ext + ext.coords.normalize() * cfg.chains.surface_offset(l);
         let (seg, local) = tpl.tips[l.index()];
         let tip = posed.point(seg, &local);
-        if (tip - ext_b).norm() > cfg.register.tip_trust {
+        if (tip - ext_b).norm() > cfg.hands.tip_trust {
             continue;
         }
         if let Some(u) = (ext_b - skel[elbow]).try_normalize(1e-6) {

@@ -8,6 +8,40 @@ use super::{Pass, Problem, Registration};
 use crate::body::{Posed, Segment};
 use nalgebra::Vector3;
 
+/// Weights and scales of the energy's terms (part of [`super::RegisterConfig`]).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct EnergyConfig {
+    /// Scale of the data term's Cauchy weight, metres.
+    pub sigma: f32,
+    /// Weight of a silhouette residual against one data point's.
+    pub silhouette_weight: f32,
+    /// Weight of a free-space residual against one data point's.
+    pub free_space_weight: f32,
+    /// Beyond this (metres) the silhouette and free-space terms pull linearly (Huber).
+    pub silhouette_scale: f32,
+    /// How far the body's front may lie before the surface seen, metres.
+    pub free_space_margin: f32,
+    /// Weight of a limb tip's distance to its geodesic maximum...
+    pub tip_weight: f32,
+    /// ...and its Cauchy scale, metres.
+    pub tip_sigma: f32,
+}
+
+impl Default for EnergyConfig {
+    fn default() -> Self {
+        Self {
+            sigma: 0.03,
+            silhouette_weight: 3.0,
+            free_space_weight: 4.0,
+            silhouette_scale: 0.05,
+            free_space_margin: 0.03,
+            tip_weight: 10.0,
+            tip_sigma: 0.1,
+        }
+    }
+}
+
 /// Cauchy's weight and cost for residual `r` at scale `s`.
 #[inline]
 pub(super) fn cauchy(r: f32, s: f32) -> (f32, f32) {
@@ -51,7 +85,7 @@ impl Registration {
         let (f, t, tips, cfg) = (p.frame, p.body, p.tips, p.cfg);
         let placed = place(t, posed);
         let gaps = pass.search.then(|| Gaps::new(&placed));
-        let mut acc = Accumulator::new(posed, cfg.bone_evidence.is_some());
+        let mut acc = Accumulator::new(posed, cfg.lengths.bone_evidence.is_some());
 
         // Data: each point on its nearest capsule's surface.
         for ((p, area), ci) in self.data.iter().zip(assign.iter_mut()) {
@@ -69,9 +103,9 @@ impl Registration {
                 continue;
             }
             let n = off / len;
-            let w = cauchy_weight(d, cfg.sigma);
+            let w = cauchy_weight(d, cfg.energy.sigma);
             if pass.energy {
-                acc.energy += (area * cauchy_cost(d, cfg.sigma)) as f64;
+                acc.energy += (area * cauchy_cost(d, cfg.energy.sigma)) as f64;
             }
             acc.add(placed[*ci as usize].segment, &q, &(-n), d, area * w);
         }
@@ -104,17 +138,17 @@ impl Registration {
                 if person {
                     let z_obs = f.points[idx].z;
                     let gap = z_obs - s.z;
-                    if gap > cfg.free_space_margin {
+                    if gap > cfg.energy.free_space_margin {
                         // The camera sees past the body's front: the body is not there.
-                        let res = cfg.free_space_margin - gap;
-                        let (wc, cost) = huber(res, cfg.silhouette_scale);
-                        acc.energy += (cfg.free_space_weight * cost) as f64;
+                        let res = cfg.energy.free_space_margin - gap;
+                        let (wc, cost) = huber(res, cfg.energy.silhouette_scale);
+                        acc.energy += (cfg.energy.free_space_weight * cost) as f64;
                         acc.add(
                             c.segment,
                             &s,
                             &Vector3::z(),
                             res,
-                            cfg.free_space_weight * wc,
+                            cfg.energy.free_space_weight * wc,
                         );
                     } else if gap > -0.05 {
                         seen_n[c.segment.index()] += 1;
@@ -122,9 +156,9 @@ impl Registration {
                 } else if let Some((qu, qv)) = self.nearest.get(u as usize, v as usize) {
                     let target = f.k.back_project(qu as f32, qv as f32, s.z);
                     let e = s - target;
-                    let (wc, cost) = huber(e.norm(), cfg.silhouette_scale);
-                    acc.energy += (cfg.silhouette_weight * cost) as f64;
-                    let ws = cfg.silhouette_weight * wc;
+                    let (wc, cost) = huber(e.norm(), cfg.energy.silhouette_scale);
+                    acc.energy += (cfg.energy.silhouette_weight * cost) as f64;
+                    let ws = cfg.energy.silhouette_weight * wc;
                     // Both image axes: pulled only up or down, an arm held out beside
                     // the silhouette (a T-pose's arm, the person since turned side-on)
                     // stayed in the air.
@@ -139,9 +173,9 @@ impl Registration {
             let Some(m) = target else { continue };
             let x = posed.point(tip.0, &tip.1);
             let e = x - m;
-            let (wc, cost) = cauchy(e.norm(), cfg.tip_sigma);
-            acc.energy += (cfg.tip_weight * cost) as f64;
-            let wt = cfg.tip_weight * wc;
+            let (wc, cost) = cauchy(e.norm(), cfg.energy.tip_sigma);
+            acc.energy += (cfg.energy.tip_weight * cost) as f64;
+            let wt = cfg.energy.tip_weight * wc;
             acc.add(tip.0, &x, &Vector3::x(), e.x, wt);
             acc.add(tip.0, &x, &Vector3::y(), e.y, wt);
             acc.add(tip.0, &x, &Vector3::z(), e.z, wt);

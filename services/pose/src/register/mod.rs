@@ -33,7 +33,10 @@ mod tests;
 mod tips;
 
 pub(crate) use capsules::{nearest_is, place};
-pub use config::RegisterConfig;
+pub use config::{
+    EnergyConfig, LengthsConfig, PriorsConfig, RaceConfig, RegisterConfig, SamplingConfig,
+    SolverConfig,
+};
 pub use priors::hidden_limbs;
 pub use starts::{starts, OfferedStart};
 pub use tips::{drop_borrowed_tips, tips_strayed};
@@ -118,8 +121,8 @@ impl Registration {
     }
 
     /// Fits the body from the best of several starts: each is moved
-    /// [`RegisterConfig::race_iterations`] steps, and the one whose energy is then
-    /// lowest goes on to [`RegisterConfig::iterations`] in all. `tips`: per limb of
+    /// [`SolverConfig::race_iterations`] steps, and the one whose energy is then
+    /// lowest goes on to [`SolverConfig::iterations`] in all. `tips`: per limb of
     /// [`crate::Limb::ALL`], the geodesic maximum assigned to it (camera frame), if any.
     /// `None` without a start.
     pub fn fit(
@@ -139,9 +142,12 @@ impl Registration {
             cfg,
         };
         if let [only] = starts {
-            return Some(self.run(&problem, *only, cfg.iterations, true));
+            return Some(self.run(&problem, *only, cfg.solver.iterations, true));
         }
-        let race = cfg.race_iterations.clamp(1, cfg.iterations.max(1));
+        let race = cfg
+            .solver
+            .race_iterations
+            .clamp(1, cfg.solver.iterations.max(1));
         let mut best: Option<Fit> = None;
         let mut passes = 0;
         for &s in starts {
@@ -154,7 +160,12 @@ impl Registration {
             }
         }
         let b = best?;
-        let mut fit = self.run(&problem, b.pose, cfg.iterations.saturating_sub(race), true);
+        let mut fit = self.run(
+            &problem,
+            b.pose,
+            cfg.solver.iterations.saturating_sub(race),
+            true,
+        );
         fit.passes += passes;
         Some(fit)
     }

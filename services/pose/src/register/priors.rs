@@ -5,6 +5,56 @@ use super::{Gradient, Normal, RegisterConfig};
 use crate::body::{BodyPose, Segment};
 use nalgebra::Vector3;
 
+/// Weights of the priors on the joints' turns, per radian² (part of
+/// [`super::RegisterConfig`]).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct PriorsConfig {
+    /// The head's turn from its rest against the chest: its turn about its own axis is
+    /// not in the data at all.
+    pub head: f64,
+    /// The chest's turn against the abdomen.
+    pub chest: f64,
+    /// The abdomen's turn against the pelvis.
+    pub abdomen: f64,
+    /// The collarbones' raising and bringing forward of the shoulders, against their
+    /// rest turn `collar_rest`...
+    pub collar: f64,
+    /// ...(rotation vectors against the chest, left and right), which the calibration
+    /// learns for the person.
+    pub collar_rest: [[f32; 3]; 2],
+    /// Elbows and knees: a twist...
+    pub hinge_twist: f64,
+    /// ...a sideways bend...
+    pub hinge_side: f64,
+    /// ...and bending the wrong way beyond `hinge_slack` radians.
+    pub hinge_limit: f64,
+    /// See `hinge_limit`.
+    pub hinge_slack: f32,
+    /// Pull of upper arms and thighs towards hanging straight down: a limb the camera
+    /// does not see (behind the body) has nothing else to keep it. Scaled per limb by
+    /// how hidden it was last frame. Stronger pulls bend limbs the camera half sees
+    /// (pose NOTES, 2026-12-02).
+    pub limb_rest: f64,
+}
+
+impl Default for PriorsConfig {
+    fn default() -> Self {
+        Self {
+            head: 1.0,
+            chest: 3.0,
+            abdomen: 3.0,
+            collar: 3.0,
+            collar_rest: [[0.0; 3]; 2],
+            hinge_twist: 0.05,
+            hinge_side: 2.0,
+            hinge_limit: 5.0,
+            hinge_slack: 0.15,
+            limb_rest: 0.3,
+        }
+    }
+}
+
 /// Priors on each joint's turn, the rotation vector φ of a segment against its parent
 /// (parent frame, x = the person's left, y = up, z = forward at rest). A world turn ω
 /// of the segment changes φ by R_parentᵀ ω; its parent's turn moves both and leaves φ
@@ -12,7 +62,7 @@ use nalgebra::Vector3;
 /// axis is not in the data at all). Elbows and knees are hinges about x: they do not
 /// bend sideways (z), twist little (y), and bend one way only (the knee back, the
 /// elbow forward). Upper arms and thighs hidden last frame are pulled towards hanging
-/// down ([`RegisterConfig::limb_rest_prior`], scaled by [`hidden_limbs`]): a limb behind
+/// down ([`PriorsConfig::limb_rest`], scaled by [`hidden_limbs`]): a limb behind
 /// the body is held by nothing else and would stay where the last frame that saw it (or
 /// a wrong start) left it. Pulling every limb alike bent an arm raised to draw and
 /// turned its collar; pulling the hidden ones only leaves the drawing arm alone.
@@ -25,20 +75,20 @@ pub(super) fn add_joint_priors(
 ) {
     use Segment::*;
     // (segment, weight per axis of φ, bending limit on φ.x: (sign, allowed))
-    let hinge = |seg| (seg, [0.0, cfg.hinge_twist_prior, cfg.hinge_side_prior]);
-    let rest = |seg: Segment| (seg, [cfg.limb_rest_prior * hidden[seg.index()] as f64; 3]);
+    let hinge = |seg| (seg, [0.0, cfg.priors.hinge_twist, cfg.priors.hinge_side]);
+    let rest = |seg: Segment| (seg, [cfg.priors.limb_rest * hidden[seg.index()] as f64; 3]);
     let priors = [
-        (Head, [cfg.head_prior; 3]),
-        (Chest, [cfg.chest_prior; 3]),
-        (Abdomen, [cfg.abdomen_prior; 3]),
+        (Head, [cfg.priors.head; 3]),
+        (Chest, [cfg.priors.chest; 3]),
+        (Abdomen, [cfg.priors.abdomen; 3]),
         // The collarbone points sideways (x): its turn about x is no motion at all.
         (
             LeftCollar,
-            [cfg.hinge_twist_prior, cfg.collar_prior, cfg.collar_prior],
+            [cfg.priors.hinge_twist, cfg.priors.collar, cfg.priors.collar],
         ),
         (
             RightCollar,
-            [cfg.hinge_twist_prior, cfg.collar_prior, cfg.collar_prior],
+            [cfg.priors.hinge_twist, cfg.priors.collar, cfg.priors.collar],
         ),
         rest(LeftUpperArm),
         rest(RightUpperArm),
@@ -55,8 +105,8 @@ pub(super) fn add_joint_priors(
         let mut phi = (rp.inverse() * pose.rotation[seg.index()]).scaled_axis();
         // The collarbones keep near the person's own rest, learned as they move.
         match seg {
-            LeftCollar => phi -= Vector3::from(cfg.collar_rest[0]),
-            RightCollar => phi -= Vector3::from(cfg.collar_rest[1]),
+            LeftCollar => phi -= Vector3::from(cfg.priors.collar_rest[0]),
+            RightCollar => phi -= Vector3::from(cfg.priors.collar_rest[1]),
             _ => {}
         }
         let rpm = rp.matrix().cast::<f64>();
@@ -78,8 +128,8 @@ pub(super) fn add_joint_priors(
         // One-way bending: the knee flexes with φ.x > 0 (the shin goes back), the elbow
         // with φ.x < 0 (the forearm comes forward).
         let over = match seg {
-            LeftShin | RightShin => (-phi.x - cfg.hinge_slack).max(0.0),
-            LeftForearm | RightForearm => (phi.x - cfg.hinge_slack).max(0.0),
+            LeftShin | RightShin => (-phi.x - cfg.priors.hinge_slack).max(0.0),
+            LeftForearm | RightForearm => (phi.x - cfg.priors.hinge_slack).max(0.0),
             _ => 0.0,
         };
         if over > 0.0 {
@@ -88,7 +138,7 @@ pub(super) fn add_joint_priors(
             } else {
                 1.0
             };
-            add(0, sign * over, cfg.hinge_limit_prior);
+            add(0, sign * over, cfg.priors.hinge_limit);
         }
     }
 }

@@ -4,6 +4,27 @@
 
 use super::{Frame, RegisterConfig, Registration};
 
+/// Which person points the registration's data term takes (part of
+/// [`super::RegisterConfig`]).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct SamplingConfig {
+    /// Every person point within this many pixels of the silhouette's edge (thin parts:
+    /// a forearm is two or three pixels wide)...
+    pub thin_px: f32,
+    /// ...and the others on a grid of this stride.
+    pub interior_stride: usize,
+}
+
+impl Default for SamplingConfig {
+    fn default() -> Self {
+        Self {
+            thin_px: 2.0,
+            interior_stride: 3,
+        }
+    }
+}
+
 /// How far around the person's bounding box the nearest-person-pixel map reaches,
 /// pixels (a limb of the body farther out is pulled towards the box's edge first).
 pub(super) const NEAREST_MARGIN: usize = 24;
@@ -165,12 +186,12 @@ impl EdgeTest {
 impl Registration {
     /// Samples the person's points and builds the nearest-person-pixel map.
     ///
-    /// Thin parts (limbs, within [`RegisterConfig::thin_px`] of the silhouette's edge)
+    /// Thin parts (limbs, within [`SamplingConfig::thin_px`] of the silhouette's edge)
     /// keep every pixel: a forearm is two or three pixels wide. The thick interior is
-    /// taken on a grid of [`RegisterConfig::interior_stride`].
+    /// taken on a grid of [`SamplingConfig::interior_stride`].
     pub fn prepare(&mut self, f: &Frame, cfg: &RegisterConfig) {
-        let s = cfg.interior_stride.max(1);
-        let edge = EdgeTest::new(cfg.thin_px);
+        let s = cfg.sampling.interior_stride.max(1);
+        let edge = EdgeTest::new(cfg.sampling.thin_px);
         self.data.clear();
         let (mut u0, mut v0, mut u1, mut v1) = (usize::MAX, usize::MAX, 0, 0);
         for v in 0..f.height {

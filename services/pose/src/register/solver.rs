@@ -7,6 +7,66 @@ use super::{Fit, Gradient, Local, Normal, Pass, Problem, Registration, N, REASSI
 use crate::body::{BodyPose, Posed, Segment};
 use nalgebra::{Matrix3, Point3, SMatrix, Vector3, Vector6};
 
+/// Settings of the Gauss–Newton steps (part of [`super::RegisterConfig`]).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct SolverConfig {
+    /// Gauss–Newton steps in all...
+    pub iterations: usize,
+    /// ...and of them how many each start is given before the best one alone goes on.
+    pub race_iterations: usize,
+    /// A run stops early once a step is smaller than this (metres and radians
+    /// together).
+    pub converged: f32,
+    /// Levenberg–Marquardt damping, relative (of the diagonal)...
+    pub damping: f64,
+    /// ...and absolute.
+    pub damping_abs: f64,
+}
+
+impl Default for SolverConfig {
+    fn default() -> Self {
+        Self {
+            iterations: 10,
+            race_iterations: 3,
+            converged: 1e-4,
+            damping: 0.05,
+            damping_abs: 0.01,
+        }
+    }
+}
+
+/// What the fits tell of the person's limb lengths (part of
+/// [`super::RegisterConfig`]; the calibration learns from it).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct LengthsConfig {
+    /// Σ w j² a limb pair's length gradient needs before it is trusted (j: metres a
+    /// point moves per unit change of the length ratio).
+    pub evidence: f64,
+    /// The share of a limb pair's front surface the camera must see where the fit puts
+    /// it for the frame to count towards the pair's length.
+    pub seen: f32,
+    /// When set, an arm's upper arm and forearm are learned apart (`bone_steps`) from
+    /// frames whose normal equations of the two bones' length ratios have no eigenvalue
+    /// below this (Σ w j², as `evidence`). Off (None) by default: the split it learns is
+    /// biased, and a sequence with noise lost a leg with it (pose NOTES).
+    pub bone_evidence: Option<f64>,
+    /// The share of the way to each well-seen frame's collarbone turns their rest moves.
+    pub collar_gain: f32,
+}
+
+impl Default for LengthsConfig {
+    fn default() -> Self {
+        Self {
+            evidence: 10.0,
+            seen: 0.6,
+            bone_evidence: None,
+            collar_gain: 0.02,
+        }
+    }
+}
+
 /// Normal equations of one step, per segment: the segment's motion is a twist (v, ω)
 /// about its own joint o, and a residual r along `dir` at point x of it changes by
 /// dirᵀ(v + ω × (x − o)). Sums are in f32 (lever arms are a limb long, not the
@@ -27,7 +87,7 @@ pub(super) struct Accumulator {
     /// upper arm's and the forearm's length ratios apart (an upper arm's points move
     /// away from the shoulder as it grows, a forearm's with the elbow and away from
     /// it): Σ w j₁ r, Σ w j₂ r, Σ w j₁², Σ w j₁ j₂, Σ w j₂². None unless
-    /// [`RegisterConfig::bone_evidence`] asks for them: every arm point of every pass
+    /// [`LengthsConfig::bone_evidence`] asks for them: every arm point of every pass
     /// would pay for sums nobody reads.
     pub(super) arm_bones: Option<[[f64; 5]; 2]>,
 }
@@ -231,7 +291,7 @@ impl Registration {
             let (mut h, mut g) = acc.assemble();
             add_joint_priors(&mut h, &mut g, &pose, p.hidden, cfg);
             for i in 0..N {
-                h[(i, i)] += cfg.damping * h[(i, i)] + cfg.damping_abs;
+                h[(i, i)] += cfg.solver.damping * h[(i, i)] + cfg.solver.damping_abs;
             }
             let Some(ch) = h.cholesky() else {
                 break;
@@ -257,14 +317,14 @@ impl Registration {
                 break;
             }
             pose = next;
-            if step.norm() < cfg.converged as f64 {
+            if step.norm() < cfg.solver.converged as f64 {
                 break;
             }
         }
         // A step only where the limbs carry enough evidence (about a hundred points'
         // worth of a limb's reach).
-        let length_step = length.map(|(g, h)| (h > cfg.length_evidence).then(|| (-g / h) as f32));
-        let arm_bone_steps = match (arm_bones, cfg.bone_evidence) {
+        let length_step = length.map(|(g, h)| (h > cfg.lengths.evidence).then(|| (-g / h) as f32));
+        let arm_bone_steps = match (arm_bones, cfg.lengths.bone_evidence) {
             (Some(sums), Some(e)) => sums.map(|l| bone_steps(&l, e)),
             _ => [None; 2],
         };

@@ -23,7 +23,7 @@ pub enum OfferedStart {
 /// The starts of one frame's registration and the settings and tips they race with.
 #[derive(Debug, Clone)]
 pub struct Starts<'a> {
-    /// Each is moved [`RegisterConfig::race_iterations`] steps; the best goes on.
+    /// Each is moved [`super::SolverConfig::race_iterations`] steps; the best goes on.
     pub poses: Vec<BodyPose>,
     /// The registration's settings for this race (the configured ones but for a person
     /// perhaps side-on).
@@ -34,7 +34,7 @@ pub struct Starts<'a> {
 
 /// The starts of a frame: the last frame's body `tracked`, the geodesic estimate
 /// `geodesic` (when the seed's steps ran), the tracked body with the limbs whose tip
-/// strayed taken from the geodesic estimate ([`RegisterConfig::race_hybrid`]), and,
+/// strayed taken from the geodesic estimate ([`super::RaceConfig::hybrid`]), and,
 /// for a person perhaps side-on (`side_on`: the person's centroid), standing side-on
 /// bodies, raced for every step and without the tips (they were assigned to the limbs
 /// of the frontal body). An `offered` start is added, or replaces them all.
@@ -48,16 +48,14 @@ pub fn starts<'a>(
     cfg: &'a PoseConfig,
 ) -> Starts<'a> {
     let hybrid = tracked
-        .zip(geodesic.filter(|_| cfg.register.race_hybrid))
+        .zip(geodesic.filter(|_| cfg.register.race.hybrid))
         .and_then(|(prev, geo)| hybrid_start(tpl, &prev, &geo, tips, cfg));
     let mut poses: Vec<BodyPose> = [tracked, hybrid, geodesic].into_iter().flatten().collect();
     let (register_cfg, tips_now) = match geodesic.zip(side_on) {
         Some((g, centroid)) => {
             poses.extend(side_on_starts(&g, &centroid));
-            let side_on_cfg = RegisterConfig {
-                race_iterations: cfg.register.iterations,
-                ..cfg.register.clone()
-            };
+            let mut side_on_cfg = cfg.register.clone();
+            side_on_cfg.solver.race_iterations = cfg.register.solver.iterations;
             (Cow::Owned(side_on_cfg), [None; 5])
         }
         None => (Cow::Borrowed(&cfg.register), *tips),
@@ -102,7 +100,7 @@ fn side_on_starts(geodesic: &BodyPose, centroid: &Point3<f32>) -> [BodyPose; 2] 
 }
 
 /// The tracked body `prev` with every limb whose tip strayed (lies farther than
-/// [`RegisterConfig::race_gap`] from the geodesic maximum given to it) taken from the
+/// [`super::RaceConfig::gap`] from the geodesic maximum given to it) taken from the
 /// geodesic estimate `geo`: an arm dropped from a T-pose within a frame, say, while the
 /// rest is tracked well. None when no tip strayed.
 fn hybrid_start(
@@ -118,7 +116,7 @@ fn hybrid_start(
     for l in Limb::ALL {
         let (seg, local) = tpl.tips[l.index()];
         if tips[l.index()]
-            .is_some_and(|m| (posed.point(seg, &local) - m).norm() > cfg.register.race_gap)
+            .is_some_and(|m| (posed.point(seg, &local) - m).norm() > cfg.register.race.gap)
         {
             h = h.with_limb_of(geo, l);
             changed = true;

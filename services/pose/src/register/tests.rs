@@ -122,12 +122,10 @@ fn registration_finds_the_pose_a_body_was_drawn_at() {
     // Every pixel a data point, of weight one; without the pull towards hanging,
     // which by design bends a limb the camera hardly sees (this raised arm: 3.6 cm
     // at its worst joint with a pull of 0.1).
-    let cfg = RegisterConfig {
-        iterations: 30,
-        interior_stride: 1,
-        limb_rest_prior: 0.0,
-        ..RegisterConfig::default()
-    };
+    let mut cfg = RegisterConfig::default();
+    cfg.solver.iterations = 30;
+    cfg.sampling.interior_stride = 1;
+    cfg.priors.limb_rest = 0.0;
     let before = worst(&t, &start, &truth);
     assert!(before > 0.1, "the start is {before} m off at worst");
     // The limbs' tips where the geodesic maxima would be: the truth's.
@@ -164,11 +162,9 @@ fn an_arm_held_out_beside_the_silhouette_is_pulled_back_onto_it() {
     let mut w = [Vector3::zeros(); Segment::COUNT];
     w[Segment::RightUpperArm.index()] = Vector3::z() * 1.5;
     start.step(&Vector3::zeros(), &w);
-    let cfg = RegisterConfig {
-        interior_stride: 1,
-        limb_rest_prior: 0.0,
-        ..RegisterConfig::default()
-    };
+    let mut cfg = RegisterConfig::default();
+    cfg.sampling.interior_stride = 1;
+    cfg.priors.limb_rest = 0.0;
     let posed = Posed::new(&t, &truth);
     let mut tips = t.tips.map(|(s, local)| Some(posed.point(s, &local)));
     tips[crate::config::Limb::RightArm.index()] = None;
@@ -232,10 +228,8 @@ fn a_tip_on_another_limb_of_the_tracked_body_is_dropped() {
     assert_eq!(tips[Limb::LeftArm.index()], own[Limb::LeftArm.index()]);
     // Off, it stays.
     tips[Limb::RightArm.index()] = Some(on_left_forearm);
-    let off = RegisterConfig {
-        borrowed_tip_gap: 0.0,
-        ..cfg
-    };
+    let mut off = cfg;
+    off.race.borrowed_tip_gap = 0.0;
     drop_borrowed_tips(&t, &tracked, &mut tips, &off);
     assert_eq!(tips[Limb::RightArm.index()], Some(on_left_forearm));
 }
@@ -258,13 +252,11 @@ fn only_a_tip_off_the_tracked_body_makes_the_geodesic_estimate_race() {
     let mut tips = own;
     tips[Limb::LeftLeg.index()] = Some(knee);
     let toes = own[Limb::LeftLeg.index()].expect("toes");
-    assert!((knee - toes).norm() > cfg.race_gap);
+    assert!((knee - toes).norm() > cfg.race.gap);
     assert!(!tips_strayed(&t, &tracked, &tips, &cfg));
     // Without the surface test it races.
-    let anywhere = RegisterConfig {
-        race_off_body: 0.0,
-        ..cfg.clone()
-    };
+    let mut anywhere = cfg.clone();
+    anywhere.race.off_body = 0.0;
     assert!(tips_strayed(&t, &tracked, &tips, &anywhere));
     // A hand raised 40 cm before the chest, where the tracked body is not, races.
     let mut tips = own;
@@ -318,10 +310,8 @@ fn the_better_start_wins_the_race() {
         &Vector3::new(0.04, -0.03, 0.02),
         &[Vector3::zeros(); Segment::COUNT],
     );
-    let cfg = RegisterConfig {
-        interior_stride: 1,
-        ..RegisterConfig::default()
-    };
+    let mut cfg = RegisterConfig::default();
+    cfg.sampling.interior_stride = 1;
     let mut reg = Registration::default();
     reg.prepare(&frame, &cfg);
     let posed = Posed::new(&t, &truth);
