@@ -8,11 +8,10 @@
 
 use airglyph_core::{DepthImage, Intrinsics};
 use airglyph_pose::config::RegisterConfig;
-use airglyph_pose::dijkstra::{Dijkstra, Graph};
-use airglyph_pose::dt::DistanceTransform;
-use airglyph_pose::graph::GeoGraph;
-use airglyph_pose::segment::{Segmentation, Segmenter};
-use airglyph_pose::torso::{TorsoEstimator, TorsoStart};
+use airglyph_pose::steps::{
+    Dijkstra, DistanceTransform, GeoGraph, Graph, Segmentation, Segmenter, TorsoEstimator,
+    TorsoStart,
+};
 use airglyph_pose::{PoseConfig, PoseEstimator};
 use airglyph_synth::{Background, MotionSpec, SceneConfig, ScriptedPose, Synthesizer};
 use criterion::{criterion_group, criterion_main, Criterion};
@@ -65,7 +64,7 @@ fn bench(c: &mut Criterion) {
             seg.run(
                 &img.view(),
                 &k,
-                &cfg,
+                &cfg.segment,
                 floor,
                 centroid,
                 bbox,
@@ -88,13 +87,15 @@ fn bench(c: &mut Criterion) {
         g.bench_function("2a distance transform", |b| {
             b.iter(|| dt.compute(black_box(&mask), wu, hu, &mut dist))
         });
-        let mut torso = TorsoEstimator::new(&cfg);
+        let mut torso = TorsoEstimator::new(&cfg.torso);
         let up = -Vector3::y();
         g.bench_function("2 torso (DT + PCA + registration from PCA)", |b| {
-            b.iter(|| black_box(torso.fit(&points, &mask, wu, hu, &cfg, TorsoStart::Fresh, up)))
+            b.iter(|| {
+                black_box(torso.fit(&points, &mask, wu, hu, &cfg.torso, TorsoStart::Fresh, up))
+            })
         });
         let fit = torso
-            .fit(&points, &mask, wu, hu, &cfg, TorsoStart::Fresh, up)
+            .fit(&points, &mask, wu, hu, &cfg.torso, TorsoStart::Fresh, up)
             .expect("torso");
         g.bench_function("2b torso registration from last frame", |b| {
             b.iter(|| {
@@ -103,7 +104,7 @@ fn bench(c: &mut Criterion) {
                     &mask,
                     wu,
                     hu,
-                    &cfg,
+                    &cfg.torso,
                     TorsoStart::Track(fit.pose, Vector3::zeros()),
                     up,
                 ))
@@ -111,9 +112,9 @@ fn bench(c: &mut Criterion) {
         });
         let mut graph = GeoGraph::default();
         g.bench_function("3 geodesic graph", |b| {
-            b.iter(|| graph.build(&points, &mask, wu, hu, &k, &cfg))
+            b.iter(|| graph.build(&points, &mask, wu, hu, &k, &cfg.graph))
         });
-        graph.build(&points, &mask, wu, hu, &k, &cfg);
+        graph.build(&points, &mask, wu, hu, &k, &cfg.graph);
         let root = graph
             .nearest_node(&k, &Point3::from(fit.pose.t), 12)
             .expect("root");

@@ -1,4 +1,4 @@
-//! The articulated body the registration ([`crate::register`]) fits to the depth data:
+//! The articulated body the registration (step 7, `register/`) fits to the depth data:
 //! fourteen rigid segments in a tree (pelvis → abdomen → chest → head, and collars →
 //! arms; pelvis → legs), each
 //! carrying tapered capsules that approximate its surface, and the 16 joints as points of
@@ -11,37 +11,103 @@
 //! torso's shape can never change from frame to frame.
 //!
 //! The template's numbers were measured on the MakeHuman body of airglyph-synth standing
-//! (`cargo run --release -p airglyph-pose --example body_shape -- mh pose:neutral`): the
+//! (`examples/fit_template.rs`): the
 //! radius of each limb around its bone, the torso's cross-sections in the pelvis frame,
 //! the joints' places. Arm and leg lengths scale with the person's
-//! ([`crate::calibrate`]).
+//! (`calibrate.rs`).
 
 use crate::config::PoseConfig;
+use crate::Limb;
 use airglyph_core::{Joint, Skeleton};
 use nalgebra::{Point3, Rotation3, Unit, Vector3};
+use serde::{Deserialize, Serialize};
+
+/// The body's bone lengths, metres (part of [`crate::PoseConfig`]): measured on the
+/// MakeHuman body of airglyph-synth standing still; the arms' and legs' are then learned
+/// for the person in view (`calibrate.rs`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct BodyConfig {
+    /// Shoulder to elbow.
+    pub upper_arm: f32,
+    /// Elbow to palm centre.
+    pub forearm: f32,
+    /// Hip to knee.
+    pub thigh: f32,
+    /// Knee to ankle.
+    pub shin: f32,
+    /// Neck to the head joint (the skull's centre).
+    pub neck_to_head: f32,
+}
+
+impl Default for BodyConfig {
+    fn default() -> Self {
+        Self {
+            upper_arm: 0.227,
+            forearm: 0.272,
+            thigh: 0.42,
+            shin: 0.382,
+            neck_to_head: 0.104,
+        }
+    }
+}
+
+impl BodyConfig {
+    /// Bone lengths (root→middle, middle→end) of a limb; the head has one bone.
+    pub fn bones(&self, limb: Limb) -> (f32, f32) {
+        match limb {
+            Limb::Head => (self.neck_to_head, 0.0),
+            Limb::LeftArm | Limb::RightArm => (self.upper_arm, self.forearm),
+            Limb::LeftLeg | Limb::RightLeg => (self.thigh, self.shin),
+        }
+    }
+
+    /// Geodesic length beyond the end joint: fingers past the palm centre, the foot
+    /// past the ankle, the skull's top past its centre.
+    pub fn extremity_extra(&self, limb: Limb) -> f32 {
+        match limb {
+            Limb::Head => 0.10,
+            Limb::LeftArm | Limb::RightArm => 0.10,
+            Limb::LeftLeg | Limb::RightLeg => 0.12,
+        }
+    }
+}
 
 /// A rigid part of the body.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Segment {
+    /// The hips' segment, the tree's root.
     Pelvis,
     /// The lower back, between the pelvis and the chest: the spine bends at both ends.
     Abdomen,
+    /// The ribcage, carrying the neck, the torso joint and the collarbones.
     Chest,
+    /// The head, turning at the neck.
     Head,
     /// The collarbones: the shoulder joint rises and comes forward with the arm.
     LeftCollar,
+    /// Shoulder to elbow.
     LeftUpperArm,
+    /// Elbow to fingertips (the body model has no wrist).
     LeftForearm,
+    /// See `LeftCollar`.
     RightCollar,
+    /// See `LeftUpperArm`.
     RightUpperArm,
+    /// See `LeftForearm`.
     RightForearm,
+    /// Hip to knee.
     LeftThigh,
+    /// Knee to toes.
     LeftShin,
+    /// See `LeftThigh`.
     RightThigh,
+    /// See `LeftShin`.
     RightShin,
 }
 
 impl Segment {
+    /// How many segments there are.
     pub const COUNT: usize = 14;
     /// Every segment, each after its parent.
     pub const ALL: [Segment; Segment::COUNT] = [
@@ -61,10 +127,12 @@ impl Segment {
         Segment::RightShin,
     ];
 
+    /// The segment's place in [`Segment::ALL`] and in per-segment arrays.
     pub fn index(self) -> usize {
         self as usize
     }
 
+    /// The segment it hangs from (None for the pelvis).
     pub fn parent(self) -> Option<Segment> {
         use Segment::*;
         match self {
@@ -90,13 +158,19 @@ impl Segment {
 /// A capsule whose radius changes linearly from `ra` at `a` to `rb` at `b` (segment frame).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Capsule {
+    /// The segment carrying it.
     pub segment: Segment,
+    /// One end of its axis, segment frame.
     pub a: Point3<f32>,
+    /// The other end.
     pub b: Point3<f32>,
+    /// Radius at `a`.
     pub ra: f32,
+    /// Radius at `b`.
     pub rb: f32,
     /// The [`Shape::capsules`] entry it was made from, and whether mirrored.
     pub spec: usize,
+    /// Whether it is the right side's mirror of a left-side capsule.
     pub mirrored: bool,
 }
 
@@ -105,6 +179,7 @@ pub struct Capsule {
 pub struct BodyTemplate {
     /// Each segment's joint (its frame's origin) in its parent's frame; zero for the pelvis.
     pub origin: [Vector3<f32>; Segment::COUNT],
+    /// The capsules approximating the surface.
     pub capsules: Vec<Capsule>,
     /// Each of the 16 joints: the segment carrying it and its place in that frame.
     pub joints: [(Segment, Point3<f32>); Joint::COUNT],
@@ -117,10 +192,15 @@ pub struct BodyTemplate {
 /// is in units of its bone's length (so the capsule follows the person's limb lengths).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CapsuleSpec {
+    /// The segment carrying it.
     pub segment: Segment,
+    /// One end of its axis.
     pub a: [f32; 3],
+    /// Radius at `a`, metres.
     pub ra: f32,
+    /// The other end.
     pub b: [f32; 3],
+    /// Radius at `b`, metres.
     pub rb: f32,
 }
 
@@ -131,12 +211,16 @@ pub struct CapsuleSpec {
 pub struct Shape {
     /// The abdomen's joint (lower back), pelvis frame; the chest's, abdomen frame.
     pub abdomen: [f32; 3],
+    /// See `abdomen`.
     pub chest: [f32; 3],
     /// Chest frame: the neck (the head's joint), the torso joint, the left collarbone's
     /// joint (at the breastbone); the left shoulder in the collarbone's frame.
     pub neck: [f32; 3],
+    /// See `neck`.
     pub torso: [f32; 3],
+    /// See `neck`.
     pub collar: [f32; 3],
+    /// See `neck`.
     pub shoulder: [f32; 3],
     /// Pelvis frame: the left hip.
     pub hip: [f32; 3],
@@ -145,12 +229,17 @@ pub struct Shape {
     /// The elbow in the upper arm's frame, the hand (palm centre) in the forearm's, the
     /// knee in the thigh's, the ankle in the shin's.
     pub elbow: [f32; 3],
+    /// See `elbow`.
     pub hand: [f32; 3],
+    /// See `elbow`.
     pub knee: [f32; 3],
+    /// See `elbow`.
     pub ankle: [f32; 3],
     /// Tips: the top of the head, the fingertips, the toes.
     pub head_tip: [f32; 3],
+    /// See `head_tip`.
     pub finger_tip: [f32; 3],
+    /// See `head_tip`.
     pub toe_tip: [f32; 3],
     /// Capsules of the pelvis, chest and head (mirrored when off the midline) and of
     /// the left limbs (mirrored onto the right ones).
@@ -300,19 +389,24 @@ fn mirror(p: [f32; 3]) -> [f32; 3] {
 /// Bone lengths, metres: upper arm, forearm, thigh, shin.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Limbs {
+    /// Shoulder to elbow.
     pub upper_arm: f32,
+    /// Elbow to palm centre.
     pub forearm: f32,
+    /// Hip to knee.
     pub thigh: f32,
+    /// Knee to ankle.
     pub shin: f32,
 }
 
 impl Limbs {
+    /// The configured bone lengths.
     pub fn from_config(cfg: &PoseConfig) -> Self {
         Self {
-            upper_arm: cfg.upper_arm,
-            forearm: cfg.forearm,
-            thigh: cfg.thigh,
-            shin: cfg.shin,
+            upper_arm: cfg.body.upper_arm,
+            forearm: cfg.body.forearm,
+            thigh: cfg.body.thigh,
+            shin: cfg.body.shin,
         }
     }
 
@@ -331,11 +425,12 @@ impl Limbs {
 
 impl BodyTemplate {
     /// The configured shape with the configured bone lengths (already scaled to the
-    /// person's by [`crate::calibrate`] when that is on).
+    /// person's by the calibration when that is on).
     pub fn new(cfg: &PoseConfig) -> Self {
         Self::from_shape(&cfg.register.shape, &Limbs::from_config(cfg))
     }
 
+    /// The body of `shape` with the bone lengths `limbs`.
     pub fn from_shape(shape: &Shape, limbs: &Limbs) -> Self {
         use Segment::*;
         // A point of a segment's frame, limb y scaled by the bone length.
@@ -483,18 +578,23 @@ pub fn shortest_turn(a: &Vector3<f32>, b: &Vector3<f32>) -> Rotation3<f32> {
 /// Where the body is: the pelvis joint and every segment's rotation, camera frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BodyPose {
+    /// The pelvis segment's joint, camera frame.
     pub pelvis: Point3<f32>,
+    /// Each segment's rotation, segment frame → camera frame.
     pub rotation: [Rotation3<f32>; Segment::COUNT],
 }
 
 /// A posed body: every segment's joint position, for reading points off it.
 #[derive(Debug, Clone, Copy)]
 pub struct Posed {
+    /// Each segment's joint, camera frame.
     pub joint: [Point3<f32>; Segment::COUNT],
+    /// Each segment's rotation, segment frame → camera frame.
     pub rotation: [Rotation3<f32>; Segment::COUNT],
 }
 
 impl Posed {
+    /// The body `t` at `pose`, by forward kinematics.
     pub fn new(t: &BodyTemplate, pose: &BodyPose) -> Self {
         let mut joint = [pose.pelvis; Segment::COUNT];
         for s in Segment::ALL {
@@ -514,6 +614,7 @@ impl Posed {
         self.joint[s.index()] + self.rotation[s.index()] * local.coords
     }
 
+    /// The 16 joints where the posed body puts them.
     pub fn skeleton(&self, t: &BodyTemplate) -> Skeleton {
         let mut joints = [Point3::origin(); Joint::COUNT];
         for (j, (s, local)) in joints.iter_mut().zip(&t.joints) {
@@ -594,6 +695,7 @@ impl BodyPose {
         p
     }
 
+    /// Whether every number of the pose is finite.
     pub fn is_finite(&self) -> bool {
         self.pelvis.coords.iter().all(|c| c.is_finite())
             && self
@@ -656,9 +758,9 @@ mod tests {
         let cfg = PoseConfig::default();
         let ua = (s[Joint::LeftElbow] - s[Joint::LeftShoulder]).norm();
         let fa = (s[Joint::LeftHand] - s[Joint::LeftElbow]).norm();
-        assert!((ua - cfg.upper_arm).abs() < 0.01 && (fa - cfg.forearm).abs() < 0.01);
+        assert!((ua - cfg.body.upper_arm).abs() < 0.01 && (fa - cfg.body.forearm).abs() < 0.01);
         let leg = s[Joint::LeftFoot].y - s[Joint::LeftHip].y;
-        assert!((leg - cfg.thigh - cfg.shin).abs() < 0.01, "{leg}");
+        assert!((leg - cfg.body.thigh - cfg.body.shin).abs() < 0.01, "{leg}");
     }
 
     #[test]

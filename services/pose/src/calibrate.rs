@@ -11,12 +11,36 @@
 //!
 //! Once the articulated registration runs, it refines the lengths instead: one ratio a
 //! limb pair for the whole reach and, for the arms only and when
-//! [`crate::config::RegisterConfig::bone_evidence`] is set, the split between upper arm
+//! [`crate::config::LengthsConfig::bone_evidence`] is set, the split between upper arm
 //! and forearm, from the frames whose bent elbow tells the two bones apart (a straight
 //! limb cannot; legs are rarely seen bent enough, so they keep one ratio).
 
 use crate::config::{Limb, PoseConfig};
+use crate::register::Fit;
+use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
+
+/// Settings of the body-size calibration (part of [`crate::PoseConfig`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct CalibrateConfig {
+    /// Learn the person's arm and leg lengths instead of keeping
+    /// [`crate::body::BodyConfig`]'s.
+    pub enabled: bool,
+    /// What the geodesic measurement gives on the body the bone lengths were measured on
+    /// (arms, legs): the geodesic path over the surface, fingers and toes is longer than
+    /// the bones. Measured on the MakeHuman body standing, drawing and walking.
+    pub geodesic_reach_ratio: [f32; 2],
+}
+
+impl Default for CalibrateConfig {
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            geodesic_reach_ratio: [1.32, 1.21],
+        }
+    }
+}
 
 /// How many measurements each length remembers (about four seconds at 30 fps of
 /// both limbs of a pair).
@@ -114,9 +138,9 @@ impl BodyCalibration {
     /// Records one frame's geodesic length (metres, from the limb root to the assigned
     /// maximum) of a limb; `base` is the configuration the ratios refer to.
     pub fn measure(&mut self, base: &PoseConfig, limb: Limb, geodesic_length: f32) {
-        let (l1, l2) = base.bones(limb);
-        let reach = l1 + l2 + base.extremity_extra(limb);
-        let [arm_ref, leg_ref] = base.geodesic_reach_ratio;
+        let (l1, l2) = base.body.bones(limb);
+        let reach = l1 + l2 + base.body.extremity_extra(limb);
+        let [arm_ref, leg_ref] = base.calibrate.geodesic_reach_ratio;
         match limb {
             Limb::LeftArm | Limb::RightArm => self.arms.add(geodesic_length / reach / arm_ref),
             Limb::LeftLeg | Limb::RightLeg => self.legs.add(geodesic_length / reach / leg_ref),
@@ -140,8 +164,8 @@ impl BodyCalibration {
     /// Records the registration's steps of one arm's upper arm and forearm apart
     /// ([`crate::register::Fit::arm_bone_steps`], from frames with the elbow bent): each
     /// asks for the split it was fitted with, moved by the difference of its steps.
-    /// People's upper arms and forearms are not in one proportion (the synthetic
-    /// person's upper arm is 1.33 × the template's, the forearm 1.26 ×); one ratio for
+    /// People's upper arms and forearms are not in one proportion (the procedural
+    /// body's are not the template's); one ratio for
     /// the whole reach leaves the elbow short, and the arm then reaches its hand by
     /// turning the chest. Legs keep one ratio: they are seen bent too rarely.
     pub fn refine_arm_bones(&mut self, steps: [f32; 2]) {
@@ -188,17 +212,51 @@ impl BodyCalibration {
     pub fn apply(&self, base: &PoseConfig) -> PoseConfig {
         let (a, l) = (self.arm_ratio(), self.leg_ratio());
         // The split moves the elbow along the arm and keeps the reach (to first order).
-        let (u, f) = (base.upper_arm, base.forearm);
+        let (u, f) = (base.body.upper_arm, base.body.forearm);
         let k = self.arm_split();
-        let mut cfg = PoseConfig {
-            upper_arm: u * a * k.powf(f / (u + f)),
-            forearm: f * a * k.powf(-u / (u + f)),
-            thigh: base.thigh * l,
-            shin: base.shin * l,
-            ..base.clone()
-        };
-        cfg.register.collar_rest = self.collars;
+        let mut cfg = base.clone();
+        cfg.body.upper_arm = u * a * k.powf(f / (u + f));
+        cfg.body.forearm = f * a * k.powf(-u / (u + f));
+        cfg.body.thigh = base.body.thigh * l;
+        cfg.body.shin = base.body.shin * l;
+        cfg.register.priors.collar_rest = self.collars;
         cfg
+    }
+
+    /// Learns from a registered body `b` (fitted with `cfg`): the limb lengths (and the
+    /// collarbones' rest) its frame asks for, from frames whose limbs the camera sees
+    /// well.
+    pub fn learn(&mut self, b: &Fit, cfg: &PoseConfig) {
+        use crate::body::Segment::{self, *};
+        let seen = |segs: &[Segment]| {
+            segs.iter().map(|s| b.seen[s.index()]).sum::<f32>() / segs.len() as f32
+        };
+        let gate = cfg.register.lengths.seen;
+        let arms = seen(&[LeftUpperArm, LeftForearm, RightUpperArm, RightForearm]);
+        let legs = seen(&[LeftThigh, LeftShin, RightThigh, RightShin]);
+        self.refine([
+            b.length_step[0].filter(|_| arms >= gate),
+            b.length_step[1].filter(|_| legs >= gate),
+        ]);
+        for (steps, upper, fore) in [
+            (b.arm_bone_steps[0], LeftUpperArm, LeftForearm),
+            (b.arm_bone_steps[1], RightUpperArm, RightForearm),
+        ] {
+            if let Some(s) = steps.filter(|_| seen(&[upper, fore]) >= gate) {
+                self.refine_arm_bones(s);
+            }
+        }
+        if arms >= gate {
+            let rel = |s: Segment| {
+                let r = b.pose.rotation[Chest.index()].inverse() * b.pose.rotation[s.index()];
+                let v = r.scaled_axis();
+                [v.x, v.y, v.z]
+            };
+            self.refine_collars(
+                [rel(LeftCollar), rel(RightCollar)],
+                cfg.register.lengths.collar_gain,
+            );
+        }
     }
 
     /// Forgets the person (another may step in).
@@ -215,9 +273,10 @@ mod tests {
     fn default_until_enough_samples_then_the_high_percentile() {
         let base = PoseConfig::default();
         let mut c = BodyCalibration::default();
-        let (l1, l2) = base.bones(Limb::LeftArm);
+        let (l1, l2) = base.body.bones(Limb::LeftArm);
         // What the configured body itself would measure.
-        let reach = (l1 + l2 + base.extremity_extra(Limb::LeftArm)) * base.geodesic_reach_ratio[0];
+        let reach = (l1 + l2 + base.body.extremity_extra(Limb::LeftArm))
+            * base.calibrate.geodesic_reach_ratio[0];
         for _ in 0..MIN_SAMPLES - 1 {
             c.measure(&base, Limb::LeftArm, reach * 1.2);
         }
@@ -231,8 +290,8 @@ mod tests {
         assert!((c.arm_ratio() - 1.2).abs() < 1e-4);
         assert_eq!(c.leg_ratio(), 1.0, "the legs are measured apart");
         let scaled = c.apply(&base);
-        assert!((scaled.upper_arm - base.upper_arm * 1.2).abs() < 1e-5);
-        assert_eq!(scaled.thigh, base.thigh);
+        assert!((scaled.body.upper_arm - base.body.upper_arm * 1.2).abs() < 1e-5);
+        assert_eq!(scaled.body.thigh, base.body.thigh);
     }
 
     #[test]
@@ -266,9 +325,14 @@ mod tests {
         assert!(c.arm_split() > 1.1, "{}", c.arm_split());
         assert!(c.arm_split() <= MAX_SPLIT.exp() + 1e-6);
         let scaled = c.apply(&base);
-        assert!(scaled.upper_arm > base.upper_arm && scaled.forearm < base.forearm);
-        let reach = |p: &PoseConfig| p.upper_arm + p.forearm;
+        assert!(
+            scaled.body.upper_arm > base.body.upper_arm && scaled.body.forearm < base.body.forearm
+        );
+        let reach = |p: &PoseConfig| p.body.upper_arm + p.body.forearm;
         assert!((reach(&scaled) / reach(&base) - 1.0).abs() < 0.01);
-        assert_eq!((scaled.thigh, scaled.shin), (base.thigh, base.shin));
+        assert_eq!(
+            (scaled.body.thigh, scaled.body.shin),
+            (base.body.thigh, base.body.shin)
+        );
     }
 }

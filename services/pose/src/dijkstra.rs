@@ -34,14 +34,6 @@ impl RadixHeap {
         }
     }
 
-    pub fn is_empty(&self) -> bool {
-        self.len == 0
-    }
-
-    pub fn len(&self) -> usize {
-        self.len
-    }
-
     /// Pushes a key; keys below the last popped one are raised to it (cannot happen in
     /// Dijkstra, but the queue stays correct for any input).
     #[inline]
@@ -77,7 +69,9 @@ impl RadixHeap {
 
 /// A graph Dijkstra can walk: the neighbours of a node with edge weights in millimetres.
 pub trait Graph {
+    /// How many nodes there are, numbered from 0.
     fn node_count(&self) -> usize;
+    /// Calls `f(neighbour, weight)` for every edge of `node` (weights in millimetres).
     fn for_each_edge(&self, node: u32, f: impl FnMut(u32, u32));
 }
 
@@ -89,12 +83,15 @@ pub const INF: u32 = u32::MAX;
 /// touching only the nodes that come closer.
 #[derive(Debug, Default)]
 pub struct Dijkstra {
+    /// Each node's distance from the nearest source ([`INF`]: unreached).
     pub dist: Vec<u32>,
+    /// Each node's predecessor on its shortest path ([`INF`] for a source or unreached).
     pub pred: Vec<u32>,
     heap: RadixHeap,
 }
 
 impl Dijkstra {
+    /// Forgets every source and distance, for a graph of `n` nodes.
     pub fn reset(&mut self, n: usize) {
         self.dist.clear();
         self.dist.resize(n, INF);

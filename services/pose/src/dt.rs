@@ -16,6 +16,8 @@ pub struct DistanceTransform {
 const INF: f32 = 1e20;
 
 impl DistanceTransform {
+    /// The squared distance (pixels²) of each pixel of a `width`×`height` mask to the
+    /// nearest pixel outside it, into `out`.
     pub fn compute(&mut self, mask: &[bool], width: usize, height: usize, out: &mut Vec<f32>) {
         out.clear();
         out.resize(width * height, 0.0);

@@ -6,7 +6,9 @@ use nalgebra::{Matrix3, Matrix4, Point3, Rotation3, SymmetricEigen, UnitQuaterni
 /// A rigid motion `x ↦ R x + t`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Rigid {
+    /// The rotation.
     pub r: Rotation3<f32>,
+    /// The translation, applied after the rotation.
     pub t: Vector3<f32>,
 }
 
@@ -21,11 +23,13 @@ impl Default for Rigid {
 
 impl Rigid {
     #[inline]
+    /// The motion applied to a point.
     pub fn apply(&self, p: &Point3<f32>) -> Point3<f32> {
         self.r * p + self.t
     }
 
     #[inline]
+    /// The motion applied to a direction (the rotation alone).
     pub fn apply_vec(&self, v: &Vector3<f32>) -> Vector3<f32> {
         self.r * v
     }
@@ -38,6 +42,7 @@ impl Rigid {
         }
     }
 
+    /// The motion that undoes this one.
     pub fn inverse(&self) -> Rigid {
         let ri = self.r.inverse();
         Rigid {
@@ -46,6 +51,7 @@ impl Rigid {
         }
     }
 
+    /// Whether every number is finite.
     pub fn is_finite(&self) -> bool {
         self.r.matrix().iter().all(|c| c.is_finite()) && self.t.iter().all(|c| c.is_finite())
     }
@@ -123,6 +129,7 @@ impl RotationAccumulator {
 }
 
 /// The rotation about the origin taking the weighted vectors `a` onto `b`.
+#[cfg(test)]
 pub fn weighted_rotation(a: &[Vector3<f32>], b: &[Vector3<f32>], w: &[f32]) -> Rotation3<f32> {
     let mut acc = RotationAccumulator::default();
     for ((a, b), &w) in a.iter().zip(b).zip(w) {
@@ -181,12 +188,6 @@ impl Moments {
         self.n += 1.0;
         self.s += v;
         self.ss += v * v.transpose();
-    }
-
-    pub fn merge(&mut self, o: &Moments) {
-        self.n += o.n;
-        self.s += o.s;
-        self.ss += o.ss;
     }
 
     pub fn mean(&self) -> Point3<f32> {

@@ -2,10 +2,39 @@
 //! a threshold that grows with the pixel footprint, edges that bridge occluding
 //! foreground, and stray components joined to the one holding the root.
 
-use crate::config::PoseConfig;
 use crate::dijkstra::Graph;
 use airglyph_core::Intrinsics;
 use nalgebra::{Point3, Vector3};
+use serde::{Deserialize, Serialize};
+
+/// Settings of the geodesic graph (part of [`crate::PoseConfig`]); lengths in metres.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct GraphConfig {
+    /// 8-neighbours are joined when closer than `max(edge_min, edge_px * footprint)`
+    /// (times √2 for diagonals).
+    pub edge_min: f32,
+    /// See `edge_min`.
+    pub edge_px: f32,
+    /// Longest bridge over occluding foreground.
+    pub bridge_max: f32,
+    /// How much nearer the camera than a bridge's ends its occluder must be.
+    pub bridge_occluder: f32,
+    /// Components smaller than this many nodes are dropped rather than joined.
+    pub min_component: usize,
+}
+
+impl Default for GraphConfig {
+    fn default() -> Self {
+        Self {
+            edge_min: 0.012,
+            edge_px: 3.0,
+            bridge_max: 0.35,
+            bridge_occluder: 0.05,
+            min_component: 20,
+        }
+    }
+}
 
 /// No neighbour in this slot / no node at this pixel.
 pub const NONE: u32 = u32::MAX;
@@ -81,11 +110,15 @@ impl SampleBox {
 /// The graph of one frame; buffers are reused.
 #[derive(Debug, Default)]
 pub struct GeoGraph {
+    /// Size of the image the graph was built on.
     pub width: usize,
+    /// See `width`.
     pub height: usize,
     /// Node of each pixel, or [`NONE`].
     pub node_of_pixel: Vec<u32>,
+    /// Each node's pixel (row-major index).
     pub pixel_of_node: Vec<u32>,
+    /// Each node's point, camera frame.
     pub pos: Vec<Point3<f32>>,
     /// Eight neighbour slots a node: (node, weight in mm).
     slots: Vec<[(u32, u32); 8]>,
@@ -94,6 +127,7 @@ pub struct GeoGraph {
     extra: Vec<(u32, u32)>,
     /// Bridges and joins found this frame (both directions go into `extra`).
     pub bridges: Vec<(u32, u32, u32)>,
+    /// Edges joining stray components to the rest: (node, node, weight in millimetres).
     pub joins: Vec<(u32, u32, u32)>,
     /// Component of each node after joining (0 = the root's), or [`NONE`] for dropped
     /// fragments.
@@ -143,7 +177,7 @@ impl GeoGraph {
         width: usize,
         height: usize,
         k: &Intrinsics,
-        cfg: &PoseConfig,
+        cfg: &GraphConfig,
     ) {
         self.width = width;
         self.height = height;
@@ -222,7 +256,7 @@ impl GeoGraph {
     /// Edges over occluding foreground: along rows and columns, from a node whose next
     /// pixel is much nearer the camera, across a run of such nearer pixels, to the first
     /// node at about the first one's depth.
-    fn find_bridges(&mut self, points: &[Point3<f32>], cfg: &PoseConfig, f: f32) {
+    fn find_bridges(&mut self, points: &[Point3<f32>], cfg: &GraphConfig, f: f32) {
         self.bridges.clear();
         let (w, h) = (self.width, self.height);
         for a in 0..self.pos.len() {
@@ -266,7 +300,7 @@ impl GeoGraph {
     /// Labels components and joins every one of at least `min_component` nodes to the
     /// growing set that holds the largest, nearest first (Prim's order), by an edge
     /// between their closest sampled nodes.
-    fn join_components(&mut self, cfg: &PoseConfig) {
+    fn join_components(&mut self, cfg: &GraphConfig) {
         self.joins.clear();
         let n = self.pos.len();
         self.uf.clear();
@@ -469,7 +503,7 @@ mod tests {
         let pts = flat(40, 30, 2.0, &k);
         let mask = vec![true; 40 * 30];
         let mut g = GeoGraph::default();
-        g.build(&pts, &mask, 40, 30, &k, &PoseConfig::default());
+        g.build(&pts, &mask, 40, 30, &k, &GraphConfig::default());
         assert!(g.joins.is_empty() && g.bridges.is_empty());
         let mut d = Dijkstra::default();
         d.reset(g.node_count());
@@ -500,7 +534,7 @@ mod tests {
             }
         }
         let mut g = GeoGraph::default();
-        g.build(&pts, &mask, w, h, &k, &PoseConfig::default());
+        g.build(&pts, &mask, w, h, &k, &GraphConfig::default());
         assert!(!g.bridges.is_empty());
         assert_eq!(g.joins.len(), 1);
         let mut d = Dijkstra::default();

@@ -4,8 +4,8 @@
 //!
 //! The body model has no hand: its forearm capsule runs on to the fingertips, and its
 //! hand joint (the palm's centre) is a fixed point of the forearm. A real hand turns at
-//! the wrist, so from the true pose itself the fit's hands lie 4.5–4.9 cm from the
-//! truth, mostly across the forearm and too deep (pose README, "Measured"). The points
+//! the wrist, so even from the true pose itself the fit's hands lie off the truth,
+//! mostly across the forearm and too deep (pose NOTES). The points
 //! the fitted body gives to a forearm near its hand are the hand's own, though: their
 //! centre, set back along the camera's ray by half a hand's thickness (the camera sees
 //! the hand's front), is where the palm is across the forearm. Along the forearm it is
@@ -19,6 +19,36 @@ use crate::register::{nearest_is, place, Frame};
 use crate::{body::BodyTemplate, body::Posed, body::Segment, Limb, PoseConfig};
 use airglyph_core::{Joint, Skeleton};
 use nalgebra::{Point3, Vector3};
+use serde::{Deserialize, Serialize};
+
+/// Settings of where the hands go (part of [`crate::PoseConfig`]); metres.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct HandsConfig {
+    /// The hand joint (palm centre) this far behind the arm's extremity (fingertips),
+    /// towards the elbow, instead of at the fitted chain's end; 0 = the chain's end.
+    pub behind_tip: f32,
+    /// After the registration, each hand moves across its forearm to the centre of the
+    /// forearm's points within this radius (0 = off), set back along the camera's ray
+    /// by `behind_surface`.
+    pub points_radius: f32,
+    /// See `points_radius`.
+    pub behind_surface: f32,
+    /// A hand is placed behind the fingertips seen (as the seed's chains place it) when
+    /// they lie this near the fitted body's fingertips; farther, the fit's hand stays.
+    pub tip_trust: f32,
+}
+
+impl Default for HandsConfig {
+    fn default() -> Self {
+        Self {
+            behind_tip: 0.11,
+            points_radius: 0.10,
+            behind_surface: 0.018,
+            tip_trust: 0.12,
+        }
+    }
+}
 
 /// Mean-shift steps of a hand towards the centre of its points.
 const STEPS: usize = 3;
@@ -29,7 +59,7 @@ const MIN_POINTS: usize = 5;
 /// The hands of a registered body moved to follow the fingertips seen (the arms'
 /// geodesic maxima `tips`), as in the seed's chains: a capsule forearm cannot bend at
 /// the wrist, and its end lags a quickly drawing hand. Only where the body's own tip
-/// lies within [`crate::register::RegisterConfig::tip_trust`] of the maximum.
+/// lies within [`HandsConfig::tip_trust`] of the maximum.
 pub fn hands_at_fingertips(
     skel: &mut Skeleton,
     posed: &Posed,
@@ -41,17 +71,17 @@ pub fn hands_at_fingertips(
         (Limb::LeftArm, Joint::LeftHand, Joint::LeftElbow),
         (Limb::RightArm, Joint::RightHand, Joint::RightElbow),
     ] {
-        let (Some(ext), true) = (tips[l.index()], cfg.hand_behind_tip > 0.0) else {
+        let (Some(ext), true) = (tips[l.index()], cfg.hands.behind_tip > 0.0) else {
             continue;
         };
-        let ext_b = ext + ext.coords.normalize() * cfg.surface_offset(l);
+        let ext_b = ext + ext.coords.normalize() * cfg.chains.surface_offset(l);
         let (seg, local) = tpl.tips[l.index()];
         let tip = posed.point(seg, &local);
-        if (tip - ext_b).norm() > cfg.register.tip_trust {
+        if (tip - ext_b).norm() > cfg.hands.tip_trust {
             continue;
         }
         if let Some(u) = (ext_b - skel[elbow]).try_normalize(1e-6) {
-            skel.set(hand, ext_b - u * cfg.hand_behind_tip);
+            skel.set(hand, ext_b - u * cfg.hands.behind_tip);
             // Its fingertips are in sight.
             let c = &mut skel.confidence[hand.index()];
             *c = c.max(0.9);
@@ -61,7 +91,7 @@ pub fn hands_at_fingertips(
 
 /// Where each hand (left, right) lies among its points, for the body `posed`
 /// registered to `frame`; None where the hand keeps the fit's place (too few points, or
-/// [`PoseConfig::hand_points_radius`] 0). `skel` holds the fitted hands and elbows.
+/// [`HandsConfig::points_radius`] 0). `skel` holds the fitted hands and elbows.
 pub fn hands_at_their_points(
     skel: &Skeleton,
     frame: &Frame,
@@ -69,7 +99,7 @@ pub fn hands_at_their_points(
     posed: &Posed,
     cfg: &PoseConfig,
 ) -> [Option<Point3<f32>>; 2] {
-    let radius = cfg.hand_points_radius;
+    let radius = cfg.hands.points_radius;
     if radius <= 0.0 {
         return [None; 2];
     }
@@ -98,7 +128,7 @@ pub fn hands_at_their_points(
                 break;
             }
             let centre = Point3::from(sum / n as f32);
-            let palm = centre + centre.coords.normalize() * cfg.hand_behind_surface;
+            let palm = centre + centre.coords.normalize() * cfg.hands.behind_surface;
             let d = palm - h;
             h += d - axis * d.dot(&axis);
         }
@@ -195,7 +225,7 @@ mod tests {
         // The palm 4 cm outwards of where the fit put the hand (a wrist turned
         // sideways), its front surface facing the camera.
         let palm = hand + Vector3::new(0.04, 0.0, 0.0);
-        let surface = palm - Vector3::z() * cfg.hand_behind_surface;
+        let surface = palm - Vector3::z() * cfg.hands.behind_surface;
         let seen = disc(surface, 0.04);
         let place_in = |points: &[Point3<f32>], cfg: &PoseConfig| {
             let (img, mask) = image(&k, points);
@@ -233,16 +263,14 @@ mod tests {
         let beside = disc(thigh_surface - out * 0.01, 0.015);
         assert!(beside
             .iter()
-            .all(|p| (p - hand).norm() < cfg.hand_points_radius));
+            .all(|p| (p - hand).norm() < cfg.hands.points_radius));
         let mut with_thigh = seen.clone();
         with_thigh.extend(beside);
         assert_eq!(place_in(&with_thigh, &cfg)[0], left);
 
         // Off: nothing moves.
-        let off = PoseConfig {
-            hand_points_radius: 0.0,
-            ..cfg.clone()
-        };
+        let mut off = cfg.clone();
+        off.hands.points_radius = 0.0;
         assert_eq!(place_in(&seen, &off), [None; 2]);
     }
 }

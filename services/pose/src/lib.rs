@@ -1,5 +1,9 @@
 //! The pose stage: a 16-joint skeleton from each depth frame by geodesic distances
-//! (Handrich, Rashid & Al-Hamadi, seed §16.3). A plain, deterministic library: no IPC.
+//! (Handrich, Rashid & Al-Hamadi, seed §16.3) and an articulated body registered to the
+//! person's points. A plain, deterministic library: no IPC.
+//!
+//! How it works and how well: `services/pose/README.md`; what was tried, round by round,
+//! with its figures: `services/pose/NOTES.md`.
 //!
 //! # Use
 //!
@@ -22,146 +26,153 @@
 //! * [`PoseEstimator::estimate`]`(&mut self, depth: DepthView<'_>) -> PoseResult`:
 //!   `PoseResult { person_found: bool, skeleton: Skeleton }`. Never panics, never NaN;
 //!   with no person the skeleton is all zeros with confidence 0. The estimator keeps
-//!   state between frames (torso registration, last limb fits): one estimator per
-//!   camera stream; [`PoseEstimator::reset`] after a gap. Frames whose size differs
-//!   from the intrinsics are handled with the intrinsics scaled to them. It takes the
-//!   frames to be [`PoseConfig::nominal_fps`] apart; with capture times, use
+//!   state between frames (torso registration, last limb fits, the registered body, the
+//!   person's limb lengths): one estimator per camera stream; [`PoseEstimator::reset`]
+//!   after a gap. Frames whose size differs from the intrinsics are handled with the
+//!   intrinsics scaled to them. It takes the frames to be [`PoseConfig::nominal_fps`]
+//!   apart; with capture times, use
 //! * [`PoseEstimator::estimate_at`]`(&mut self, depth, time_s: f64) -> PoseResult`.
-//! * [`PoseEstimator::step_times`] gives the time of each step of the last frame.
+//! * [`PoseEstimator::step_times`] gives the time of each step of the last frame,
+//!   [`PoseEstimator::debug`] its intermediate results ([`struct@Debug`]).
 //!
-//! # Method, in the order of the steps
+//! Public beside the estimator: [`config`] (the settings, one section a step), [`body`]
+//! (the articulated body model, for examples and overlays), [`metrics`] (the evaluation
+//! against ground truth: Eq. 16.20–16.22, share within 10 cm, mAP at 10 cm), [`overlay`]
+//! (skeletons drawn on depth images) and [`steps`] (single steps, for the benches).
 //!
-//! 1. [`segment`]: back-projection (airglyph-core), depth band, floor plane by RANSAC
-//!    removed, blobs split at depth jumps, the largest person-shaped blob kept (planar,
-//!    too small or too large blobs are walls, tables, noise). While a person is
-//!    tracked, only a window around the last frame's is looked at; the whole image
-//!    only when the person found there is not the tracked one or may reach beyond it,
-//!    so the person's pixels are the whole image's either way.
-//! 2. [`torso`]: distance transform of the mask ([`dt`]); the torso region is where it
-//!    is at least half its maximum; PCA of its points gives a first frame; a torso model
-//!    is registered by mutual closest points (< 0.1 m) and Horn's quaternion closed form
-//!    ([`geom`]), started from the last frame's pose and redone from PCA when the
-//!    residual is too large. Neck, shoulders, pelvis and hips are fixed points of the
-//!    torso frame.
-//! 3. [`graph`]: 8-neighbours joined when closer than a threshold scaled by the pixel
-//!    footprint z/f; edges bridging occluding foreground along rows and columns; stray
-//!    components joined to the rest, nearest first.
-//! 4. [`dijkstra`]: geodesic distances from the torso centre with a radix heap; five
-//!    (and spare) maxima, each joined to the root by a zero-weight edge and the search continued
-//!    incrementally.
-//! 5. [`limbs`]: maxima assigned to the five limb roots by least total cost (geodesic
-//!    cost from the limb root, distance to the limb's last extremity, side of the body);
-//!    a limb without a maximum keeps its last fit with lowered confidence. Target points
-//!    within d_e (5 cm arms, 10 cm legs and head) of the geodesic path (Eq. 16.10); a
-//!    two-joint chain fitted by weighted closed-form rotations (ω_succ = 0.05) until the
-//!    error stops falling.
-//! 6. [`register`] (beyond the seed): an articulated body ([`body`]: fourteen rigid
-//!    segments carrying tapered capsules, the shape measured on the MakeHuman body) is
-//!    fitted to the person's points by Gauss–Newton — points on the nearest capsule,
-//!    the body's front inside the silhouette and never before a surface the camera
-//!    sees, limb tips at their geodesic maxima, spine, neck and hinge-joint priors —
-//!    from the last frame's fit and, when a limb tip strays or every tenth frame, from
-//!    the seed's estimate too; the start that explains the frame better wins. Its 16
-//!    joints are the skeleton.
+//! # The steps of a frame
+//!
+//! Frames wider than [`PoseConfig::work_width`] are first reduced by an integer factor,
+//! each pixel the nearest depth of its block. Then, in `estimate_at`'s order (each step
+//! a module of its own, its settings a section of [`PoseConfig`]):
+//!
+//! 1. Segmentation (`segment.rs`, [`config::SegmentConfig`]): back-projection, depth
+//!    band, floor plane by RANSAC removed, blobs split at depth jumps, the largest
+//!    person-shaped blob kept with the parts of the body that meet it only across depth
+//!    jumps. While a person is tracked, only a window around the last frame's is looked
+//!    at; the whole image only when the person found there is not the tracked one or may
+//!    reach beyond it, so the person's pixels are the whole image's either way.
+//! 2. Torso (`torso.rs`, [`config::TorsoConfig`]): distance transform of the mask
+//!    (`dt.rs`); the torso region is where it is at least half its maximum; PCA of its
+//!    points gives a first frame; a torso model is registered by mutual closest points
+//!    and Horn's closed form (`geom.rs`), started from the last frame's pose and redone
+//!    from PCA when the residual is too large. While the registration tracks the body,
+//!    the torso is the tracked body's instead. The key points (neck, shoulders, pelvis,
+//!    hips, torso) are fixed points of the torso frame ([`config::TorsoPoints`]).
+//! 3. Geodesic graph (`graph.rs`, [`config::GraphConfig`]): 8-neighbours joined when
+//!    closer than a threshold scaled by the pixel footprint; edges bridging occluding
+//!    foreground; stray components joined to the rest, nearest first.
+//! 4. Geodesic maxima (`geodesic.rs`, [`config::GeodesicConfig`]): distances from the
+//!    torso centre (`dijkstra.rs`, a radix heap), then up to eight maxima, each joined
+//!    to the root by a zero-weight edge and the search continued. The torso is turned
+//!    to face where the toes point when the feet say so.
+//! 5. Assignment (`assign.rs`, [`config::AssignConfig`]): maxima given to the five
+//!    limbs by least total cost; the head's maximum holds the torso's height. Then the
+//!    limbs' tips are checked against the tracked body (`register/tips.rs`): a tip on
+//!    another limb is dropped, and only a tip off the tracked body's surface makes the
+//!    seed's estimate race the tracked body.
+//! 6. Chains (`chains.rs`, [`config::ChainConfig`]), when the seed's estimate races:
+//!    target points within d_e of each limb's geodesic path, a two-joint chain fitted
+//!    by weighted closed-form rotations.
+//! 7. Body registration (`register/`, [`config::RegisterConfig`]; beyond the seed): an
+//!    articulated body ([`body`]: fourteen rigid segments carrying tapered capsules) is
+//!    fitted to the person's points by Gauss–Newton — points on the nearest capsule, the
+//!    body's front inside the silhouette and never before a surface the camera sees,
+//!    limb tips at their geodesic maxima, spine, neck and hinge-joint priors — from the
+//!    last frame's body and, when the seed's estimate races, from it too; the start
+//!    that explains the frame better wins. Its joints are the skeleton; the hands are
+//!    then placed behind the fingertips seen and across the forearm onto the hand's own
+//!    points (`hands.rs`, [`config::HandsConfig`]). The arms' and legs' lengths are
+//!    learned from the fits (`calibrate.rs`, [`config::CalibrateConfig`]).
+//! 8. Smoothing (`smooth.rs`, [`config::SmoothingConfig`]): the One Euro filter per
+//!    joint coordinate.
+//!
+//! What a frame carries to the next is one struct in `estimator.rs` (`Tracking`:
+//! segmentation's window and floor, the torso, each limb's chain, the registered body,
+//! the filters); losing the person resets it whole. The person's learned size is kept
+//! apart, and the steps' buffers are a third struct, reused frame to frame.
 //!
 //! # Beyond the seed (and why)
 //!
-//! * The registration (step 6) exists because the seed's estimate is made of parts
-//!   fitted apart: a rigid torso model that turns a few degrees when an arm is raised
-//!   before the chest or slides along its own axis carries every key point with it,
-//!   and each chain knows nothing of the others. Fitted as one body, MakeHuman's CMU
-//!   01_01 and 01_03 fall from 7.6 / 14.4 cm mean error to under 5 cm. While it tracks
-//!   the body, the seed's torso registration and chains are skipped (the registered
-//!   body gives the torso frame for the geodesic steps); every tenth frame, and whenever
-//!   a geodesic maximum lies 25 cm from the tracked body's limb tip and 5 cm off its
-//!   surface ([`register::tips_strayed`]), the seed's steps run in full and race the
-//!   tracked body, so a lost limb is found again. A maximum on the body's surface (noise
-//!   makes them on knees and hips) is explained where the body is: racing on those cost
-//!   most frames of a noisy 320×240 image the chains and a second start, and sometimes
-//!   the race went to the wrong start (CMU 01_03 with noise 3.94 → 3.81 cm without).
-//! * A person found afresh whose torso core is narrow (half width under 0.125 m,
-//!   [`PoseConfig::side_on_half_width`]; 0.15–0.16 m facing the camera, 0.09–0.11 m
-//!   side-on) may be side-on, where the seed's torso step fits its frontal model to a
-//!   flank. The registration then also races a standing body turned a quarter either
-//!   way, for every step and without the tips (assigned to the frontal body's limbs).
-//!   Side-on scenes before floor and wall with noise fall from 29 to 20 cm mean error
-//!   (MakeHuman, seven poses, both sides; `examples/turning.rs`). Of 22 such people
-//!   turning to the camera, none instead of 4 stays lost once facing it. Frontal
-//!   detections are unchanged.
+//! * The registration exists because the seed's estimate is made of parts fitted
+//!   apart: a rigid torso model that turns a few degrees when an arm is raised before
+//!   the chest or slides along its own axis carries every key point with it, and each
+//!   chain knows nothing of the others. While it tracks the body, the seed's torso
+//!   registration and chains are skipped; every tenth frame, and whenever a geodesic
+//!   maximum lies far from the tracked body's limb tip and off its surface, the seed's
+//!   steps run in full and race the tracked body, so a lost limb is found again. A
+//!   maximum on the body's surface (noise makes them on knees and hips) is explained
+//!   where the body is.
+//! * A person found afresh whose torso core is narrow may be side-on, where the seed's
+//!   torso step fits its frontal model to a flank: the registration then also races a
+//!   standing body turned a quarter either way.
 //! * Upper arms and thighs the camera did not see last frame are pulled weakly towards
-//!   hanging down ([`config::RegisterConfig::limb_rest_prior`], 0.3): a limb behind the
-//!   body has no data to hold it, and "hanging" is a better guess for it than wherever
-//!   a wrong start left it. It brings CMU 01_01 / 01_03 with sensor noise from 94.9 /
-//!   93.3 % of joints within 10 cm to 96.8 / 95.5 %.
+//!   hanging down: a limb behind the body has no data to hold it, and "hanging" is a
+//!   better guess for it than wherever a wrong start left it.
 //! * A limb's geodesic maximum that lies on another limb of the last frame's body is
-//!   not that limb's end ([`register::drop_borrowed_tips`]): the assignment could give
-//!   an arm hidden behind the body a point of the other arm, which then pulled the
-//!   hidden arm out to it for frames. With it, all five evaluation sequences improve
-//!   (CMU 01_03 with sensor noise: 96.9 → 97.4 % within 10 cm).
+//!   not that limb's end: the assignment could give an arm hidden behind the body a
+//!   point of the other arm, which then pulled the hidden arm out to it for frames.
 //! * Joint confidence is the share of the joint's segment that the camera sees where
 //!   the fitted body puts it (a hand whose fingertips are seen: 0.9 at least).
-//! * Frames wider than [`PoseConfig::work_width`] (320) are reduced by an integer factor,
-//!   each pixel the nearest depth of its block: 640×480 then costs what 320×240 does.
 //! * Up to eight geodesic maxima are taken, not five: the middle of a long leg can lie
-//!   geodesically farther from every source than the top of the head, so the fifth
-//!   maximum is often a thigh. The assignment leaves the spares out.
+//!   geodesically farther from every source than the top of the head.
 //! * Assignment cost: |geodesic length from the limb root − the limb's expected length|
 //!   (a limb's geodesic length hardly depends on how it is bent), plus the gap between
 //!   the limb root and the path, the side of the body, feet below the hips, and the
-//!   distance to the limb's last extremity.
-//! * A cylinder-like torso model slides along its axis under closest-point registration;
-//!   tracking therefore starts where the torso region is now, and the head's geodesic
-//!   maximum, when assigned and plausible, fixes the torso's height.
-//! * Target points are pushed back along their viewing ray by a per-limb surface offset
-//!   (the seen surface lies in front of the bone), and targets beyond the chain's end
-//!   (fingers, toes) weigh 0.1.
-//! * Key points and bone lengths in [`PoseConfig::default`] were measured on the
-//!   MakeHuman body of airglyph-synth standing still. Arm and leg lengths are then
-//!   learned for the person in view ([`calibrate`]): from the registration (each frame
-//!   that sees a limb pair well asks for a length; the median of recent frames' is
-//!   taken), or without it from the limbs' geodesic lengths. Optionally
-//!   ([`config::RegisterConfig::bone_evidence`], off by default), the arms' upper arm
-//!   and forearm are learned apart, from frames whose bent elbow tells them apart: with
-//!   one ratio for the whole reach the elbow of the procedural body comes out 1.7 cm
-//!   short, and the registered chest turns with the drawing arm (2.8° per shoulder
-//!   width the hand goes down; 1.6° with the split), bending the strokes. It stays off
-//!   because the split it learns is biased and CMU 01_03 with noise loses a leg with it.
+//!   distance to the limb's last extremity. A maximum beside a farther one's path (a
+//!   bent elbow or knee) is no limb's end; an arm whose path misses its shoulder (a hand
+//!   against the hip) is judged by reach.
+//! * A cylinder-like torso model slides along its axis under closest-point
+//!   registration: tracking starts where the torso region is now, and the head's
+//!   geodesic maximum fixes the torso's height.
+//! * Target points are pushed back along their viewing ray (the seen surface lies in
+//!   front of the bone), and targets beyond the chain's end (fingers, toes) weigh 0.1.
+//! * Key points, bone lengths and the body's shape were measured on the MakeHuman body
+//!   of airglyph-synth standing still; arm and leg lengths are learned for the person
+//!   in view (from the registration, or without it from the limbs' geodesic lengths).
 //! * Segmentation keeps the person's own parts that meet the body only across depth
 //!   jumps (an arm raised before the chest hides its shoulder); points of a limb before
-//!   the chest stay out of the torso's PCA; the geodesic root is a torso node even when
-//!   a forearm covers the torso centre's projection.
-//! * A maximum beside a farther one's path (a bent elbow or knee) is no limb's end; a
-//!   head candidate out on a shoulder costs more; an arm whose path misses its shoulder
-//!   (a hand against the hip) is judged by reach, not geodesic length.
-//! * The hand is placed a palm behind the fingertips seen, towards the elbow, not at
-//!   the chain's end (nor the registered forearm's, which cannot bend at the wrist), so
-//!   an arm length a little off does not shrink the strokes drawn.
-//! * Then [`hands`] moves each hand across its forearm to the centre of the points the
-//!   fitted body gives to that forearm near it, set back by half a hand's thickness:
-//!   the body model has no wrist, and a real hand turns there. Only the published
-//!   joints move; the tracker keeps the fit's.
-//! * Joints are smoothed over time by the One Euro filter (airglyph-core): still joints
-//!   stop jittering with the sensor's noise, moving ones keep up (its speed estimate
-//!   follows at 5 Hz, so the filter opens within a frame or two of a jump's start).
-//!
-//! [`metrics`] holds the evaluation against ground truth (Eq. 16.20–16.22, share within
-//! 10 cm, mAP at 10 cm), [`overlay`] draws skeletons on depth images.
+//!   the chest stay out of the torso's PCA.
+//! * The body model has no wrist: the hand is placed behind the fingertips seen, then
+//!   across the forearm onto the hand's own points. Only the published joints move;
+//!   the tracker keeps the fit's.
+//! * Joints are smoothed over time: still joints stop jittering with the sensor's noise,
+//!   moving ones keep up.
 
+#![warn(missing_docs)]
+
+mod assign;
 pub mod body;
-pub mod calibrate;
+mod calibrate;
+mod chains;
 pub mod config;
-pub mod dijkstra;
-pub mod dt;
+mod debug;
+mod dijkstra;
+mod dt;
 mod estimator;
-pub mod geom;
-pub mod graph;
-pub mod hands;
-pub mod limbs;
+mod geodesic;
+mod geom;
+mod graph;
+mod hands;
 pub mod metrics;
 pub mod overlay;
-pub mod register;
-pub mod segment;
-pub mod torso;
+mod register;
+mod segment;
+mod smooth;
+mod torso;
 
 pub use config::{Limb, PoseConfig};
-pub use estimator::{Debug, OfferedStart, PoseEstimator, PoseResult, StepTimes};
+pub use debug::{Debug, StepTimes};
+pub use estimator::{PoseEstimator, PoseResult};
+pub use register::OfferedStart;
+
+/// The steps one at a time, for the benches and diagnostics (`benches/pose.rs` times
+/// each): not needed to estimate a pose, which [`PoseEstimator`] does.
+pub mod steps {
+    pub use crate::dijkstra::{Dijkstra, Graph, INF};
+    pub use crate::dt::DistanceTransform;
+    pub use crate::geom::Rigid;
+    pub use crate::graph::{GeoGraph, NONE};
+    pub use crate::segment::{Plane, Segmentation, Segmenter};
+    pub use crate::torso::{TorsoEstimator, TorsoFit, TorsoPose, TorsoStart};
+}

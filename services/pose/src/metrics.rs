@@ -9,8 +9,11 @@ use serde::Serialize;
 /// Errors of one frame, metres.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FrameErrors {
+    /// Whether the estimator found a person in the frame.
     pub person_found: bool,
+    /// Each joint's error, metres.
     pub joint: [f32; Joint::COUNT],
+    /// Each joint's confidence as the estimator gave it.
     pub confidence: [f32; Joint::COUNT],
 }
 
@@ -28,6 +31,7 @@ impl FrameErrors {
 /// Collects frames; [`PoseEval::summary`] gives the figures.
 #[derive(Debug, Clone, Default)]
 pub struct PoseEval {
+    /// Every frame scored, in order.
     pub frames: Vec<FrameErrors>,
     /// Seconds spent estimating, for frames/s.
     pub seconds: f64,
@@ -36,6 +40,7 @@ pub struct PoseEval {
 /// The figures of an evaluation (`eval-pose --json` prints exactly these keys).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Summary {
+    /// Frames scored.
     pub frames: usize,
     /// Mean over frames of e_m, cm (frames with a person found).
     pub mean_error_cm: f64,
@@ -49,6 +54,7 @@ pub struct Summary {
     /// Mean over joints of the average precision at 10 cm, predictions ranked by
     /// confidence.
     pub map_10cm: f64,
+    /// Frames estimated a second (of the estimator alone).
     pub fps: f64,
 }
 
@@ -63,6 +69,7 @@ pub fn in_view(truth: &Skeleton, k: &airglyph_core::Intrinsics) -> bool {
 }
 
 impl PoseEval {
+    /// Scores one frame's estimate against its truth; the frame's errors.
     pub fn add(&mut self, est: &PoseResult, truth: &Skeleton) -> FrameErrors {
         let mut joint = [0.0; Joint::COUNT];
         for (j, e) in joint.iter_mut().enumerate() {
@@ -81,6 +88,7 @@ impl PoseEval {
         fe
     }
 
+    /// The figures of every frame scored so far.
     pub fn summary(&self) -> Summary {
         let found: Vec<&FrameErrors> = self.frames.iter().filter(|f| f.person_found).collect();
         let nf = found.len().max(1) as f64;

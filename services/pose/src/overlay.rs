@@ -4,9 +4,13 @@ use airglyph_core::{DepthView, Intrinsics, Joint, Skeleton};
 use image::{Rgb, RgbImage};
 use nalgebra::Point3;
 
+/// The estimate's colour.
 pub const GREEN: [u8; 3] = [40, 220, 60];
+/// The truth's colour.
 pub const RED: [u8; 3] = [240, 40, 40];
+/// A third skeleton's colour (the geodesic estimate, say).
 pub const BLUE: [u8; 3] = [60, 120, 255];
+/// Colour of points marked (maxima, targets).
 pub const YELLOW: [u8; 3] = [250, 220, 30];
 
 /// The depth image as gray (near = bright), the person's pixels tinted.

@@ -1,20 +1,67 @@
 //! The person's pixels: depth band, floor plane removed (RANSAC), blobs split at depth
 //! jumps, the largest person-shaped blob kept.
 
-use crate::config::PoseConfig;
 use crate::geom::Moments;
 use airglyph_core::{DepthView, Intrinsics};
 use nalgebra::{Point3, Vector3};
+use serde::{Deserialize, Serialize};
+
+/// Settings of the segmentation (part of [`crate::PoseConfig`]); lengths in metres.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct SegmentConfig {
+    /// Depth band in which a person is looked for: nearest depth.
+    pub near: f32,
+    /// Farthest depth.
+    pub far: f32,
+    /// Whether to find and remove a floor plane (RANSAC on the lower image half).
+    pub remove_floor: bool,
+    /// Points closer to the floor plane than this are floor.
+    pub floor_margin: f32,
+    /// Neighbouring pixels belong to one blob when their depths differ by less than
+    /// `max(blob_jump_min, blob_jump_px * pixel footprint)`.
+    pub blob_jump_min: f32,
+    /// See `blob_jump_min`.
+    pub blob_jump_px: f32,
+    /// Physical area (m², the surface seen) a blob needs to be a person.
+    pub min_person_area: f32,
+    /// Largest area of a person (m²); larger blobs are walls.
+    pub max_person_area: f32,
+    /// Vertical extent a blob needs to be a person.
+    pub min_person_height: f32,
+    /// Largest horizontal extent of a person (arms spread).
+    pub max_person_width: f32,
+}
+
+impl Default for SegmentConfig {
+    fn default() -> Self {
+        Self {
+            near: 0.3,
+            far: 6.0,
+            remove_floor: true,
+            floor_margin: 0.03,
+            blob_jump_min: 0.15,
+            blob_jump_px: 20.0,
+            min_person_area: 0.05,
+            max_person_area: 2.0,
+            min_person_height: 0.4,
+            max_person_width: 2.4,
+        }
+    }
+}
 
 /// A plane `n · x + d = 0` with unit normal pointing up, out of the floor.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Plane {
+    /// The unit normal.
     pub n: Vector3<f32>,
+    /// The offset: `n · x + d = 0` on the plane.
     pub d: f32,
 }
 
 impl Plane {
     #[inline]
+    /// Signed height of `p` above the plane.
     pub fn height(&self, p: &Point3<f32>) -> f32 {
         self.n.dot(&p.coords) + self.d
     }
@@ -360,7 +407,7 @@ impl Segmenter {
         &mut self,
         depth: &DepthView,
         k: &Intrinsics,
-        cfg: &PoseConfig,
+        cfg: &SegmentConfig,
         prev_floor: Option<Plane>,
         prev_centroid: Option<Point3<f32>>,
         last_box: Option<(u32, u32, u32, u32)>,
@@ -416,7 +463,7 @@ impl Segmenter {
         &mut self,
         depth: &DepthView,
         k: &Intrinsics,
-        cfg: &PoseConfig,
+        cfg: &SegmentConfig,
         floor: Option<Plane>,
         prev_centroid: Option<Point3<f32>>,
         win: Window,
@@ -592,7 +639,7 @@ impl Segmenter {
         &mut self,
         depth: &DepthView,
         k: &Intrinsics,
-        cfg: &PoseConfig,
+        cfg: &SegmentConfig,
         win: &Window,
         points: &mut [Point3<f32>],
     ) {
@@ -694,7 +741,7 @@ impl Segmenter {
         h: usize,
         blobs: &[Blob],
         person: usize,
-        cfg: &PoseConfig,
+        cfg: &SegmentConfig,
     ) -> Vec<usize> {
         // Which blobs could be part of this body at all: within arm's reach of it,
         // neither far in front of it nor behind it (walls and other people are not).
@@ -786,7 +833,7 @@ impl Segmenter {
         &mut self,
         depth: &DepthView,
         k: &Intrinsics,
-        cfg: &PoseConfig,
+        cfg: &SegmentConfig,
         prev: Option<Plane>,
     ) -> Option<Plane> {
         let (w, h) = (depth.width() as usize, depth.height() as usize);
@@ -984,7 +1031,7 @@ mod tests {
         last: Option<&Segmentation>,
     ) -> (Segmentation, Vec<Point3<f32>>, Vec<bool>) {
         let (mut points, mut mask) = (Vec::new(), Vec::new());
-        let cfg = PoseConfig::default();
+        let cfg = SegmentConfig::default();
         let seg = s.run(
             &img.view(),
             k,

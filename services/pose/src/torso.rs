@@ -1,10 +1,164 @@
 //! The torso: its region by distance transform, a first orientation by PCA, then a
 //! rigid torso model registered by mutual closest points and Horn's closed form.
 
-use crate::config::PoseConfig;
+use crate::body::{BodyPose, BodyTemplate, Posed};
 use crate::dt::DistanceTransform;
+use crate::geodesic::Geodesic;
 use crate::geom::{horn_rigid, Moments, Rigid};
+use crate::graph::{GeoGraph, NONE};
+use crate::Limb;
+use crate::PoseConfig;
+use airglyph_core::Joint;
 use nalgebra::{Matrix3, Point3, Rotation3, Vector3};
+use serde::{Deserialize, Serialize};
+
+/// The torso's key points, each a `T`: in the torso frame ([`TorsoConfig::keypoints`])
+/// or the camera frame.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TorsoPoints<T> {
+    /// The neck (the head's root).
+    pub neck: T,
+    /// The pelvis joint.
+    pub pelvis: T,
+    /// The left shoulder (the left arm's root).
+    pub left_shoulder: T,
+    /// The right shoulder.
+    pub right_shoulder: T,
+    /// The left hip (the left leg's root).
+    pub left_hip: T,
+    /// The right hip.
+    pub right_hip: T,
+    /// The torso joint (mid-chest on the spine), the geodesic search's root.
+    pub torso: T,
+}
+
+impl<T> TorsoPoints<T> {
+    /// Each point mapped by `f`, in the order of [`TorsoPoints::to_array`].
+    pub fn map<U>(self, mut f: impl FnMut(T) -> U) -> TorsoPoints<U> {
+        TorsoPoints {
+            neck: f(self.neck),
+            pelvis: f(self.pelvis),
+            left_shoulder: f(self.left_shoulder),
+            right_shoulder: f(self.right_shoulder),
+            left_hip: f(self.left_hip),
+            right_hip: f(self.right_hip),
+            torso: f(self.torso),
+        }
+    }
+
+    /// The points in the order of [`TorsoPoints::JOINTS`].
+    pub fn to_array(self) -> [T; 7] {
+        [
+            self.neck,
+            self.pelvis,
+            self.left_shoulder,
+            self.right_shoulder,
+            self.left_hip,
+            self.right_hip,
+            self.torso,
+        ]
+    }
+
+    /// The point a limb is rooted at: the neck, a shoulder or a hip.
+    pub fn root_of(&self, limb: Limb) -> &T {
+        match limb {
+            Limb::Head => &self.neck,
+            Limb::LeftArm => &self.left_shoulder,
+            Limb::RightArm => &self.right_shoulder,
+            Limb::LeftLeg => &self.left_hip,
+            Limb::RightLeg => &self.right_hip,
+        }
+    }
+}
+
+impl<T> TorsoPoints<T> {
+    /// The skeleton's joint of each point, in the order of [`TorsoPoints::to_array`].
+    pub const JOINTS: [Joint; 7] = [
+        Joint::Neck,
+        Joint::Pelvis,
+        Joint::LeftShoulder,
+        Joint::RightShoulder,
+        Joint::LeftHip,
+        Joint::RightHip,
+        Joint::Torso,
+    ];
+}
+
+/// Settings of the torso step (part of [`crate::PoseConfig`]); lengths in metres.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct TorsoConfig {
+    /// Torso region: pixels whose distance-transform value is at least this share of the
+    /// maximum (seed Eq. 16.2, with the inequality the right way round).
+    pub dt_share: f32,
+    /// Torso-region points nearer the camera than the region's median depth by more
+    /// than this (a hand or forearm before the chest) are left out of its PCA.
+    pub front_band: f32,
+    /// Mutual closest points farther apart than this are not correspondences (seed: 0.1 m).
+    pub icp_max_dist: f32,
+    /// Most steps of the torso model's registration.
+    pub icp_iterations: usize,
+    /// Registration whose RMS residual exceeds this is redone from the PCA initialisation.
+    pub icp_reinit_residual: f32,
+    /// How far along its axis the registered torso may lie from the torso region's
+    /// centre when the next frame's registration starts from it (0 = unbounded).
+    pub max_offset: f32,
+    /// Turns (degrees, about the torso axis) of the PCA frame tried when registering
+    /// afresh; the lowest residual wins (the first unless another is 10 % better).
+    pub reinit_yaws: Vec<f32>,
+    /// Turn the torso to face where the toes point when they disagree by over 45°.
+    pub feet_facing: bool,
+    /// A person found afresh whose torso core is narrower than this (half width;
+    /// [`TorsoFit::core_half_width`]) may be side-on: the articulated registration also
+    /// races a standing body turned a quarter either way (0 = never).
+    pub side_on_half_width: f32,
+    /// Half-axes of the elliptic-cylinder torso model: lateral.
+    pub half_width: f32,
+    /// Front-back half-axis of the torso model.
+    pub half_depth: f32,
+    /// The torso model's lower end below the torso joint (negative).
+    pub bottom: f32,
+    /// The torso model's upper end above the torso joint.
+    pub top: f32,
+    /// Key points in the torso frame: x = person's left, y = up, z = forward (out of the
+    /// chest), origin the model's centre.
+    pub keypoints: TorsoPoints<[f32; 3]>,
+    /// Height of the top of the head above the torso frame's origin: the head's geodesic
+    /// maximum fixes the torso's position along its axis (0 = off).
+    pub head_top_height: f32,
+}
+
+impl Default for TorsoConfig {
+    fn default() -> Self {
+        Self {
+            dt_share: 0.5,
+            front_band: 0.12,
+            icp_max_dist: 0.1,
+            icp_iterations: 12,
+            icp_reinit_residual: 0.035,
+            max_offset: 0.09,
+            reinit_yaws: vec![0.0],
+            feet_facing: true,
+            side_on_half_width: 0.125,
+            half_width: 0.16,
+            half_depth: 0.11,
+            bottom: -0.30,
+            top: 0.20,
+            // Measured on the MakeHuman body of airglyph-synth (the evaluation's body),
+            // standing, in the frame the head-top anchor fixes; symmetrised.
+            keypoints: TorsoPoints {
+                neck: [0.0, 0.356, -0.071],
+                pelvis: [0.0, -0.181, -0.038],
+                left_shoulder: [0.178, 0.29, -0.005],
+                right_shoulder: [-0.178, 0.29, -0.005],
+                left_hip: [0.11, -0.181, -0.039],
+                right_hip: [-0.11, -0.181, -0.039],
+                torso: [0.0, 0.262, -0.074],
+            },
+            head_top_height: 0.60,
+        }
+    }
+}
 
 /// Torso frame → camera frame: x = person's left, y = up, z = forward, origin the torso
 /// joint (mid-chest on the spine).
@@ -13,9 +167,11 @@ pub type TorsoPose = Rigid;
 /// Result of the torso step.
 #[derive(Debug, Clone, Copy)]
 pub struct TorsoFit {
+    /// Torso frame → camera frame.
     pub pose: TorsoPose,
     /// RMS distance of the matched model points, metres.
     pub residual: f32,
+    /// Model points matched in the last step.
     pub matches: usize,
     /// Whether the registration was started from PCA rather than the last frame.
     pub reinitialised: bool,
@@ -23,10 +179,11 @@ pub struct TorsoFit {
     /// PCA frame of the torso region this frame; `None` when the pose was known, which
     /// needs neither.
     pub core_pixel: Option<usize>,
+    /// See `core_pixel`.
     pub pca: Option<TorsoPose>,
     /// Half the width of the person's mask across the core pixel's row, metres, when
-    /// the torso was looked for afresh: 0.15–0.16 m for a person facing the camera (or
-    /// turned away), 0.09–0.11 m side-on, on both synthetic bodies.
+    /// the torso was looked for afresh: narrower for a person side-on than for one
+    /// facing the camera or turned away (pose NOTES).
     pub core_half_width: Option<f32>,
 }
 
@@ -40,20 +197,19 @@ pub struct TorsoModel {
 impl TorsoModel {
     /// An elliptic cylinder from `torso_bottom` to `torso_top` whose upper part rounds
     /// into the shoulders.
-    pub fn new(cfg: &PoseConfig) -> Self {
+    pub fn new(cfg: &TorsoConfig) -> Self {
         Self::with_resolution(cfg, 14, 28)
     }
 
     /// The model with `rings` rings of `around` points.
-    pub fn with_resolution(cfg: &PoseConfig, rings: usize, around: usize) -> Self {
-        let (a, b) = (cfg.torso_half_width, cfg.torso_half_depth);
+    pub fn with_resolution(cfg: &TorsoConfig, rings: usize, around: usize) -> Self {
+        let (a, b) = (cfg.half_width, cfg.half_depth);
         let mut points = Vec::new();
         let mut normals = Vec::new();
         for i in 0..rings {
-            let y = cfg.torso_bottom
-                + (cfg.torso_top - cfg.torso_bottom) * i as f32 / (rings - 1) as f32;
+            let y = cfg.bottom + (cfg.top - cfg.bottom) * i as f32 / (rings - 1) as f32;
             // Shoulders: the lateral half-axis shrinks over the top 6 cm.
-            let top_gap = cfg.torso_top - y;
+            let top_gap = cfg.top - y;
             let shrink = if top_gap < 0.06 {
                 let s = 1.0 - top_gap / 0.06;
                 (1.0 - 0.35 * s * s).max(0.4)
@@ -106,7 +262,8 @@ pub struct TorsoEstimator {
 }
 
 impl TorsoEstimator {
-    pub fn new(cfg: &PoseConfig) -> Self {
+    /// The torso step's buffers and the torso model of `cfg`.
+    pub fn new(cfg: &TorsoConfig) -> Self {
         Self {
             model: TorsoModel::new(cfg),
             dt: DistanceTransform::default(),
@@ -134,7 +291,7 @@ impl TorsoEstimator {
         mask: &[bool],
         width: usize,
         height: usize,
-        cfg: &PoseConfig,
+        cfg: &TorsoConfig,
         up_hint: Vector3<f32>,
     ) -> Option<(TorsoPose, usize)> {
         // The transform over the person's bounding box (plus a background margin) only.
@@ -173,7 +330,7 @@ impl TorsoEstimator {
         if dmax <= 0.0 {
             return None;
         }
-        let thr = dmax * cfg.torso_dt_share * cfg.torso_dt_share;
+        let thr = dmax * cfg.dt_share * cfg.dt_share;
         self.region.clear();
         self.region.resize(mask.len(), false);
         self.stack.clear();
@@ -212,7 +369,7 @@ impl TorsoEstimator {
         let (_, &mut median_z, _) = self.region_z.select_nth_unstable_by(k, f32::total_cmp);
         let mut m = Moments::default();
         for (i, &inside) in self.region.iter().enumerate() {
-            if inside && points[i].z > median_z - cfg.torso_front_band {
+            if inside && points[i].z > median_z - cfg.front_band {
                 m.add(&points[i]);
             }
         }
@@ -234,7 +391,7 @@ impl TorsoEstimator {
         let up = fwd.cross(&left);
         let r = Rotation3::from_matrix_unchecked(Matrix3::from_columns(&[left, up, fwd]));
         // The core points lie on the front surface; the torso joint is behind them.
-        let t = pca.mean.coords - fwd * (0.8 * cfg.torso_half_depth);
+        let t = pca.mean.coords - fwd * (0.8 * cfg.half_depth);
         let pose = Rigid { r, t };
         pose.is_finite().then_some((pose, core))
     }
@@ -247,13 +404,12 @@ impl TorsoEstimator {
         mask: &[bool],
         width: usize,
         height: usize,
-        cfg: &PoseConfig,
+        cfg: &TorsoConfig,
         init: TorsoPose,
     ) -> (TorsoPose, f32, usize) {
         // Data: the person's points near the torso, thinned to about a thousand.
         let centre = Point3::from(init.t);
-        let reach = (cfg.torso_top - cfg.torso_bottom).max(cfg.torso_half_width * 2.0) * 0.75
-            + cfg.icp_max_dist;
+        let reach = (cfg.top - cfg.bottom).max(cfg.half_width * 2.0) * 0.75 + cfg.icp_max_dist;
         let count = mask.iter().filter(|&&m| m).count();
         let stride = ((count as f32 / 800.0).sqrt().ceil() as usize).max(1);
         self.data.clear();
@@ -351,7 +507,7 @@ impl TorsoEstimator {
         mask: &[bool],
         width: usize,
         height: usize,
-        cfg: &PoseConfig,
+        cfg: &TorsoConfig,
         start: TorsoStart,
         up_hint: Vector3<f32>,
     ) -> Option<TorsoFit> {
@@ -439,11 +595,108 @@ fn row_half_width(points: &[Point3<f32>], mask: &[bool], width: usize, at: usize
     Some((points[hi].x - points[lo].x).abs() / 2.0)
 }
 
-/// The torso key points in the camera frame: neck, pelvis, left/right shoulder,
-/// left/right hip, torso.
-pub fn keypoints(pose: &TorsoPose, cfg: &PoseConfig) -> [Point3<f32>; 7] {
-    cfg.torso_keypoints
+/// The torso key points in the camera frame.
+pub fn keypoints(pose: &TorsoPose, cfg: &TorsoConfig) -> TorsoPoints<Point3<f32>> {
+    cfg.keypoints
         .map(|[x, y, z]| pose.apply(&Point3::new(x, y, z)))
+}
+
+/// The torso frame of the seed's steps (key points of [`TorsoConfig::keypoints`])
+/// that fits the registered body `body` best.
+pub fn of_body(body: &BodyPose, cfg: &PoseConfig) -> Option<TorsoPose> {
+    let tpl = BodyTemplate::new(cfg);
+    let s = Posed::new(&tpl, body).skeleton(&tpl);
+    let model: Vec<Point3<f32>> = cfg
+        .torso
+        .keypoints
+        .to_array()
+        .iter()
+        .map(|&[x, y, z]| Point3::new(x, y, z))
+        .collect();
+    let seen: Vec<Point3<f32>> = TorsoPoints::<()>::JOINTS.iter().map(|&j| s[j]).collect();
+    let pose = horn_rigid(&model, &seen);
+    pose.is_finite().then_some(pose)
+}
+
+/// The torso model slides along its own axis (a cylinder's surface does not pin it);
+/// the top of the head does: `torso` moved along its axis to hold `head_top` (the
+/// head's geodesic maximum, at `pixel` of an image of `size`) at
+/// [`TorsoConfig::head_top_height`] above its origin. `inv` is the inverse of the torso
+/// the maximum was assigned with. Only a head top straight above the torso, not far
+/// off, is trusted; a head cut by the image border has its top out of sight.
+pub fn anchored_at_head_top(
+    torso: &mut TorsoPose,
+    inv: &TorsoPose,
+    head_top: &Point3<f32>,
+    (pu, pv): (usize, usize),
+    (w, h): (usize, usize),
+    cfg: &TorsoConfig,
+) {
+    let top = inv.apply(head_top);
+    let dy = top.y - cfg.head_top_height;
+    let inside = pu > 2 && pv > 2 && pu + 3 < w && pv + 3 < h;
+    if inside && dy.abs() < 0.15 && top.x.abs() < 0.12 && top.z.abs() < 0.2 {
+        torso.t += torso.r * nalgebra::Vector3::new(0.0, dy, 0.0);
+    }
+}
+
+/// The torso turned about its axis to face where the toes point, when the two
+/// lowest maxima (the feet) agree on a direction more than 45° away from the
+/// torso's; `None` to keep it. The torso model cannot tell front from back, nor well a
+/// quarter turn; the feet can.
+pub fn facing_from_feet(
+    torso: &TorsoPose,
+    maxima: &[u32],
+    graph: &GeoGraph,
+    geo: &Geodesic,
+) -> Option<TorsoPose> {
+    let inv = torso.inverse();
+    let up = torso.r * Vector3::y();
+    let mut feet: Vec<(f32, u32)> = maxima
+        .iter()
+        .map(|&m| (inv.apply(&graph.pos[m as usize]).y, m))
+        .filter(|&(y, _)| y < -0.7)
+        .collect();
+    feet.sort_by(|a, b| a.0.total_cmp(&b.0));
+    if feet.len() < 2 {
+        return None;
+    }
+    let mut dirs = Vec::with_capacity(2);
+    for &(_, m) in &feet[..2] {
+        // Back along the geodesic path to about the ankle.
+        let toe = graph.pos[m as usize];
+        let d_toe = geo.dist(m);
+        let mut a = m;
+        let mut guard = 0;
+        while a != NONE && d_toe.saturating_sub(geo.dist(a)) < 150 && guard < 10_000 {
+            a = geo.pred(a);
+            guard += 1;
+        }
+        if a == NONE {
+            return None;
+        }
+        let d = toe - graph.pos[a as usize];
+        let h = d - up * d.dot(&up);
+        if h.norm() < 0.05 {
+            return None;
+        }
+        dirs.push(h.normalize());
+    }
+    if dirs[0].dot(&dirs[1]) < 0.5 {
+        return None;
+    }
+    let feet_dir = (dirs[0] + dirs[1]).try_normalize(1e-6)?;
+    let fwd = torso.r * Vector3::z();
+    let fwd_h = (fwd - up * fwd.dot(&up)).try_normalize(1e-6)?;
+    let angle = fwd_h.cross(&feet_dir).dot(&up).atan2(fwd_h.dot(&feet_dir));
+    if angle.abs() < std::f32::consts::FRAC_PI_4 {
+        return None;
+    }
+    let turn = nalgebra::Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(up), angle);
+    Some(TorsoPose {
+        r: turn * torso.r,
+        t: torso.t,
+    })
 }
 
 #[cfg(test)]
@@ -454,9 +707,9 @@ mod tests {
     /// must find the pose they were rendered at.
     #[test]
     fn registration_recovers_a_displaced_torso() {
-        let cfg = PoseConfig {
+        let cfg = TorsoConfig {
             icp_iterations: 40,
-            ..PoseConfig::default()
+            ..TorsoConfig::default()
         };
         let truth = Rigid {
             r: Rotation3::from_euler_angles(0.05, 0.3, 0.1),

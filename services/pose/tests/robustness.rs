@@ -272,10 +272,9 @@ fn a_still_person_does_not_jitter_with_the_sensor_noise() {
         }
         sum
     };
-    let raw = jitter(PoseConfig {
-        smoothing_min_cutoff: 0.0,
-        ..PoseConfig::default()
-    });
+    let mut unsmoothed = PoseConfig::default();
+    unsmoothed.smoothing.min_cutoff = 0.0;
+    let raw = jitter(unsmoothed);
     let smooth = jitter(PoseConfig::default());
     // The registered body already jitters a quarter of what the geodesic steps alone
     // did; the filter still takes off a third of what is left.

@@ -3,7 +3,7 @@
 use airglyph_pose::PoseConfig;
 
 /// Applies every `set:FIELD=VALUE` argument to `cfg`: any PoseConfig field, VALUE as
-/// JSON, a dotted FIELD reaching into nested settings (`set:register.collar_gain=0.1`,
+/// JSON, a dotted FIELD reaching into nested settings (`set:register.lengths.collar_gain=0.1`,
 /// `set:geodesic_reach_ratio=[1.3,1.2]`). An unknown field is refused rather than
 /// silently ignored.
 pub fn apply_sets(cfg: &mut PoseConfig, args: &[String]) {

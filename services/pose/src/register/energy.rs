@@ -1,0 +1,195 @@
+//! The energy's terms, linearised into the normal equations in one pass over the data:
+//! the data term (each point on its nearest capsule), the silhouette and free-space
+//! terms (the body's front surface as the camera sees it), the tips' term.
+
+use super::capsules::{nearest_capsule, place, Gaps};
+use super::solver::Accumulator;
+use super::{Pass, Problem, Registration};
+use crate::body::{Posed, Segment};
+use nalgebra::Vector3;
+
+/// Weights and scales of the energy's terms (part of [`super::RegisterConfig`]).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct EnergyConfig {
+    /// Scale of the data term's Cauchy weight, metres.
+    pub sigma: f32,
+    /// Weight of a silhouette residual against one data point's.
+    pub silhouette_weight: f32,
+    /// Weight of a free-space residual against one data point's.
+    pub free_space_weight: f32,
+    /// Beyond this (metres) the silhouette and free-space terms pull linearly (Huber).
+    pub silhouette_scale: f32,
+    /// How far the body's front may lie before the surface seen, metres.
+    pub free_space_margin: f32,
+    /// Weight of a limb tip's distance to its geodesic maximum...
+    pub tip_weight: f32,
+    /// ...and its Cauchy scale, metres.
+    pub tip_sigma: f32,
+}
+
+impl Default for EnergyConfig {
+    fn default() -> Self {
+        Self {
+            sigma: 0.03,
+            silhouette_weight: 3.0,
+            free_space_weight: 4.0,
+            silhouette_scale: 0.05,
+            free_space_margin: 0.03,
+            tip_weight: 10.0,
+            tip_sigma: 0.1,
+        }
+    }
+}
+
+/// Cauchy's weight and cost for residual `r` at scale `s`.
+#[inline]
+pub(super) fn cauchy(r: f32, s: f32) -> (f32, f32) {
+    (cauchy_weight(r, s), cauchy_cost(r, s))
+}
+
+/// Huber's weight and cost at scale `s`: quadratic near, linear far. For the body
+/// outside the silhouette or before a seen surface, which is wrong however far it is
+/// (a data point far from the body may be something else; a limb in empty space is
+/// not), so its pull must not fade with distance.
+#[inline]
+pub(super) fn huber(r: f32, s: f32) -> (f32, f32) {
+    let a = r.abs();
+    if a <= s {
+        (1.0, 0.5 * r * r)
+    } else {
+        (s / a, s * (a - 0.5 * s))
+    }
+}
+
+#[inline]
+pub(super) fn cauchy_weight(r: f32, s: f32) -> f32 {
+    let q = (r / s) * (r / s);
+    1.0 / (1.0 + q)
+}
+
+#[inline]
+pub(super) fn cauchy_cost(r: f32, s: f32) -> f32 {
+    let q = (r / s) * (r / s);
+    0.5 * s * s * q.ln_1p()
+}
+
+impl Registration {
+    pub(super) fn accumulate(
+        &self,
+        p: &Problem,
+        posed: &Posed,
+        pass: Pass,
+        assign: &mut [u16],
+    ) -> (Accumulator, [f32; Segment::COUNT]) {
+        let (f, t, tips, cfg) = (p.frame, p.body, p.tips, p.cfg);
+        let placed = place(t, posed);
+        let gaps = pass.search.then(|| Gaps::new(&placed));
+        let mut acc = Accumulator::new(posed, cfg.lengths.bone_evidence.is_some());
+
+        // Data: each point on its nearest capsule's surface.
+        for ((p, area), ci) in self.data.iter().zip(assign.iter_mut()) {
+            let (q, d) = if let Some(gaps) = &gaps {
+                let (c, q, d) = nearest_capsule(&placed, gaps, p, usize::from(*ci));
+                *ci = c as u16;
+                (q, d)
+            } else {
+                let (q, _, d) = placed[*ci as usize].nearest(p);
+                (q, d)
+            };
+            let off = p - q;
+            let len = off.norm();
+            if len < 1e-6 || !d.is_finite() {
+                continue;
+            }
+            let n = off / len;
+            let w = cauchy_weight(d, cfg.energy.sigma);
+            if pass.energy {
+                acc.energy += (area * cauchy_cost(d, cfg.energy.sigma)) as f64;
+            }
+            acc.add(placed[*ci as usize].segment, &q, &(-n), d, area * w);
+        }
+
+        // Silhouette and free space: the body's front surface as the camera sees it.
+        let mut seen_n = [0u32; Segment::COUNT];
+        let mut all_n = [0u32; Segment::COUNT];
+        let (w, h) = (f.width as i32, f.height as i32);
+        for c in &placed {
+            let len = c.len2.sqrt();
+            let k = ((len / 0.04).ceil() as usize + 1).max(2);
+            for i in 0..k {
+                let tt = i as f32 / (k - 1) as f32;
+                let axis = c.a + c.ab * tt;
+                let r = c.ra + (c.rb - c.ra) * tt;
+                let Some(ray) = axis.coords.try_normalize(1e-6) else {
+                    continue;
+                };
+                let s = axis - ray * r;
+                let Some((u, v)) = f.k.project(&s) else {
+                    continue;
+                };
+                let (u, v) = (u.round() as i32, v.round() as i32);
+                if u < 0 || v < 0 || u >= w || v >= h {
+                    continue;
+                }
+                let idx = (v * w + u) as usize;
+                all_n[c.segment.index()] += 1;
+                let person = f.mask[idx] && f.points[idx].z > 0.0;
+                if person {
+                    let z_obs = f.points[idx].z;
+                    let gap = z_obs - s.z;
+                    if gap > cfg.energy.free_space_margin {
+                        // The camera sees past the body's front: the body is not there.
+                        let res = cfg.energy.free_space_margin - gap;
+                        let (wc, cost) = huber(res, cfg.energy.silhouette_scale);
+                        acc.energy += (cfg.energy.free_space_weight * cost) as f64;
+                        acc.add(
+                            c.segment,
+                            &s,
+                            &Vector3::z(),
+                            res,
+                            cfg.energy.free_space_weight * wc,
+                        );
+                    } else if gap > -0.05 {
+                        seen_n[c.segment.index()] += 1;
+                    }
+                } else if let Some((qu, qv)) = self.nearest.get(u as usize, v as usize) {
+                    let target = f.k.back_project(qu as f32, qv as f32, s.z);
+                    let e = s - target;
+                    let (wc, cost) = huber(e.norm(), cfg.energy.silhouette_scale);
+                    acc.energy += (cfg.energy.silhouette_weight * cost) as f64;
+                    let ws = cfg.energy.silhouette_weight * wc;
+                    // Both image axes: pulled only up or down, an arm held out beside
+                    // the silhouette (a T-pose's arm, the person since turned side-on)
+                    // stayed in the air.
+                    acc.add(c.segment, &s, &Vector3::x(), e.x, ws);
+                    acc.add(c.segment, &s, &Vector3::y(), e.y, ws);
+                }
+            }
+        }
+
+        // Tips near their geodesic maxima.
+        for (tip, target) in t.tips.iter().zip(tips) {
+            let Some(m) = target else { continue };
+            let x = posed.point(tip.0, &tip.1);
+            let e = x - m;
+            let (wc, cost) = cauchy(e.norm(), cfg.energy.tip_sigma);
+            acc.energy += (cfg.energy.tip_weight * cost) as f64;
+            let wt = cfg.energy.tip_weight * wc;
+            acc.add(tip.0, &x, &Vector3::x(), e.x, wt);
+            acc.add(tip.0, &x, &Vector3::y(), e.y, wt);
+            acc.add(tip.0, &x, &Vector3::z(), e.z, wt);
+        }
+        // A segment without a surface of its own (a collarbone) is seen as its parent.
+        let mut seen = [0.0; Segment::COUNT];
+        for s in Segment::ALL {
+            let i = s.index();
+            seen[i] = if all_n[i] > 0 {
+                seen_n[i] as f32 / all_n[i] as f32
+            } else {
+                s.parent().map_or(0.0, |p| seen[p.index()])
+            };
+        }
+        (acc, seen)
+    }
+}

@@ -1,0 +1,172 @@
+//! Articulated registration: the body template ([`crate::body`]) fitted to the person's
+//! points by Gauss–Newton, beyond the seed.
+//!
+//! The seed's limbs are two-joint chains fitted one by one to target points around a
+//! geodesic path, on a torso registered alone; a torso model that turns a few degrees
+//! when an arm is raised before the chest, or slides along its own axis, then carries
+//! every key point with it. Here the whole body is fitted at once, from the geodesic
+//! estimate and from the last frame's fit, whichever explains the frame better:
+//!
+//! * data term: every sampled person point lies on the surface of the nearest capsule
+//!   (signed distance, Cauchy-weighted so points the body does not explain — a bag, a
+//!   second person's arm — cannot drag it);
+//! * silhouette term: the body's front surface, seen from the camera, projects onto the
+//!   person's pixels (a limb outside them is pulled to the nearest one);
+//! * free-space term: where the camera sees a surface behind the body's front, the body
+//!   cannot be (it would hide that surface);
+//! * extremity term: the limbs' tips near the geodesic maxima assigned to them.
+//!
+//! Bone lengths and the torso's shape are fixed by the template, so no step can stretch
+//! a limb or shear the torso. The unknowns are the pelvis position and a rotation per
+//! segment (36 numbers); a step moves each segment by a twist that is linear in them, so
+//! the normal equations are accumulated per segment (6×6) and assembled once.
+
+mod capsules;
+mod config;
+mod energy;
+mod priors;
+mod sampling;
+mod solver;
+mod starts;
+#[cfg(test)]
+mod tests;
+mod tips;
+
+pub(crate) use capsules::{nearest_is, place};
+pub use config::{
+    EnergyConfig, LengthsConfig, PriorsConfig, RaceConfig, RegisterConfig, SamplingConfig,
+    SolverConfig,
+};
+pub use priors::hidden_limbs;
+pub use starts::{starts, OfferedStart};
+pub use tips::{drop_borrowed_tips, tips_strayed};
+
+use crate::body::{BodyPose, BodyTemplate, Segment};
+use airglyph_core::Intrinsics;
+use nalgebra::{Point3, SMatrix, SVector};
+use sampling::NearestPixel;
+
+/// Unknowns of a step: the pelvis's translation, then a rotation per segment.
+pub(super) const N: usize = 3 + 3 * Segment::COUNT;
+pub(super) type Normal = SMatrix<f64, N, N>;
+pub(super) type Gradient = SVector<f64, N>;
+pub(super) type Local = SMatrix<f64, 6, 6>;
+
+/// The frame the body is fitted to: the organized point cloud and the person mask of
+/// the work image.
+#[derive(Debug, Clone, Copy)]
+pub struct Frame<'a> {
+    pub points: &'a [Point3<f32>],
+    pub mask: &'a [bool],
+    pub width: usize,
+    pub height: usize,
+    pub k: &'a Intrinsics,
+}
+
+/// The result of one registration.
+#[derive(Debug, Clone, Copy)]
+pub struct Fit {
+    pub pose: BodyPose,
+    /// The robust energy at the end (lower explains the frame better).
+    pub energy: f32,
+    /// Per segment, the share of its front surface the camera sees where the body puts
+    /// it (1 = all of it; hidden or contradicted parts lower it).
+    pub seen: [f32; Segment::COUNT],
+    /// The change of the arms' and the legs' length ratio that would explain the frame
+    /// best (one Gauss–Newton step at the final pose), when the frame says enough.
+    pub length_step: [Option<f32>; 2],
+    /// Per arm (left, right): the change of the upper arm's and the forearm's length
+    /// ratios apart that would explain the frame best, only when the frame tells the
+    /// two bones apart (a bent elbow; see `bone_steps`).
+    pub arm_bone_steps: [Option<[f32; 2]>; 2],
+    /// Passes over the data this fit took (all starts).
+    pub passes: usize,
+}
+
+/// Reusable state: the sampled data and the nearest-person-pixel map of a frame.
+#[derive(Debug, Default)]
+pub struct Registration {
+    /// Sampled person points and the number of pixels each stands for.
+    data: Vec<(Point3<f32>, f32)>,
+    nearest: NearestPixel,
+}
+
+/// What one registration fits, to what, and how.
+pub(super) struct Problem<'a> {
+    pub(super) frame: &'a Frame<'a>,
+    pub(super) body: &'a BodyTemplate,
+    pub(super) tips: &'a [Option<Point3<f32>>; 5],
+    /// Per segment, how hidden it was last frame (1 − seen, squared): what the pull
+    /// towards hanging acts on.
+    pub(super) hidden: &'a [f32; Segment::COUNT],
+    pub(super) cfg: &'a RegisterConfig,
+}
+
+/// What a pass over the data does besides the normal equations.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Pass {
+    /// Search every point's nearest capsule (else keep the last pass's).
+    pub(super) search: bool,
+    /// Sum the energy (only the last pass of a run needs it).
+    pub(super) energy: bool,
+}
+
+/// Passes between two nearest-capsule searches.
+pub(super) const REASSIGN: usize = 2;
+
+impl Registration {
+    /// How many person points the data term uses.
+    pub fn data_len(&self) -> usize {
+        self.data.len()
+    }
+
+    /// Fits the body from the best of several starts: each is moved
+    /// [`SolverConfig::race_iterations`] steps, and the one whose energy is then
+    /// lowest goes on to [`SolverConfig::iterations`] in all. `tips`: per limb of
+    /// [`crate::Limb::ALL`], the geodesic maximum assigned to it (camera frame), if any.
+    /// `None` without a start.
+    pub fn fit(
+        &self,
+        f: &Frame,
+        t: &BodyTemplate,
+        starts: &[BodyPose],
+        tips: &[Option<Point3<f32>>; 5],
+        hidden: &[f32; Segment::COUNT],
+        cfg: &RegisterConfig,
+    ) -> Option<Fit> {
+        let problem = Problem {
+            frame: f,
+            body: t,
+            tips,
+            hidden,
+            cfg,
+        };
+        if let [only] = starts {
+            return Some(self.run(&problem, *only, cfg.solver.iterations, true));
+        }
+        let race = cfg
+            .solver
+            .race_iterations
+            .clamp(1, cfg.solver.iterations.max(1));
+        let mut best: Option<Fit> = None;
+        let mut passes = 0;
+        for &s in starts {
+            // Each start's energy at its own final pose: the energy before the last
+            // step would favour the start that moved least.
+            let fit = self.run(&problem, s, race, true);
+            passes += fit.passes;
+            if best.is_none_or(|b| fit.energy < b.energy) {
+                best = Some(fit);
+            }
+        }
+        let b = best?;
+        let mut fit = self.run(
+            &problem,
+            b.pose,
+            cfg.solver.iterations.saturating_sub(race),
+            true,
+        );
+        fit.passes += passes;
+        Some(fit)
+    }
+}

@@ -1,0 +1,126 @@
+//! Where the registration starts: the tracked body, the geodesic estimate, the tracked
+//! body with its strayed limbs taken from the geodesic estimate, standing side-on
+//! bodies, and a start offered from outside.
+
+use super::RegisterConfig;
+use crate::body::{BodyPose, BodyTemplate, Posed, Segment};
+use crate::{Limb, PoseConfig};
+use airglyph_core::Skeleton;
+use nalgebra::{Point3, Vector3};
+use std::borrow::Cow;
+
+/// A pose offered to the next frame's registration from outside, for experiments
+/// that ask whether finding the pose or the energy limits the error (the truth of a
+/// synthetic frame, say: `examples/devloop.rs oracle`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum OfferedStart {
+    /// Raced beside the estimator's own starts.
+    Also(Skeleton),
+    /// The only start.
+    Only(Skeleton),
+}
+
+/// The starts of one frame's registration and the settings and tips they race with.
+#[derive(Debug, Clone)]
+pub struct Starts<'a> {
+    /// Each is moved [`super::SolverConfig::race_iterations`] steps; the best goes on.
+    pub poses: Vec<BodyPose>,
+    /// The registration's settings for this race (the configured ones but for a person
+    /// perhaps side-on).
+    pub cfg: Cow<'a, RegisterConfig>,
+    /// The limbs' tips the tip term pulls to.
+    pub tips: [Option<Point3<f32>>; 5],
+}
+
+/// The starts of a frame: the last frame's body `tracked`, the geodesic estimate
+/// `geodesic` (when the seed's steps ran), the tracked body with the limbs whose tip
+/// strayed taken from the geodesic estimate ([`super::RaceConfig::hybrid`]), and,
+/// for a person perhaps side-on (`side_on`: the person's centroid), standing side-on
+/// bodies, raced for every step and without the tips (they were assigned to the limbs
+/// of the frontal body). An `offered` start is added, or replaces them all.
+pub fn starts<'a>(
+    tpl: &BodyTemplate,
+    tracked: Option<BodyPose>,
+    geodesic: Option<BodyPose>,
+    tips: &[Option<Point3<f32>>; 5],
+    side_on: Option<Point3<f32>>,
+    offered: Option<OfferedStart>,
+    cfg: &'a PoseConfig,
+) -> Starts<'a> {
+    let hybrid = tracked
+        .zip(geodesic.filter(|_| cfg.register.race.hybrid))
+        .and_then(|(prev, geo)| hybrid_start(tpl, &prev, &geo, tips, cfg));
+    let mut poses: Vec<BodyPose> = [tracked, hybrid, geodesic].into_iter().flatten().collect();
+    let (register_cfg, tips_now) = match geodesic.zip(side_on) {
+        Some((g, centroid)) => {
+            poses.extend(side_on_starts(&g, &centroid));
+            let mut side_on_cfg = cfg.register.clone();
+            side_on_cfg.solver.race_iterations = cfg.register.solver.iterations;
+            (Cow::Owned(side_on_cfg), [None; 5])
+        }
+        None => (Cow::Borrowed(&cfg.register), *tips),
+    };
+    match offered {
+        Some(OfferedStart::Also(s)) => poses.extend(BodyPose::from_skeleton(tpl, &s)),
+        Some(OfferedStart::Only(s)) => {
+            if let Some(b) = BodyPose::from_skeleton(tpl, &s) {
+                poses = vec![b];
+            }
+        }
+        None => {}
+    }
+    Starts {
+        poses,
+        cfg: register_cfg,
+        tips: tips_now,
+    }
+}
+
+/// Starts for a person who may be side-on: standing, arms hanging, turned a quarter
+/// either way from the camera, about the person's centroid a little behind its surface,
+/// upright as the geodesic estimate's pelvis. The seed's torso step fits its frontal
+/// model to a flank and nothing later turns the body by a quarter; from these the
+/// registration's energy tells the two apart (a side-on person's energy is lower for
+/// the side-on start than for the frontal one).
+fn side_on_starts(geodesic: &BodyPose, centroid: &Point3<f32>) -> [BodyPose; 2] {
+    // The centroid of the surface the camera sees lies in front of the body's axis.
+    const BEHIND_SURFACE: f32 = 0.05;
+    let up = geodesic.rotation[Segment::Pelvis.index()] * Vector3::y();
+    [1.0f32, -1.0].map(|side| {
+        let toward = Vector3::new(0.0, 0.0, side);
+        let x = (toward - up * up.dot(&toward))
+            .try_normalize(1e-6)
+            .unwrap_or(toward);
+        let r = nalgebra::Rotation3::from_basis_unchecked(&[x, up, x.cross(&up)]);
+        BodyPose {
+            pelvis: centroid + Vector3::new(0.0, 0.0, BEHIND_SURFACE),
+            rotation: [r; Segment::COUNT],
+        }
+    })
+}
+
+/// The tracked body `prev` with every limb whose tip strayed (lies farther than
+/// [`super::RaceConfig::gap`] from the geodesic maximum given to it) taken from the
+/// geodesic estimate `geo`: an arm dropped from a T-pose within a frame, say, while the
+/// rest is tracked well. None when no tip strayed.
+fn hybrid_start(
+    tpl: &BodyTemplate,
+    prev: &BodyPose,
+    geo: &BodyPose,
+    tips: &[Option<Point3<f32>>; 5],
+    cfg: &PoseConfig,
+) -> Option<BodyPose> {
+    let posed = Posed::new(tpl, prev);
+    let mut h = *prev;
+    let mut changed = false;
+    for l in Limb::ALL {
+        let (seg, local) = tpl.tips[l.index()];
+        if tips[l.index()]
+            .is_some_and(|m| (posed.point(seg, &local) - m).norm() > cfg.register.race.gap)
+        {
+            h = h.with_limb_of(geo, l);
+            changed = true;
+        }
+    }
+    changed.then_some(h)
+}
