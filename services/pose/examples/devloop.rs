@@ -2,7 +2,8 @@
 //! figures and writes overlays (green = truth, red = estimate).
 //!
 //! `cargo run --release -p airglyph-pose --example devloop -- [pose:NAME|bvh:FILE|draw:SYMBOLS]
-//!  [mh] [follow] [noise] [floor] [qvga] [frames] [oracle|oracle-only] [overlays:DIR] [from:N] [every:N] [set:FIELD=VALUE]`
+//!  [mh] [follow] [noise] [floor|room] [seated] [table] [upper] [partial] [qvga] [lateral:M] [dist:M]
+//!  [yaw:DEG] [frames] [oracle|oracle-only] [overlays:DIR] [from:N] [every:N] [set:FIELD=VALUE]`
 #![allow(clippy::needless_range_loop)]
 
 mod support;
@@ -22,6 +23,8 @@ fn main() {
     let mut from = 0usize;
     // oracle: the true pose also raced each frame; oracle-only: the only start.
     let mut oracle: Option<fn(airglyph_core::Skeleton) -> OfferedStart> = None;
+    // upper: framed from the waist up; partial: frames without the whole body scored too.
+    let (mut upper, mut partial) = (false, false);
     for a in &args {
         if let Some(f) = a.strip_prefix("bvh:") {
             cfg.motion = MotionSpec::Bvh(f.into());
@@ -41,12 +44,29 @@ fn main() {
             cfg.sensor_noise = true;
         } else if a == "floor" {
             cfg.background = Background::FloorAndWall;
+        } else if a == "room" {
+            cfg.background = Background::Room;
+        } else if a == "seated" {
+            let chair = airglyph_synth::Chair::default();
+            cfg.props.push(airglyph_synth::Prop::Chair(chair));
+            cfg.posture = airglyph_synth::Posture::Seated {
+                seat_height_m: chair.seat_height_m,
+            };
+        } else if a == "table" {
+            cfg.props
+                .push(airglyph_synth::Prop::Table(airglyph_synth::Table::default()));
+        } else if a == "upper" {
+            upper = true;
+        } else if a == "partial" {
+            partial = true;
         } else if a == "qvga" {
             cfg.intrinsics = Intrinsics::default().scaled_to(320, 240);
         } else if let Some(d) = a.strip_prefix("overlays:") {
             out = Some(d.to_string());
         } else if let Some(y) = a.strip_prefix("yaw:") {
             cfg.placement.yaw_deg = y.parse().unwrap();
+        } else if let Some(x) = a.strip_prefix("lateral:") {
+            cfg.placement.lateral_m = x.parse().unwrap();
         } else if let Some(y) = a.strip_prefix("dist:") {
             cfg.placement.distance_m = y.parse().unwrap();
         } else if a == "oracle" {
@@ -60,6 +80,9 @@ fn main() {
         } else if let Ok(n) = a.parse() {
             frames = n;
         }
+    }
+    if upper {
+        cfg = cfg.framing_upper_body().expect("the body loads");
     }
     let mut synth = Synthesizer::new(cfg).expect("scene");
     let k = synth.intrinsics();
@@ -111,7 +134,7 @@ fn main() {
         }
         let r = est.estimate(img.view());
         let c1 = cpu_seconds();
-        if !airglyph_pose::metrics::in_view(&truth.skeleton, &k) {
+        if !partial && !airglyph_pose::metrics::in_view(&truth.skeleton, &k) {
             continue;
         }
         ev.seconds += t.elapsed().as_secs_f64();
@@ -131,19 +154,21 @@ fn main() {
         ]) {
             *a += b;
         }
-        let fe = ev.add(&r, &truth.skeleton);
+        let fe = ev.add(&r, &truth.skeleton, &k);
+        // Joints out of view count as no error here (`partial` frames).
+        let err = fe.joint.map(|e| e.unwrap_or(0.0));
         for j in 0..Joint::COUNT {
             let k = usize::from(!truth.visible[j]);
-            vis_err[k] += fe.joint[j] as f64;
+            vis_err[k] += err[j] as f64;
             vis_n[k] += 1;
-            if fe.joint[j] >= 0.1 {
+            if err[j] >= 0.1 {
                 vis_far[k] += 1;
             }
         }
         if let Some(f) = &mut series {
             use std::io::Write;
             let worst = (0..Joint::COUNT)
-                .max_by(|&a, &b| fe.joint[a].total_cmp(&fe.joint[b]))
+                .max_by(|&a, &b| err[a].total_cmp(&err[b]))
                 .unwrap_or(0);
             writeln!(
                 f,
@@ -327,7 +352,7 @@ fn main() {
             let n = ev
                 .frames
                 .iter()
-                .filter(|f| f.joint[j.index()] >= 0.10)
+                .filter(|f| f.joint[j.index()].is_none_or(|e| e >= 0.10))
                 .count();
             line += &format!(
                 " {} {:.1}%",
@@ -353,7 +378,7 @@ fn main() {
     for j in Joint::ALL {
         let b = bias[j.index()] * 100.0;
         let lo = local[j.index()] / nlocal[j.index()].max(1.0);
-        println!("{:15} e_j {:6.2} cm  bias ({:6.2} {:6.2} {:6.2}) cm  truth in torso frame [{:.3}, {:.3}, {:.3}]", j.name(), s.per_joint_cm[j.name()], b.x, b.y, b.z, lo.x, lo.y, lo.z);
+        println!("{:15} e_j {:6.2} cm  bias ({:6.2} {:6.2} {:6.2}) cm  truth in torso frame [{:.3}, {:.3}, {:.3}]", j.name(), s.per_joint_cm[j.name()].unwrap_or(f64::NAN), b.x, b.y, b.z, lo.x, lo.y, lo.z);
     }
     eprintln!(
         "thread CPU time per frame {:.3} ms = {:.0} frames/s on one core",

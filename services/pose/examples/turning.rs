@@ -112,7 +112,7 @@ fn turn(body: &BodySpec, pose: ScriptedPose, side: f32, cfg: &PoseConfig) -> (f6
         let s = scenes.iter_mut().find(|s| s.0 == yaw).expect("scene");
         let (img, truth) = s.1.render(f);
         let r = est.estimate(img.view());
-        let e = f64::from(PoseEval::default().add(&r, &truth.skeleton).mean());
+        let e = f64::from(PoseEval::default().add(&r, &truth.skeleton, &k).mean());
         if f < HOLD {
             side_on.push(e);
         } else if f >= yaws.len() - HOLD {

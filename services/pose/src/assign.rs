@@ -145,9 +145,13 @@ pub fn limb_costs(
                         + a_cfg.head_off_axis_weight * (local.x.abs() - 0.08).max(0.0)
                 }
             };
-            // Feet stay below the hips.
+            // Feet stay below the hips, and never reach the chest: a maximum up there
+            // is a head, a hand or an ear, and the legs may well be out of view.
             if matches!(l, Limb::LeftLeg | Limb::RightLeg) {
                 c += (local.y - cfg.torso.keypoints.left_hip[1] + 0.2).max(0.0);
+                if local.y > 0.0 {
+                    c = f32::INFINITY;
+                }
             }
             row[l.index()] = c;
             cut[l.index()] = best.1;

@@ -29,8 +29,11 @@ pub struct StepTimes {
 /// Intermediate results of the last frame, for overlays and diagnostics.
 #[derive(Debug, Clone, Default)]
 pub struct Debug {
-    /// Pixels of the geodesic maxima, in the order found.
+    /// Pixels of the geodesic maxima, in the order found (those at a cut left out).
     pub maxima: Vec<u32>,
+    /// Pixels of the geodesic maxima where the body is cut from view (the image's edge,
+    /// something nearer): no limb ends there.
+    pub cut_maxima: Vec<u32>,
     /// For each limb, the maximum assigned to it (index into `maxima`).
     pub assignment: [Option<usize>; 5],
     /// Target points of each limb.

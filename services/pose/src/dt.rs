@@ -15,16 +15,40 @@ pub struct DistanceTransform {
 
 const INF: f32 = 1e20;
 
+/// Which sides of the image the mask continues beyond.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Open {
+    pub left: bool,
+    pub right: bool,
+    pub top: bool,
+    pub bottom: bool,
+}
+
 impl DistanceTransform {
     /// The squared distance (pixels²) of each pixel of a `width`×`height` mask to the
     /// nearest pixel outside it, into `out`.
     pub fn compute(&mut self, mask: &[bool], width: usize, height: usize, out: &mut Vec<f32>) {
+        self.compute_open(mask, width, height, Open::default(), out);
+    }
+
+    /// [`DistanceTransform::compute`] with the sides in `open` continuing the mask
+    /// beyond the border (a body cut by the image's edge is no narrower there).
+    pub fn compute_open(
+        &mut self,
+        mask: &[bool],
+        width: usize,
+        height: usize,
+        open: Open,
+        out: &mut Vec<f32>,
+    ) {
         out.clear();
         out.resize(width * height, 0.0);
         if width == 0 || height == 0 {
             return;
         }
-        // The border counts as background: pad each 1-D problem with a zero at both ends.
+        // Each 1-D problem is padded at both ends: zero where the border counts as
+        // background, infinity where the mask goes on.
+        let pad = |on: bool| if on { INF } else { 0.0 };
         let n = width.max(height) + 2;
         self.f.resize(n, 0.0);
         self.d.resize(n, 0.0);
@@ -33,11 +57,11 @@ impl DistanceTransform {
         self.col.resize(n, 0.0);
         // Columns first.
         for x in 0..width {
-            self.f[0] = 0.0;
+            self.f[0] = pad(open.top);
             for y in 0..height {
                 self.f[y + 1] = if mask[y * width + x] { INF } else { 0.0 };
             }
-            self.f[height + 1] = 0.0;
+            self.f[height + 1] = pad(open.bottom);
             self.pass(height + 2);
             for y in 0..height {
                 out[y * width + x] = self.d[y + 1];
@@ -45,9 +69,9 @@ impl DistanceTransform {
         }
         // Then rows.
         for y in 0..height {
-            self.f[0] = 0.0;
+            self.f[0] = pad(open.left);
             self.f[1..width + 1].copy_from_slice(&out[y * width..(y + 1) * width]);
-            self.f[width + 1] = 0.0;
+            self.f[width + 1] = pad(open.right);
             self.pass(width + 2);
             for x in 0..width {
                 out[y * width + x] = if mask[y * width + x] {
@@ -148,6 +172,30 @@ mod tests {
         // The centre of an 8-row band is 4 pixels from the edge.
         assert_eq!(out[5 * w + 10], 16.0);
         assert_eq!(out[0], 0.0);
+    }
+
+    #[test]
+    fn a_mask_cut_by_an_open_side_is_no_narrower_there() {
+        // A band 8 pixels wide running off the bottom: near the bottom its centre is
+        // 4 pixels from the sides, not 1 from the border.
+        let (w, h) = (20, 12);
+        let mut mask = vec![false; w * h];
+        for y in 2..h {
+            for x in 6..14 {
+                mask[y * w + x] = true;
+            }
+        }
+        let mut dt = DistanceTransform::default();
+        let mut out = Vec::new();
+        let open = Open {
+            bottom: true,
+            ..Open::default()
+        };
+        dt.compute_open(&mask, w, h, open, &mut out);
+        assert_eq!(out[(h - 1) * w + 10], 16.0);
+        assert_eq!(out[(h - 1) * w + 6], 1.0);
+        dt.compute(&mask, w, h, &mut out);
+        assert_eq!(out[(h - 1) * w + 10], 1.0);
     }
 
     #[test]

@@ -18,8 +18,8 @@ use crate::register::{
 use crate::segment::{Plane, Segmentation, Segmenter, TRACKED};
 use crate::smooth::Smoother;
 use crate::torso::{
-    anchored_at_head_top, facing_from_feet, keypoints, TorsoEstimator, TorsoFit, TorsoPoints,
-    TorsoPose, TorsoStart,
+    anchored_at_head_top, facing_from_feet, head_top_of_mask, keypoints, TorsoEstimator, TorsoFit,
+    TorsoPoints, TorsoPose, TorsoStart,
 };
 use airglyph_core::{DepthView, Intrinsics, Joint, Skeleton};
 use nalgebra::{Point3, Vector3};
@@ -216,18 +216,30 @@ impl PoseEstimator {
     /// decreasing), which paces the joints' smoothing. Never panics, never NaN.
     pub fn estimate_at(&mut self, depth: DepthView, time_s: f64) -> PoseResult {
         self.clock = Some(time_s);
+        let k = if (depth.width(), depth.height()) == (self.k.width, self.k.height) {
+            self.k
+        } else {
+            self.k.scaled_to(depth.width(), depth.height())
+        };
         let estimated = self.work_image(depth);
         // An offer is for one frame, taken or not (a frame without a person never
         // reaches the registration).
         self.offered = None;
         match estimated {
-            Some(s) if s.is_finite() => PoseResult {
-                person_found: true,
-                skeleton: self
+            Some(s) if s.is_finite() => {
+                let mut skeleton = self
                     .tracking
                     .smoother
-                    .smooth(s, time_s, &self.cfg.smoothing),
-            },
+                    .smooth(s, time_s, &self.cfg.smoothing);
+                // Smoothing may carry a joint seen at the image's edge past it.
+                for (p, v) in skeleton.joints.iter().zip(&mut skeleton.visible) {
+                    *v = *v && inside(&k, p);
+                }
+                PoseResult {
+                    person_found: true,
+                    skeleton,
+                }
+            }
             _ => {
                 self.tracking = Tracking::default();
                 PoseResult {
@@ -307,18 +319,40 @@ impl PoseEstimator {
         // 3. The geodesic graph, rooted at the torso joint.
         let root = graph(s, &k, size, &torso, cfg, d)?;
         self.times.graph = lap.lap();
-        // 4. The geodesic maxima.
+        // 4. The geodesic maxima, and which of them lie where the body is cut from view
+        // (there the limb goes on: it passes the maximum, it does not end at it).
         let maxima = s.geodesic.maxima(&s.graph, root, &cfg.geodesic);
-        d.maxima = maxima
+        let frame = Frame {
+            points: &s.points,
+            mask: &s.mask,
+            width: size.0,
+            height: size.1,
+            k: &k,
+        };
+        let cut: Vec<bool> = maxima
             .iter()
-            .map(|&m| s.graph.pixel_of_node[m as usize])
+            .map(|&m| frame.at_a_cut(s.graph.pixel_of_node[m as usize] as usize))
+            .collect();
+        let pixel = |m: &u32| s.graph.pixel_of_node[*m as usize];
+        d.maxima = maxima.iter().map(pixel).collect();
+        d.cut_maxima = maxima
+            .iter()
+            .zip(&cut)
+            .filter(|(_, c)| **c)
+            .map(|(m, _)| pixel(m))
             .collect();
         self.times.geodesic = lap.lap();
-        turn_to_the_feet(s, t, &mut torso, &maxima, cfg);
+        let whole: Vec<u32> = maxima
+            .iter()
+            .zip(&cut)
+            .filter(|(_, c)| !**c)
+            .map(|(m, _)| *m)
+            .collect();
+        turn_to_the_feet(s, t, &mut torso, &whole, cfg);
         // 5. The maxima given to the limbs (the head's holding the torso's height), and
         // the limbs' tips checked against the tracked body.
         let tpl = BodyTemplate::new(cfg);
-        let assigned = assign_limbs(s, t, &maxima, &mut torso, size, &tpl, cfg, d);
+        let assigned = assign_limbs(s, t, &maxima, &cut, &mut torso, size, &tpl, cfg, d);
         // Without registration, the limbs' geodesic lengths measure the person.
         if !cfg.register.enabled {
             for l in Limb::ALL {
@@ -334,7 +368,7 @@ impl PoseEstimator {
         self.times.limbs = lap.lap();
         // 7. The whole body registered to the frame, from the last frame's body and
         // from the seed's estimate when it races, whichever explains the frame better.
-        let skeleton = if cfg.register.enabled {
+        let mut skeleton = if cfg.register.enabled {
             let frame = Frame {
                 points: &s.points,
                 mask: &s.mask,
@@ -356,6 +390,21 @@ impl PoseEstimator {
             seed.skeleton
         };
         self.times.register = lap.lap();
+        // 8. Which joints the camera could see: a joint out of view is reported so,
+        // with confidence 0, its place only a guess.
+        let frame = Frame {
+            points: &s.points,
+            mask: &s.mask,
+            width: size.0,
+            height: size.1,
+            k: &k,
+        };
+        for j in 0..Joint::COUNT {
+            skeleton.visible[j] = frame.sees(&skeleton.joints[j]);
+            if !skeleton.visible[j] {
+                skeleton.confidence[j] = 0.0;
+            }
+        }
 
         // The paths are done with: hand their buffers to the overlay as pixels.
         let mut paths = assigned.paths;
@@ -367,6 +416,13 @@ impl PoseEstimator {
         d.paths = paths;
         Some(skeleton)
     }
+}
+
+/// Whether `p` projects inside the image of camera `k`.
+fn inside(k: &Intrinsics, p: &Point3<f32>) -> bool {
+    k.project(p).is_some_and(|(u, v)| {
+        u >= 0.0 && v >= 0.0 && u <= k.width as f32 - 1.0 && v <= k.height as f32 - 1.0
+    })
 }
 
 /// Seconds between laps.
@@ -472,12 +528,24 @@ fn torso(
     } else {
         0.2
     };
-    t.torso = Some(fit.pose);
-    d.torso_pose = Some(fit.pose);
+    // The torso model slides along its axis; the top of the head holds it, by a long
+    // way when the torso is found afresh.
+    let mut pose = fit.pose;
+    if cfg.torso.head_top_height > 0.0 {
+        if let Some(top) = head_top_of_mask(&s.points, &s.mask, w, &pose) {
+            let dy = top - cfg.torso.head_top_height;
+            let reach = if detecting { 0.3 } else { 0.15 };
+            if dy.abs() < reach {
+                pose.t += pose.r * Vector3::new(0.0, dy, 0.0);
+            }
+        }
+    }
+    t.torso = Some(pose);
+    d.torso_pose = Some(pose);
     Some(Torso {
         fit,
-        pose: fit.pose,
-        keypoints: keypoints(&fit.pose, &cfg.torso),
+        pose,
+        keypoints: keypoints(&pose, &cfg.torso),
         confidence,
         detecting,
         side_on,
@@ -559,6 +627,7 @@ fn assign_limbs(
     s: &mut Scratch,
     t: &mut Tracking,
     maxima: &[u32],
+    cut: &[bool],
     torso: &mut Torso,
     (w, h): (usize, usize),
     tpl: &BodyTemplate,
@@ -619,9 +688,10 @@ fn assign_limbs(
         }
         t.torso_offset = Some(offset);
     }
+    // A limb given a maximum at a cut goes on beyond it: it has no tip to pull to.
     let mut tips = [None; 5];
     for l in Limb::ALL {
-        if let Some(mi) = limb[l.index()] {
+        if let Some(mi) = limb[l.index()].filter(|&mi| !cut[mi]) {
             tips[l.index()] = Some(s.graph.pos[maxima[mi] as usize]);
         }
     }

@@ -187,7 +187,8 @@ impl GeoGraph {
         self.pixel_of_node.clear();
         self.pos.clear();
         for i in 0..n_px {
-            if mask[i] {
+            // The person's pixels without depth (holes the sensor left) are no nodes.
+            if mask[i] && points[i].z > 0.0 {
                 self.node_of_pixel[i] = self.pos.len() as u32;
                 self.pixel_of_node.push(i as u32);
                 self.pos.push(points[i]);

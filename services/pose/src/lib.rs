@@ -160,6 +160,7 @@ mod register;
 mod segment;
 mod smooth;
 mod torso;
+mod view;
 
 pub use config::{Limb, PoseConfig};
 pub use debug::{Debug, StepTimes};

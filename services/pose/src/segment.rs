@@ -312,6 +312,11 @@ pub struct Segmenter {
     ray_x: Vec<f32>,
     /// Per blob label, whether it is the person's.
     keep: Vec<bool>,
+    /// The flood fill of the holes in the person: its queue, the pixels it reached and
+    /// those it has been to (over the person's box).
+    queue: Vec<u32>,
+    reached: Vec<u32>,
+    visited: Vec<bool>,
 }
 
 struct Blob {
@@ -597,12 +602,71 @@ impl Segmenter {
                     *m = self.keep.get(l as usize).copied().unwrap_or(false);
                 }
             }
+            self.fill_holes(points, mask, w, bbox, pixels / 50);
             seg.found = true;
             seg.pixels = pixels;
             seg.centroid = b.moments.mean();
             seg.bbox = bbox;
         }
         seg
+    }
+
+    /// Gives the person the pixels without data that their pixels enclose (each hole up
+    /// to `max_area` pixels): the sensor lost them (a dark or shiny patch, an eye), the
+    /// body is there. Their points stay without depth.
+    fn fill_holes(
+        &mut self,
+        points: &[Point3<f32>],
+        mask: &mut [bool],
+        w: usize,
+        (u0, v0, u1, v1): (u32, u32, u32, u32),
+        max_area: usize,
+    ) {
+        let (u0, v0, u1, v1) = (u0 as usize, v0 as usize, u1 as usize, v1 as usize);
+        let bw = u1 - u0 + 1;
+        let hole = |i: usize, mask: &[bool]| !mask[i] && points[i].z <= 0.0;
+        let at = |i: usize| (i / w - v0) * bw + i % w - u0;
+        self.visited.clear();
+        self.visited.resize(bw * (v1 - v0 + 1), false);
+        for v in v0..=v1 {
+            for u in u0..=u1 {
+                let start = v * w + u;
+                if !hole(start, mask) || self.visited[at(start)] {
+                    continue;
+                }
+                // Grow the hole: no hole when it reaches the box's edge or data that is
+                // not the person's.
+                self.queue.clear();
+                self.reached.clear();
+                self.queue.push(start as u32);
+                self.visited[at(start)] = true;
+                let mut enclosed = true;
+                while let Some(i) = self.queue.pop() {
+                    let i = i as usize;
+                    self.reached.push(i as u32);
+                    let (x, y) = (i % w, i / w);
+                    if x == u0 || x == u1 || y == v0 || y == v1 {
+                        enclosed = false;
+                        continue;
+                    }
+                    for j in [i - 1, i + 1, i - w, i + w] {
+                        if hole(j, mask) {
+                            if !self.visited[at(j)] {
+                                self.visited[at(j)] = true;
+                                self.queue.push(j as u32);
+                            }
+                        } else if !mask[j] {
+                            enclosed = false;
+                        }
+                    }
+                }
+                if enclosed && self.reached.len() <= max_area {
+                    for &j in &self.reached {
+                        mask[j as usize] = true;
+                    }
+                }
+            }
+        }
     }
 
     /// Whether most of the left and right ends of a blob's `spans` (those with a pixel

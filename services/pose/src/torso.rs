@@ -2,7 +2,7 @@
 //! rigid torso model registered by mutual closest points and Horn's closed form.
 
 use crate::body::{BodyPose, BodyTemplate, Posed};
-use crate::dt::DistanceTransform;
+use crate::dt::{DistanceTransform, Open};
 use crate::geodesic::Geodesic;
 use crate::geom::{horn_rigid, Moments, Rigid};
 use crate::graph::{GeoGraph, NONE};
@@ -315,7 +315,16 @@ impl TorsoEstimator {
             self.sub_mask
                 .extend_from_slice(&mask[v * width + u0..v * width + u1 + 1]);
         }
-        self.dt.compute(&self.sub_mask, sw, sh, &mut self.sub_dist);
+        // Where the person is cut from view (the image's edge, a table before them) the
+        // body goes on: the torso is no narrower there than the cut shows.
+        let open = Open {
+            left: cut_beyond(points, mask, width, height, (u0, v0, u1, v1), Side::Left),
+            right: cut_beyond(points, mask, width, height, (u0, v0, u1, v1), Side::Right),
+            top: cut_beyond(points, mask, width, height, (u0, v0, u1, v1), Side::Top),
+            bottom: cut_beyond(points, mask, width, height, (u0, v0, u1, v1), Side::Bottom),
+        };
+        self.dt
+            .compute_open(&self.sub_mask, sw, sh, open, &mut self.sub_dist);
         self.dist.clear();
         self.dist.resize(width * height, 0.0);
         for (r, v) in (v0..=v1).enumerate() {
@@ -326,6 +335,7 @@ impl TorsoEstimator {
             .dist
             .iter()
             .enumerate()
+            .filter(|(i, _)| points[*i].z > 0.0)
             .max_by(|a, b| a.1.total_cmp(b.1))?;
         if dmax <= 0.0 {
             return None;
@@ -416,7 +426,7 @@ impl TorsoEstimator {
         for v in (0..height).step_by(stride) {
             for u in (0..width).step_by(stride) {
                 let i = v * width + u;
-                if mask[i] && (points[i] - centre).norm() < reach {
+                if mask[i] && points[i].z > 0.0 && (points[i] - centre).norm() < reach {
                     self.data.push(points[i]);
                 }
             }
@@ -595,6 +605,64 @@ fn row_half_width(points: &[Point3<f32>], mask: &[bool], width: usize, at: usize
     Some((points[hi].x - points[lo].x).abs() / 2.0)
 }
 
+/// A side of the person's bounding box.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Side {
+    Left,
+    Right,
+    Top,
+    Bottom,
+}
+
+/// Whether the person continues beyond a side of their bounding box `(u0, v0, u1, v1)`:
+/// it is the image's edge, or most of the person's pixels along it border something
+/// nearer that hides what goes on (a table before the waist).
+fn cut_beyond(
+    points: &[Point3<f32>],
+    mask: &[bool],
+    width: usize,
+    height: usize,
+    (u0, v0, u1, v1): (usize, usize, usize, usize),
+    side: Side,
+) -> bool {
+    let edge = match side {
+        Side::Left => u0 == 0,
+        Side::Right => u1 + 1 >= width,
+        Side::Top => v0 == 0,
+        Side::Bottom => v1 + 1 >= height,
+    };
+    if edge {
+        return true;
+    }
+    // The person's pixels along the side and the pixel just beyond each.
+    let pairs: Vec<(usize, usize)> = match side {
+        Side::Left => (v0..=v1)
+            .map(|v| (v * width + u0, v * width + u0 - 1))
+            .collect(),
+        Side::Right => (v0..=v1)
+            .map(|v| (v * width + u1, v * width + u1 + 1))
+            .collect(),
+        Side::Top => (u0..=u1)
+            .map(|u| (v0 * width + u, (v0 - 1) * width + u))
+            .collect(),
+        Side::Bottom => (u0..=u1)
+            .map(|u| (v1 * width + u, (v1 + 1) * width + u))
+            .collect(),
+    };
+    let (mut along, mut hidden) = (0, 0);
+    for (inner, outer) in pairs {
+        if !mask[inner] || points[inner].z <= 0.0 {
+            continue;
+        }
+        along += 1;
+        let q = points[outer];
+        if !mask[outer] && q.z > 0.0 && q.z < points[inner].z - crate::view::OCCLUDER_GAP {
+            hidden += 1;
+        }
+    }
+    along > 0 && 2 * hidden > along
+}
+
 /// The torso key points in the camera frame.
 pub fn keypoints(pose: &TorsoPose, cfg: &TorsoConfig) -> TorsoPoints<Point3<f32>> {
     cfg.keypoints
@@ -638,6 +706,38 @@ pub fn anchored_at_head_top(
     if inside && dy.abs() < 0.15 && top.x.abs() < 0.12 && top.z.abs() < 0.2 {
         torso.t += torso.r * nalgebra::Vector3::new(0.0, dy, 0.0);
     }
+}
+
+/// How high above the torso's origin the top of the head is, along the torso's up, as
+/// the person's mask shows it: the highest of the points within 10 cm of the torso's
+/// axis and 20–100 cm above its origin (the 99th percentile, a flying pixel is no
+/// head). `None` when there are none, or when the head reaches the image's top edge and
+/// its top is out of sight.
+pub fn head_top_of_mask(
+    points: &[Point3<f32>],
+    mask: &[bool],
+    width: usize,
+    pose: &TorsoPose,
+) -> Option<f32> {
+    let inv = pose.inverse();
+    let mut tops: Vec<f32> = Vec::new();
+    let mut at_edge = false;
+    for (i, (p, &m)) in points.iter().zip(mask).enumerate() {
+        if !m || p.z <= 0.0 {
+            continue;
+        }
+        let q = inv.apply(p);
+        if q.x.abs() < 0.10 && q.z.abs() < 0.25 && (0.2..1.0).contains(&q.y) {
+            tops.push(q.y);
+            at_edge |= i < 2 * width;
+        }
+    }
+    if tops.len() < 10 || at_edge {
+        return None;
+    }
+    let k = tops.len() * 99 / 100;
+    let (_, &mut top, _) = tops.select_nth_unstable_by(k, f32::total_cmp);
+    Some(top)
 }
 
 /// The torso turned about its axis to face where the toes point, when the two

@@ -316,7 +316,9 @@ fn a_person_first_seen_side_on_is_found_once_they_turn_to_the_camera() {
         let r = est.estimate(img.view());
         check(&r);
         assert!(r.person_found, "frame {f} at {yaw}°");
-        last = PoseEval::default().add(&r, &truth.skeleton).mean();
+        last = PoseEval::default()
+            .add(&r, &truth.skeleton, &Intrinsics::default())
+            .mean();
     }
     // The procedural body's torso joint is 11 cm off by definition (pose README), so a
     // body found right is within about 6 cm on average; the wrong one was 36 cm off.

@@ -18,6 +18,9 @@ pub(crate) struct Placed {
     /// A sphere around the whole capsule, for skipping it in nearest-capsule searches.
     pub(super) centre: Point3<f32>,
     pub(super) bound: f32,
+    /// Whether the camera could see any of it (inside the image, before what stands in
+    /// front): a capsule out of view takes no data point, which belongs to what is seen.
+    pub(super) in_view: bool,
 }
 
 impl Placed {
@@ -79,7 +82,12 @@ pub(super) fn nearest_capsule(
     guess: usize,
 ) -> (usize, Point3<f32>, f32) {
     let (q, _, d) = placed[guess].nearest(p);
-    let mut best = (guess, q, if d.is_nan() { f32::INFINITY } else { d });
+    let d = if d.is_nan() || !placed[guess].in_view {
+        f32::INFINITY
+    } else {
+        d
+    };
+    let mut best = (guess, q, d);
     let within = 2.0 * best.2;
     for &(gap, ci) in gaps.of(guess) {
         if gap > within {
@@ -87,6 +95,9 @@ pub(super) fn nearest_capsule(
         }
         let ci = usize::from(ci);
         let c = &placed[ci];
+        if !c.in_view {
+            continue;
+        }
         let reach = best.2 + c.bound;
         if reach > 0.0 && (p - c.centre).norm_squared() > reach * reach {
             continue;
@@ -128,6 +139,7 @@ pub(crate) fn place(t: &BodyTemplate, posed: &Posed) -> Vec<Placed> {
                 rb: c.rb,
                 centre: a + ab * 0.5,
                 bound: 0.5 * len2.sqrt() + c.ra.max(c.rb),
+                in_view: true,
             }
         })
         .collect()

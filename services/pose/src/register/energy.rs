@@ -2,11 +2,12 @@
 //! the data term (each point on its nearest capsule), the silhouette and free-space
 //! terms (the body's front surface as the camera sees it), the tips' term.
 
+use super::capsules::Placed;
 use super::capsules::{nearest_capsule, place, Gaps};
 use super::solver::Accumulator;
 use super::{Pass, Problem, Registration};
 use crate::body::{Posed, Segment};
-use nalgebra::Vector3;
+use nalgebra::{Point3, Vector3};
 
 /// Weights and scales of the energy's terms (part of [`super::RegisterConfig`]).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -83,7 +84,10 @@ impl Registration {
         assign: &mut [u16],
     ) -> (Accumulator, [f32; Segment::COUNT]) {
         let (f, t, tips, cfg) = (p.frame, p.body, p.tips, p.cfg);
-        let placed = place(t, posed);
+        let mut placed = place(t, posed);
+        for c in &mut placed {
+            c.in_view = f.sees_any(front_surface(c));
+        }
         let gaps = pass.search.then(|| Gaps::new(&placed));
         let mut acc = Accumulator::new(posed, cfg.lengths.bone_evidence.is_some());
 
@@ -94,7 +98,11 @@ impl Registration {
                 *ci = c as u16;
                 (q, d)
             } else {
-                let (q, _, d) = placed[*ci as usize].nearest(p);
+                let c = &placed[*ci as usize];
+                if !c.in_view {
+                    continue;
+                }
+                let (q, _, d) = c.nearest(p);
                 (q, d)
             };
             let off = p - q;
@@ -115,16 +123,7 @@ impl Registration {
         let mut all_n = [0u32; Segment::COUNT];
         let (w, h) = (f.width as i32, f.height as i32);
         for c in &placed {
-            let len = c.len2.sqrt();
-            let k = ((len / 0.04).ceil() as usize + 1).max(2);
-            for i in 0..k {
-                let tt = i as f32 / (k - 1) as f32;
-                let axis = c.a + c.ab * tt;
-                let r = c.ra + (c.rb - c.ra) * tt;
-                let Some(ray) = axis.coords.try_normalize(1e-6) else {
-                    continue;
-                };
-                let s = axis - ray * r;
+            for s in front_surface(c) {
                 let Some((u, v)) = f.k.project(&s) else {
                     continue;
                 };
@@ -153,6 +152,11 @@ impl Registration {
                     } else if gap > -0.05 {
                         seen_n[c.segment.index()] += 1;
                     }
+                } else if f.mask[idx] {
+                    // A hole the sensor left in the person: no evidence either way.
+                } else if f.occluded(idx, s.z) {
+                    // Something nearer stands before the body here (a table before the
+                    // legs): the camera could not have seen it; no evidence either way.
                 } else if let Some((qu, qv)) = self.nearest.get(u as usize, v as usize) {
                     let target = f.k.back_project(qu as f32, qv as f32, s.z);
                     let e = s - target;
@@ -192,4 +196,18 @@ impl Registration {
         }
         (acc, seen)
     }
+}
+
+/// Points of a capsule's front as the camera sees it: along its axis every 4 cm, each
+/// moved a radius towards the camera.
+pub(super) fn front_surface(c: &Placed) -> impl Iterator<Item = Point3<f32>> + '_ {
+    let len = c.len2.sqrt();
+    let k = ((len / 0.04).ceil() as usize + 1).max(2);
+    (0..k).filter_map(move |i| {
+        let tt = i as f32 / (k - 1) as f32;
+        let axis = c.a + c.ab * tt;
+        let r = c.ra + (c.rb - c.ra) * tt;
+        let ray = axis.coords.try_normalize(1e-6)?;
+        Some(axis - ray * r)
+    })
 }

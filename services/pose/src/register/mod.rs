@@ -42,7 +42,6 @@ pub use starts::{starts, OfferedStart};
 pub use tips::{drop_borrowed_tips, tips_strayed};
 
 use crate::body::{BodyPose, BodyTemplate, Segment};
-use airglyph_core::Intrinsics;
 use nalgebra::{Point3, SMatrix, SVector};
 use sampling::NearestPixel;
 
@@ -52,16 +51,7 @@ pub(super) type Normal = SMatrix<f64, N, N>;
 pub(super) type Gradient = SVector<f64, N>;
 pub(super) type Local = SMatrix<f64, 6, 6>;
 
-/// The frame the body is fitted to: the organized point cloud and the person mask of
-/// the work image.
-#[derive(Debug, Clone, Copy)]
-pub struct Frame<'a> {
-    pub points: &'a [Point3<f32>],
-    pub mask: &'a [bool],
-    pub width: usize,
-    pub height: usize,
-    pub k: &'a Intrinsics,
-}
+pub use crate::view::Frame;
 
 /// The result of one registration.
 #[derive(Debug, Clone, Copy)]

@@ -51,6 +51,16 @@ pub fn starts<'a>(
         .zip(geodesic.filter(|_| cfg.register.race.hybrid))
         .and_then(|(prev, geo)| hybrid_start(tpl, &prev, &geo, tips, cfg));
     let mut poses: Vec<BodyPose> = [tracked, hybrid, geodesic].into_iter().flatten().collect();
+    // Arms at rest lie against the body: no geodesic maximum marks their hands, and the
+    // estimate sends them after whatever maximum there is; a leg's maximum may be its
+    // knee, or the legs may be out of view. So a person found afresh is also looked for
+    // standing straight, with either arm or both hanging. (Raced against a tracked
+    // body, these won frames they should not: tracking keeps its own starts.)
+    if let Some(geo) = geodesic.filter(|_| tracked.is_none()) {
+        for arms in [[false, false], [true, true], [true, false], [false, true]] {
+            poses.extend(resting(tpl, &geo, arms));
+        }
+    }
     let (register_cfg, tips_now) = match geodesic.zip(side_on) {
         Some((g, centroid)) => {
             poses.extend(side_on_starts(&g, &centroid));
@@ -123,4 +133,69 @@ fn hybrid_start(
         }
     }
     changed.then_some(h)
+}
+
+/// `geo` standing straight, with the left (`arms[0]`) and right (`arms[1]`) arm
+/// hanging: along the body down from the shoulder, a little out from the side, the
+/// elbow a little bent.
+fn resting(tpl: &BodyTemplate, geo: &BodyPose, arms: [bool; 2]) -> Option<BodyPose> {
+    use airglyph_core::Joint;
+    let mut s = Posed::new(tpl, geo).skeleton(tpl);
+    let down = (s[Joint::Pelvis] - s[Joint::Neck]).try_normalize(1e-6)?;
+    let left = s[Joint::LeftHip] - s[Joint::RightHip];
+    let left = (left - down * down.dot(&left)).try_normalize(1e-6)?;
+    for (hip, knee, foot, shin) in [
+        (
+            Joint::LeftHip,
+            Joint::LeftKnee,
+            Joint::LeftFoot,
+            Segment::LeftShin,
+        ),
+        (
+            Joint::RightHip,
+            Joint::RightKnee,
+            Joint::RightFoot,
+            Segment::RightShin,
+        ),
+    ] {
+        let thigh_len = tpl.origin[shin.index()].norm();
+        let shin_len = tpl.joints[foot.index()].1.coords.norm();
+        let k = s[hip] + down * thigh_len;
+        s.set(knee, k);
+        s.set(foot, k + down * shin_len);
+    }
+    for (side, (shoulder, elbow, hand, fore)) in [
+        (
+            1.0f32,
+            (
+                Joint::LeftShoulder,
+                Joint::LeftElbow,
+                Joint::LeftHand,
+                Segment::LeftForearm,
+            ),
+        ),
+        (
+            -1.0,
+            (
+                Joint::RightShoulder,
+                Joint::RightElbow,
+                Joint::RightHand,
+                Segment::RightForearm,
+            ),
+        ),
+    ]
+    .into_iter()
+    .zip(arms)
+    .filter_map(|(arm, hang)| hang.then_some(arm))
+    {
+        let upper_len = tpl.origin[fore.index()].norm();
+        let fore_len = tpl.joints[hand.index()].1.coords.norm();
+        let e = s[shoulder] + (down + left * (side * 0.15)).normalize() * upper_len;
+        s.set(elbow, e);
+        s.set(
+            hand,
+            e + (down + left * (side * 0.1)).normalize() * fore_len,
+        );
+    }
+    BodyPose::from_skeleton(tpl, &s)
 }

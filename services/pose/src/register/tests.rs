@@ -2,7 +2,7 @@ use super::solver::bone_steps;
 use super::*;
 use crate::body::{Posed, Shape};
 use crate::PoseConfig;
-use airglyph_core::{Joint, Skeleton};
+use airglyph_core::{Intrinsics, Joint, Skeleton};
 use nalgebra::{Rotation3, Unit, Vector3};
 
 /// The template's own surface seen by a 320×240 camera at `pose`: dense points on
