@@ -2,7 +2,7 @@
 //! figures and writes overlays (green = truth, red = estimate).
 //!
 //! `cargo run --release -p airglyph-pose --example devloop -- [pose:NAME|bvh:FILE|draw:SYMBOLS]
-//!  [mh] [follow] [noise] [floor|room] [seated] [table] [upper] [partial] [qvga] [lateral:M] [dist:M]
+//!  [mh] [follow] [noise] [floor|room] [seated] [table] [upper] [partial] [single] [qvga] [lateral:M] [dist:M]
 //!  [yaw:DEG] [frames] [oracle|oracle-only] [overlays:DIR] [from:N] [every:N] [set:FIELD=VALUE]`
 #![allow(clippy::needless_range_loop)]
 
@@ -24,7 +24,8 @@ fn main() {
     // oracle: the true pose also raced each frame; oracle-only: the only start.
     let mut oracle: Option<fn(airglyph_core::Skeleton) -> OfferedStart> = None;
     // upper: framed from the waist up; partial: frames without the whole body scored too.
-    let (mut upper, mut partial) = (false, false);
+    // single: every frame estimated afresh, without history.
+    let (mut upper, mut partial, mut single) = (false, false, false);
     for a in &args {
         if let Some(f) = a.strip_prefix("bvh:") {
             cfg.motion = MotionSpec::Bvh(f.into());
@@ -34,6 +35,8 @@ fn main() {
                 .find(|x| format!("{x:?}").eq_ignore_ascii_case(p))
                 .expect("pose name");
             cfg.motion = MotionSpec::Pose(p);
+        } else if a == "rest" || a == "poses" {
+            cfg.motion = MotionSpec::parse(a, None, false).expect("a motion");
         } else if a.starts_with("draw:") {
             cfg.motion = MotionSpec::parse(a, None, false).expect("draw spec");
         } else if a == "mh" {
@@ -59,6 +62,8 @@ fn main() {
             upper = true;
         } else if a == "partial" {
             partial = true;
+        } else if a == "single" {
+            single = true;
         } else if a == "qvga" {
             cfg.intrinsics = Intrinsics::default().scaled_to(320, 240);
         } else if let Some(d) = a.strip_prefix("overlays:") {
@@ -129,6 +134,9 @@ fn main() {
         }
         let t = Instant::now();
         let c0 = cpu_seconds();
+        if single {
+            est.reset();
+        }
         if let Some(offer) = oracle {
             est.offer_start(offer(truth.skeleton));
         }

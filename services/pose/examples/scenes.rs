@@ -2,8 +2,10 @@
 //! sees, with and without the sensor model: one table, and a JSON line a row.
 //!
 //! `cargo run --release -p airglyph-pose --example scenes -- [KIND…] [frames:N]
-//!  [json:FILE] [overlays:DIR] [set:FIELD=VALUE]` (default: every kind, whole clips;
-//! `scripts/eval pose` runs it). KIND filters rows by name prefix.
+//!  [every:N] [single] [json:FILE] [overlays:DIR] [set:FIELD=VALUE]` (default: every
+//! kind, whole clips; `scripts/eval pose` runs it). KIND filters rows by name prefix;
+//! `single` estimates every frame afresh, with no history (as single real frames are
+//! scored); `every:N` scores every Nth frame only.
 //!
 //! The rows marked "held out" use bodies, seeds, symbols and distances that no setting
 //! was chosen on: a figure measured only on the tuned rows is not a result. The 2-D
@@ -196,7 +198,15 @@ fn main() {
         .map(|n| n.parse::<usize>().expect("frames:N"));
     let json = args.iter().find_map(|a| a.strip_prefix("json:"));
     let overlays = args.iter().find_map(|a| a.strip_prefix("overlays:"));
-    let filters: Vec<&String> = args.iter().filter(|a| !a.contains(':')).collect();
+    let single = args.iter().any(|a| a == "single");
+    let every = args
+        .iter()
+        .find_map(|a| a.strip_prefix("every:"))
+        .map_or(1, |n| n.parse::<usize>().expect("every:N").max(1));
+    let filters: Vec<&String> = args
+        .iter()
+        .filter(|a| !a.contains(':') && *a != "single")
+        .collect();
     let mut json = json.map(|f| std::fs::File::create(f).expect("json file"));
     let mut rows = Vec::new();
     for kind in kinds() {
@@ -217,7 +227,12 @@ fn main() {
             };
             let n = synth.len().unwrap_or(ENDLESS_FRAMES);
             let n = max_frames.map_or(n, |m| n.min(m));
-            let row = run(&kind, noise, &mut synth, n, &pcfg, overlays);
+            let how = Run {
+                frames: n,
+                every,
+                single,
+            };
+            let row = run(&kind, noise, &mut synth, how, &pcfg, overlays);
             print_row(&row);
             if let Some(f) = json.as_mut() {
                 let mut v = serde_json::to_value(&row.summary).expect("a summary");
@@ -235,11 +250,19 @@ fn main() {
     print_table(&rows);
 }
 
+/// Which frames are estimated and scored, and how.
+struct Run {
+    frames: usize,
+    every: usize,
+    /// Every frame estimated afresh.
+    single: bool,
+}
+
 fn run(
     kind: &Kind,
     noise: bool,
     synth: &mut Synthesizer,
-    n: usize,
+    how: Run,
     pcfg: &PoseConfig,
     overlays: Option<&str>,
 ) -> Row {
@@ -249,10 +272,16 @@ fn run(
     let (mut px_sum, mut px_n) = (0.0f64, 0usize);
     let (mut rest_sum, mut rest_n) = (0.0f64, 0usize);
     let scale = 640.0 / k.width as f64;
-    for i in 0..n {
+    for i in (0..how.frames).step_by(if how.single { how.every } else { 1 }) {
         let (img, truth) = synth.render(i);
+        if how.single {
+            est = PoseEstimator::new(k, pcfg.clone());
+        }
         let t = Instant::now();
         let r = est.estimate(img.view());
+        if i % how.every != 0 {
+            continue;
+        }
         ev.seconds += t.elapsed().as_secs_f64();
         let fe = ev.add(&r, &truth.skeleton, &k);
         if r.person_found {
@@ -270,7 +299,7 @@ fn run(
             }
         }
         if let Some(dir) = overlays {
-            if i % 30 == 0 {
+            if i % (30 * how.every) == 0 {
                 let slug: String = kind
                     .name
                     .chars()

@@ -818,13 +818,15 @@ fn register_body(
         body.offered,
         cfg,
     );
+    // A person found afresh has their arms searched for too. (While tracking, a
+    // searched arm won frames it should not: an arm hidden behind the body, which
+    // nothing contradicts, searched into the open.)
     let best = reg.fit(
         frame,
         &tpl,
-        &starts.poses,
-        &starts.tips,
+        &starts,
         &t.hidden,
-        &starts.cfg,
+        seed.race && t.body.is_none(),
     );
     if seed.race {
         d.geodesic = Some(seed.skeleton);

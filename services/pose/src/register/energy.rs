@@ -19,6 +19,9 @@ pub struct EnergyConfig {
     pub silhouette_weight: f32,
     /// Weight of a free-space residual against one data point's.
     pub free_space_weight: f32,
+    /// The silhouette's weight, as a share, where something nearer hides the body.
+    pub occluded_weight: f32,
+
     /// Beyond this (metres) the silhouette and free-space terms pull linearly (Huber).
     pub silhouette_scale: f32,
     /// How far the body's front may lie before the surface seen, metres.
@@ -35,6 +38,8 @@ impl Default for EnergyConfig {
             sigma: 0.03,
             silhouette_weight: 3.0,
             free_space_weight: 4.0,
+            occluded_weight: 0.3,
+
             silhouette_scale: 0.05,
             free_space_margin: 0.03,
             tip_weight: 10.0,
@@ -154,15 +159,25 @@ impl Registration {
                     }
                 } else if f.mask[idx] {
                     // A hole the sensor left in the person: no evidence either way.
-                } else if f.occluded(idx, s.z) {
-                    // Something nearer stands before the body here (a table before the
-                    // legs): the camera could not have seen it; no evidence either way.
-                } else if let Some((qu, qv)) = self.nearest.get(u as usize, v as usize) {
+                } else if let Some((qu, qv)) = self
+                    .nearest
+                    .get(u as usize, v as usize)
+                    .filter(|_| c.in_view)
+                {
+                    // Behind something nearer (a table) the camera could not have seen
+                    // the body, but a limb partly in view is more likely above the table
+                    // than through it: a weaker pull. A capsule wholly out of view (legs
+                    // under the table) is left alone.
+                    let weight = if f.occluded(idx, s.z) {
+                        cfg.energy.occluded_weight
+                    } else {
+                        1.0
+                    } * cfg.energy.silhouette_weight;
                     let target = f.k.back_project(qu as f32, qv as f32, s.z);
                     let e = s - target;
                     let (wc, cost) = huber(e.norm(), cfg.energy.silhouette_scale);
-                    acc.energy += (cfg.energy.silhouette_weight * cost) as f64;
-                    let ws = cfg.energy.silhouette_weight * wc;
+                    acc.energy += (weight * cost) as f64;
+                    let ws = weight * wc;
                     // Both image axes: pulled only up or down, an arm held out beside
                     // the silhouette (a T-pose's arm, the person since turned side-on)
                     // stayed in the air.
@@ -179,17 +194,25 @@ impl Registration {
             let e = x - m;
             let (wc, cost) = cauchy(e.norm(), cfg.energy.tip_sigma);
             acc.energy += (cfg.energy.tip_weight * cost) as f64;
+            acc.tip_energy += (cfg.energy.tip_weight * cost) as f64;
             let wt = cfg.energy.tip_weight * wc;
             acc.add(tip.0, &x, &Vector3::x(), e.x, wt);
             acc.add(tip.0, &x, &Vector3::y(), e.y, wt);
             acc.add(tip.0, &x, &Vector3::z(), e.z, wt);
         }
-        // A segment without a surface of its own (a collarbone) is seen as its parent.
+        // A segment without a surface of its own (a collarbone) is seen as its parent;
+        // one whose surface lies all outside the image is not seen.
+        let mut surface = [false; Segment::COUNT];
+        for c in &placed {
+            surface[c.segment.index()] = true;
+        }
         let mut seen = [0.0; Segment::COUNT];
         for s in Segment::ALL {
             let i = s.index();
             seen[i] = if all_n[i] > 0 {
                 seen_n[i] as f32 / all_n[i] as f32
+            } else if surface[i] {
+                0.0
             } else {
                 s.parent().map_or(0.0, |p| seen[p.index()])
             };

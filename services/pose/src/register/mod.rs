@@ -21,6 +21,7 @@
 //! segment (36 numbers); a step moves each segment by a twist that is linear in them, so
 //! the normal equations are accumulated per segment (6×6) and assembled once.
 
+mod arm_search;
 mod capsules;
 mod config;
 mod energy;
@@ -38,7 +39,7 @@ pub use config::{
     SolverConfig,
 };
 pub use priors::hidden_limbs;
-pub use starts::{starts, OfferedStart};
+pub use starts::{starts, OfferedStart, Starts};
 pub use tips::{drop_borrowed_tips, tips_strayed};
 
 use crate::body::{BodyPose, BodyTemplate, Segment};
@@ -59,6 +60,9 @@ pub struct Fit {
     pub pose: BodyPose,
     /// The robust energy at the end (lower explains the frame better).
     pub energy: f32,
+    /// The part of `energy` the tips' term makes: a guide to the limbs' ends, not
+    /// evidence of the fit (a maximum given to the wrong limb costs the right pose).
+    pub tip_energy: f32,
     /// Per segment, the share of its front surface the camera sees where the body puts
     /// it (1 = all of it; hidden or contradicted parts lower it).
     pub seen: [f32; Segment::COUNT],
@@ -112,18 +116,22 @@ impl Registration {
 
     /// Fits the body from the best of several starts: each is moved
     /// [`SolverConfig::race_iterations`] steps, and the one whose energy is then
-    /// lowest goes on to [`SolverConfig::iterations`] in all. `tips`: per limb of
-    /// [`crate::Limb::ALL`], the geodesic maximum assigned to it (camera frame), if any.
+    /// lowest goes on to [`SolverConfig::iterations`] in all, with the settings and the
+    /// tips of `s` (per limb of [`crate::Limb::ALL`], the geodesic maximum assigned to
+    /// it, camera frame, if any). Its `free` starts race with only the tips near their own limbs' ends, and the
+    /// starts are judged without the tips' term: a tip is a guide, not evidence. With
+    /// `search`, the arms are also searched for on the winner of the starts
+    /// ([`Registration::search_arms`]), which then races once more (as a free start).
     /// `None` without a start.
     pub fn fit(
         &self,
         f: &Frame,
         t: &BodyTemplate,
-        starts: &[BodyPose],
-        tips: &[Option<Point3<f32>>; 5],
+        s: &Starts,
         hidden: &[f32; Segment::COUNT],
-        cfg: &RegisterConfig,
+        search: bool,
     ) -> Option<Fit> {
+        let (starts, free, tips, cfg) = (&s.poses[..], &s.free[..], &s.tips, &*s.cfg);
         let problem = Problem {
             frame: f,
             body: t,
@@ -131,7 +139,7 @@ impl Registration {
             hidden,
             cfg,
         };
-        if let [only] = starts {
+        if let ([only], [], false) = (starts, free, search) {
             return Some(self.run(&problem, *only, cfg.solver.iterations, true));
         }
         let race = cfg
@@ -140,16 +148,64 @@ impl Registration {
             .clamp(1, cfg.solver.iterations.max(1));
         let mut best: Option<Fit> = None;
         let mut passes = 0;
-        for &s in starts {
+        // The starts race on what the frame says of them, without the tips' pull.
+        let evidence = |f: &Fit| f.energy - f.tip_energy;
+        // A tip far from a pose's limb end is not that limb's for it: each start races
+        // with the tips it agrees with.
+        let agreeing = |pose: &BodyPose| {
+            let posed = crate::body::Posed::new(t, pose);
+            let mut kept = *tips;
+            for (tip, (seg, local)) in kept.iter_mut().zip(&t.tips) {
+                if tip.is_some_and(|m| (posed.point(*seg, local) - m).norm() > cfg.race.gap) {
+                    *tip = None;
+                }
+            }
+            kept
+        };
+        let followers = starts.iter().map(|s| (s, *tips));
+        let free = free.iter().map(|s| (s, agreeing(s)));
+        for (&s, own) in followers.chain(free) {
             // Each start's energy at its own final pose: the energy before the last
             // step would favour the start that moved least.
-            let fit = self.run(&problem, s, race, true);
+            let fit = self.run(
+                &Problem {
+                    tips: &own,
+                    ..problem
+                },
+                s,
+                race,
+                true,
+            );
             passes += fit.passes;
-            if best.is_none_or(|b| fit.energy < b.energy) {
+            if best.is_none_or(|b| evidence(&fit) < evidence(&b)) {
                 best = Some(fit);
             }
         }
-        let b = best?;
+        let mut b = best?;
+        // The arms searched for on the winner's body (its torso by now fitted): a
+        // local method keeps an arm where its start put it.
+        if search {
+            let searched = self.search_arms(f, t, &b.pose, cfg);
+            let own = agreeing(&searched);
+            let fit = self.run(
+                &Problem {
+                    tips: &own,
+                    ..problem
+                },
+                searched,
+                race,
+                true,
+            );
+            passes += fit.passes;
+            if evidence(&fit) < evidence(&b) {
+                b = fit;
+            }
+        }
+        let kept = agreeing(&b.pose);
+        let problem = Problem {
+            tips: &kept,
+            ..problem
+        };
         let mut fit = self.run(
             &problem,
             b.pose,

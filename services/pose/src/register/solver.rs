@@ -78,6 +78,8 @@ pub(super) struct Accumulator {
     /// The twists' origins: each segment's joint.
     pub(super) origin: [Point3<f32>; Segment::COUNT],
     pub(super) energy: f64,
+    /// The part of `energy` the tips' term makes.
+    pub(super) tip_energy: f64,
     /// Where each limb is rooted (shoulder, hip), for the limb-length gradient.
     pub(super) roots: [Option<Point3<f32>>; Segment::COUNT],
     /// For arms and legs: Σ w j r and Σ w j² of the residuals' derivative j by the limbs'
@@ -130,6 +132,7 @@ impl Accumulator {
             g: [[0.0; 6]; Segment::COUNT],
             origin: posed.joint,
             energy: 0.0,
+            tip_energy: 0.0,
             roots,
             length: [(0.0, 0.0); 2],
             arm_bones: split_arms.then_some([[0.0; 5]; 2]),
@@ -261,6 +264,7 @@ impl Registration {
         let (t, cfg) = (p.body, p.cfg);
         let mut pose = start;
         let mut energy = f32::INFINITY;
+        let mut tip_energy = 0.0;
         let mut seen = [0.0; Segment::COUNT];
         let mut length = [(0.0, 0.0); 2];
         let mut arm_bones = None;
@@ -282,6 +286,7 @@ impl Registration {
             };
             let (acc, s) = self.accumulate(p, &posed, pass, &mut assign);
             energy = acc.energy as f32;
+            tip_energy = acc.tip_energy as f32;
             seen = s;
             length = acc.length;
             arm_bones = acc.arm_bones;
@@ -331,6 +336,7 @@ impl Registration {
         Fit {
             pose,
             energy,
+            tip_energy,
             seen,
             length_step,
             arm_bone_steps,

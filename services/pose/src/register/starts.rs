@@ -25,6 +25,9 @@ pub enum OfferedStart {
 pub struct Starts<'a> {
     /// Each is moved [`super::SolverConfig::race_iterations`] steps; the best goes on.
     pub poses: Vec<BodyPose>,
+    /// Poses of the person's own making, not the tips': each races with only the
+    /// tips that lie near its own limbs' ends.
+    pub free: Vec<BodyPose>,
     /// The registration's settings for this race (the configured ones but for a person
     /// perhaps side-on).
     pub cfg: Cow<'a, RegisterConfig>,
@@ -56,9 +59,10 @@ pub fn starts<'a>(
     // knee, or the legs may be out of view. So a person found afresh is also looked for
     // standing straight, with either arm or both hanging. (Raced against a tracked
     // body, these won frames they should not: tracking keeps its own starts.)
+    let mut free = Vec::new();
     if let Some(geo) = geodesic.filter(|_| tracked.is_none()) {
         for arms in [[false, false], [true, true], [true, false], [false, true]] {
-            poses.extend(resting(tpl, &geo, arms));
+            free.extend(resting(tpl, &geo, arms));
         }
     }
     let (register_cfg, tips_now) = match geodesic.zip(side_on) {
@@ -71,16 +75,18 @@ pub fn starts<'a>(
         None => (Cow::Borrowed(&cfg.register), *tips),
     };
     match offered {
-        Some(OfferedStart::Also(s)) => poses.extend(BodyPose::from_skeleton(tpl, &s)),
+        Some(OfferedStart::Also(s)) => free.extend(BodyPose::from_skeleton(tpl, &s)),
         Some(OfferedStart::Only(s)) => {
             if let Some(b) = BodyPose::from_skeleton(tpl, &s) {
                 poses = vec![b];
+                free.clear();
             }
         }
         None => {}
     }
     Starts {
         poses,
+        free,
         cfg: register_cfg,
         tips: tips_now,
     }
@@ -135,9 +141,9 @@ fn hybrid_start(
     changed.then_some(h)
 }
 
-/// `geo` standing straight, with the left (`arms[0]`) and right (`arms[1]`) arm
-/// hanging: along the body down from the shoulder, a little out from the side, the
-/// elbow a little bent.
+/// `geo` standing straight, with the left (`arms[0]`) and right (`arms[1]`) arm hanging
+/// (along the body down from the shoulder, a little out from the side, the elbow a
+/// little bent).
 fn resting(tpl: &BodyTemplate, geo: &BodyPose, arms: [bool; 2]) -> Option<BodyPose> {
     use airglyph_core::Joint;
     let mut s = Posed::new(tpl, geo).skeleton(tpl);

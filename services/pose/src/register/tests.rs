@@ -135,7 +135,7 @@ fn registration_finds_the_pose_a_body_was_drawn_at() {
     reg.prepare(&frame, &cfg);
     assert!(reg.data_len() > 1000);
     let fit = reg
-        .fit(&frame, &t, &[start], &tips, &SEEN, &cfg)
+        .fit(&frame, &t, &racing(vec![start], tips, &cfg), &SEEN, false)
         .expect("a start");
     let after = worst(&t, &fit.pose, &truth);
     assert!(after < 0.02, "worst joint {after} m off after registration");
@@ -188,7 +188,7 @@ fn an_arm_held_out_beside_the_silhouette_is_pulled_back_onto_it() {
     let mut reg = Registration::default();
     reg.prepare(&frame, &cfg);
     let fit = reg
-        .fit(&frame, &t, &[start], &tips, &SEEN, &cfg)
+        .fit(&frame, &t, &racing(vec![start], tips, &cfg), &SEEN, false)
         .expect("a start");
     let after = off_silhouette(&fit.pose);
     assert!(after.iter().all(|&d| d < 2.0), "{after:?} pixels off");
@@ -318,7 +318,13 @@ fn the_better_start_wins_the_race() {
     let tips = t.tips.map(|(s, local)| Some(posed.point(s, &local)));
     for starts in [[away, near], [near, away]] {
         let fit = reg
-            .fit(&frame, &t, &starts, &tips, &SEEN, &cfg)
+            .fit(
+                &frame,
+                &t,
+                &racing(starts.to_vec(), tips, &cfg),
+                &SEEN,
+                false,
+            )
             .expect("starts");
         let err = worst(&t, &fit.pose, &truth);
         let (sa, sb) = (
@@ -329,5 +335,19 @@ fn the_better_start_wins_the_race() {
             eprintln!("{j:?} {:.3}", (sa[j] - sb[j]).norm());
         }
         assert!(err < 0.02, "worst joint {err} m off");
+    }
+}
+
+/// Starts that follow the tips, with the settings `cfg`.
+fn racing(
+    poses: Vec<BodyPose>,
+    tips: [Option<Point3<f32>>; 5],
+    cfg: &RegisterConfig,
+) -> Starts<'_> {
+    Starts {
+        poses,
+        free: Vec::new(),
+        cfg: std::borrow::Cow::Borrowed(cfg),
+        tips,
     }
 }

@@ -1,0 +1,238 @@
+//! Each arm found by search, not by following: the registration is a local method, and
+//! from a start whose arm lies elsewhere (after a geodesic maximum that was an ear, or
+//! with the arm hanging against the body where no maximum marks the hand) it stays
+//! there. Here every arm pose on a grid of directions is scored against the frame with
+//! the rest of the body held, coarse to fine, and the best goes into a start.
+//!
+//! The score is the registration's own energy, kept to what an arm changes: the
+//! person's points within the arm's reach, each explained by the arm or by the rest of
+//! the body, whichever is nearer; the arm's front where the camera sees background
+//! (pulled to the person) or sees past it (free space).
+
+use super::capsules::{place, Placed};
+use super::energy::{cauchy_cost, front_surface, huber};
+use super::{Frame, RegisterConfig, Registration};
+use crate::body::{shortest_turn, BodyPose, BodyTemplate, Posed, Segment};
+use airglyph_core::Joint;
+use nalgebra::{Point3, Rotation3, Vector3};
+
+/// One arm's segments and its hand joint.
+#[derive(Debug, Clone, Copy)]
+struct Arm {
+    upper: Segment,
+    fore: Segment,
+    hand: Joint,
+}
+
+const ARMS: [Arm; 2] = [
+    Arm {
+        upper: Segment::LeftUpperArm,
+        fore: Segment::LeftForearm,
+        hand: Joint::LeftHand,
+    },
+    Arm {
+        upper: Segment::RightUpperArm,
+        fore: Segment::RightForearm,
+        hand: Joint::RightHand,
+    },
+];
+
+/// Directions spread evenly over the sphere (a Fibonacci lattice).
+fn sphere(n: usize) -> Vec<Vector3<f32>> {
+    let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
+    (0..n)
+        .map(|i| {
+            let y = 1.0 - 2.0 * (i as f32 + 0.5) / n as f32;
+            let r = (1.0 - y * y).max(0.0).sqrt();
+            let a = golden * i as f32;
+            Vector3::new(r * a.cos(), y, r * a.sin())
+        })
+        .collect()
+}
+
+/// Directions within `angle` (radians) of `d`: `d` itself and a ring of six around it.
+fn around(d: &Vector3<f32>, angle: f32) -> Vec<Vector3<f32>> {
+    let any = if d.x.abs() < 0.9 {
+        Vector3::x()
+    } else {
+        Vector3::y()
+    };
+    let a = d.cross(&any).normalize();
+    let b = d.cross(&a);
+    let mut out = vec![*d];
+    for k in 0..6 {
+        let t = k as f32 * std::f32::consts::TAU / 6.0;
+        out.push((d * angle.cos() + (a * t.cos() + b * t.sin()) * angle.sin()).normalize());
+    }
+    out
+}
+
+impl Registration {
+    /// `start` with each arm moved to the best pose of a search over directions (the
+    /// rest of the body as it is).
+    pub fn search_arms(
+        &self,
+        f: &Frame,
+        t: &BodyTemplate,
+        start: &BodyPose,
+        cfg: &RegisterConfig,
+    ) -> BodyPose {
+        let mut pose = *start;
+        for arm in ARMS {
+            pose = self.search_arm(f, t, &pose, arm, cfg);
+        }
+        pose
+    }
+
+    fn search_arm(
+        &self,
+        f: &Frame,
+        t: &BodyTemplate,
+        start: &BodyPose,
+        arm: Arm,
+        cfg: &RegisterConfig,
+    ) -> BodyPose {
+        let posed = Posed::new(t, start);
+        let shoulder = posed.joint[arm.upper.index()];
+        let upper_bone = t.origin[arm.fore.index()];
+        let fore_bone = t.joints[arm.hand.index()].1.coords;
+        let reach = upper_bone.norm() + fore_bone.norm() * 1.4 + 0.1;
+        // The points the arm could explain, and how well the rest of the body does.
+        let rest: Vec<Placed> = place(t, &posed)
+            .into_iter()
+            .filter(|c| !is_arm(c.segment))
+            .collect();
+        let near: Vec<(Point3<f32>, f32, f32)> = self
+            .data
+            .iter()
+            .filter(|(p, _)| (p - shoulder).norm() < reach)
+            .map(|(p, area)| {
+                let d = rest
+                    .iter()
+                    .map(|c| c.nearest(p).2)
+                    .fold(f32::INFINITY, f32::min);
+                (*p, *area, d)
+            })
+            .collect();
+        let turned = |u: &Vector3<f32>, v: &Vector3<f32>| {
+            let mut p = *start;
+            let ru = turn_onto(&start.rotation[arm.upper.index()], &upper_bone, u);
+            // The forearm keeps its twist about the upper arm's.
+            let rf = turn_onto(&ru, &fore_bone, v);
+            p.rotation[arm.upper.index()] = ru;
+            p.rotation[arm.fore.index()] = rf;
+            p
+        };
+        let score = |p: &BodyPose| self.arm_energy(f, t, p, arm, &near, cfg);
+        // Coarse: the upper arm over the sphere, the forearm straight on or hanging.
+        let down = -(posed.rotation[Segment::Chest.index()] * Vector3::y());
+        let mut best: Vec<(f32, Vector3<f32>, Vector3<f32>)> = Vec::new();
+        for u in sphere(40) {
+            for v in [u, down, (u + down).normalize()] {
+                if u.angle(&v) > 150f32.to_radians() || !v.iter().all(|c| c.is_finite()) {
+                    continue;
+                }
+                best.push((score(&turned(&u, &v)), u, v));
+            }
+        }
+        best.sort_by(|a, b| a.0.total_cmp(&b.0));
+        best.truncate(4);
+        // Finer: the forearm over the sphere for the best upper arms, then both about
+        // the best pair.
+        let mut found = best[0];
+        for &(_, u, _) in &best {
+            for v in sphere(40) {
+                if u.angle(&v) > 150f32.to_radians() {
+                    continue;
+                }
+                let e = score(&turned(&u, &v));
+                if e < found.0 {
+                    found = (e, u, v);
+                }
+            }
+        }
+        for angle in [0.2f32, 0.1] {
+            let (_, u0, v0) = found;
+            for u in around(&u0, angle) {
+                for v in around(&v0, angle) {
+                    if u.angle(&v) > 150f32.to_radians() {
+                        continue;
+                    }
+                    let e = score(&turned(&u, &v));
+                    if e < found.0 {
+                        found = (e, u, v);
+                    }
+                }
+            }
+        }
+        turned(&found.1, &found.2)
+    }
+
+    /// The part of the registration's energy an arm changes: the points near it, each
+    /// on the nearer of the arm and the rest of the body, and the arm's front against
+    /// the silhouette and the surface seen.
+    fn arm_energy(
+        &self,
+        f: &Frame,
+        t: &BodyTemplate,
+        pose: &BodyPose,
+        arm: Arm,
+        near: &[(Point3<f32>, f32, f32)],
+        cfg: &RegisterConfig,
+    ) -> f32 {
+        let capsules: Vec<Placed> = place(t, &Posed::new(t, pose))
+            .into_iter()
+            .filter(|c| c.segment == arm.upper || c.segment == arm.fore)
+            .collect();
+        let sigma = cfg.energy.sigma;
+        let mut e = 0.0;
+        for (p, area, d_rest) in near {
+            let d = capsules
+                .iter()
+                .map(|c| c.nearest(p).2)
+                .fold(*d_rest, f32::min);
+            e += area * cauchy_cost(d, sigma);
+        }
+        let (w, h) = (f.width as i32, f.height as i32);
+        let scale = cfg.energy.silhouette_scale;
+        for c in &capsules {
+            for s in front_surface(c) {
+                let Some((u, v)) = f.k.project(&s) else {
+                    continue;
+                };
+                let (u, v) = (u.round() as i32, v.round() as i32);
+                if u < 0 || v < 0 || u >= w || v >= h {
+                    continue;
+                }
+                let idx = (v * w + u) as usize;
+                if f.mask[idx] {
+                    let z = f.points[idx].z;
+                    let gap = z - s.z;
+                    if z > 0.0 && gap > cfg.energy.free_space_margin {
+                        let (_, cost) = huber(cfg.energy.free_space_margin - gap, scale);
+                        e += cfg.energy.free_space_weight * cost;
+                    }
+                } else if let Some((qu, qv)) = self.nearest.get(u as usize, v as usize) {
+                    let weight = if f.occluded(idx, s.z) {
+                        cfg.energy.occluded_weight
+                    } else {
+                        1.0
+                    };
+                    let target = f.k.back_project(qu as f32, qv as f32, s.z);
+                    let (_, cost) = huber((s - target).norm(), scale);
+                    e += weight * cfg.energy.silhouette_weight * cost;
+                }
+            }
+        }
+        e
+    }
+}
+
+fn is_arm(s: Segment) -> bool {
+    ARMS.iter().any(|a| a.upper == s || a.fore == s)
+}
+
+/// `r` turned the shortest way so that its `bone` (segment frame) points along `want`.
+fn turn_onto(r: &Rotation3<f32>, bone: &Vector3<f32>, want: &Vector3<f32>) -> Rotation3<f32> {
+    shortest_turn(&(r * bone), want) * r
+}
