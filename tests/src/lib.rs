@@ -49,6 +49,13 @@ impl Isolated {
         cmd
     }
 
+    /// A command for one stage's process (`airglyph stage NAME`), joined to this pipeline.
+    pub fn stage(&self, name: &str) -> Command {
+        let mut cmd = self.command("airglyph");
+        cmd.args(["stage", name]);
+        cmd
+    }
+
     /// The processes started for this pipeline (by their environment), still running.
     pub fn processes(&self) -> Vec<u32> {
         let mark = format!("AIRGLYPH_IPC_PREFIX={}", self.prefix);
@@ -94,7 +101,7 @@ pub fn binary_path(name: &str) -> PathBuf {
     let path = dir.join(name);
     assert!(
         path.exists(),
-        "{} is not built: run `cargo build --workspace` (scripts/test does)",
+        "{} is not built: run `cargo build --workspace --bins` (scripts/test does)",
         path.display()
     );
     path
@@ -136,8 +143,9 @@ pub fn signal(child: &Child, sig: i32) {
     unsafe { libc::kill(child.id() as i32, sig) };
 }
 
-/// The pids of a process's direct children whose command name starts with `name`.
-pub fn children_named(parent: u32, name: &str) -> Vec<u32> {
+/// The pids of a process's direct children that run stage `name` (`airglyph stage
+/// NAME …`, told by their command line: every stage's process is `airglyph`).
+pub fn stage_children(parent: u32, name: &str) -> Vec<u32> {
     let mut out = Vec::new();
     for entry in std::fs::read_dir("/proc").into_iter().flatten().flatten() {
         let Ok(pid) = entry.file_name().to_string_lossy().parse::<u32>() else {
@@ -147,17 +155,22 @@ pub fn children_named(parent: u32, name: &str) -> Vec<u32> {
             continue;
         };
         // pid (comm) state ppid ...
-        let (Some(open), Some(close)) = (stat.find('('), stat.rfind(')')) else {
+        let Some(close) = stat.rfind(')') else {
             continue;
         };
-        let comm = &stat[open + 1..close];
         let ppid = stat[close + 2..]
             .split(' ')
             .nth(1)
             .and_then(|p| p.parse::<u32>().ok());
-        // comm is cut to 15 bytes by the kernel; a child between fork and exec still
-        // carries its parent's name.
-        if ppid == Some(parent) && comm == &name[..name.len().min(15)] {
+        if ppid != Some(parent) {
+            continue;
+        }
+        // A child between fork and exec still carries its parent's command line.
+        let Ok(cmdline) = std::fs::read(format!("/proc/{pid}/cmdline")) else {
+            continue;
+        };
+        let args: Vec<&[u8]> = cmdline.split(|&b| b == 0).skip(1).take(2).collect();
+        if args == [b"stage".as_slice(), name.as_bytes()] {
             out.push(pid);
         }
     }

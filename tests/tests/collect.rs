@@ -223,7 +223,7 @@ fn bad_labels_and_models_fail_with_a_clear_message() {
         r#"{"format":"airglyph-gesture-model","version":1,"labels":["a","b"]}"#,
     )
     .unwrap();
-    let err = fail(p.command("airglyph-gesture").arg("--model").arg(&model));
+    let err = fail(p.stage("gesture").arg("--model").arg(&model));
     assert!(
         err.contains("old.json") && err.contains("version 1 is not supported"),
         "{err}"

@@ -1,7 +1,9 @@
 //! `airglyph`: the front door. Starts and supervises the three stages, and carries the
-//! offline tools. Each subcommand lives in its own module under `cmd/`.
+//! offline tools. Each subcommand lives in its own module under `cmd/`; the stages'
+//! processes, which `airglyph run` starts as `airglyph stage NAME`, under `stage/`.
 
 mod cmd;
+mod stage;
 
 use clap::{Parser, Subcommand};
 
@@ -44,6 +46,9 @@ enum Command {
     Pose(cmd::pose::Args),
     /// Pose error against a recording's ground truth (e_m, e_j, within 10 cm, mAP, fps).
     EvalPose(cmd::eval_pose::Args),
+    /// Run one stage's process (what `airglyph run` starts; by hand, to run a stage alone).
+    #[command(subcommand, hide = true)]
+    Stage(stage::StageCommand),
 }
 
 fn main() -> std::process::ExitCode {
@@ -51,7 +56,11 @@ fn main() -> std::process::ExitCode {
     if cli.command.is_filter() {
         die_quietly_on_a_closed_pipe();
     }
-    airglyph_ipc::process::main("airglyph", || dispatch(cli))
+    let name = match &cli.command {
+        Command::Stage(s) => stage::invocation(s.stage()),
+        _ => "airglyph".to_owned(),
+    };
+    airglyph_ipc::process::main(&name, || dispatch(cli))
 }
 
 impl Command {
@@ -99,5 +108,6 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Command::EvalSpotting(a) => cmd::eval_spotting::run(a),
         Command::Pose(a) => cmd::pose::run(a),
         Command::EvalPose(a) => cmd::eval_pose::run(a),
+        Command::Stage(s) => s.run(),
     }
 }

@@ -53,11 +53,6 @@ impl Stage {
             .into_iter()
             .find(|s| *s as u32 == v)
     }
-
-    /// The executable that runs this stage.
-    pub fn binary(self) -> String {
-        format!("airglyph-{}", self.name())
-    }
 }
 
 /// The settings of one publish-subscribe service.

@@ -92,8 +92,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     let mut pipeline_child = match &args.source {
         Some(source) => {
-            let exe = std::env::current_exe()?;
-            let child = std::process::Command::new(exe)
+            let child = crate::stage::own_executable()
                 .args(["run", "--source", &source.to_string(), "--loop"])
                 .stdout(std::process::Stdio::null())
                 .spawn()

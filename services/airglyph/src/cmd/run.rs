@@ -5,8 +5,7 @@ use airglyph_ipc::{shutdown, GestureEventMsg, Pipeline, Stage};
 use anyhow::{bail, Context};
 use std::collections::VecDeque;
 use std::os::unix::process::CommandExt;
-use std::path::PathBuf;
-use std::process::{Child, Command, ExitStatus};
+use std::process::{Child, ExitStatus};
 use std::time::{Duration, Instant};
 
 /// Start the pipeline and print each gesture it recognizes.
@@ -89,16 +88,6 @@ const STOP_GRACE: Duration = Duration::from_secs(3);
 /// its first frame; a viewer that is not up by then is not waited for.
 const VIEWER_WAIT: Duration = Duration::from_secs(3);
 
-/// Finds a stage's executable: beside `airglyph`, else on PATH.
-pub fn stage_binary(stage: Stage) -> PathBuf {
-    let name = stage.binary();
-    std::env::current_exe()
-        .ok()
-        .and_then(|exe| exe.parent().map(|d| d.join(&name)))
-        .filter(|p| p.exists())
-        .unwrap_or_else(|| PathBuf::from(name))
-}
-
 /// One supervised stage.
 struct Supervised {
     stage: Stage,
@@ -116,8 +105,7 @@ struct Supervised {
 
 impl Supervised {
     fn spawn(&mut self) -> anyhow::Result<()> {
-        let bin = stage_binary(self.stage);
-        let mut cmd = Command::new(&bin);
+        let mut cmd = crate::stage::command(self.stage);
         cmd.args(&self.args);
         // SAFETY: prctl is async-signal-safe; the closure touches nothing else.
         unsafe {
@@ -130,7 +118,7 @@ impl Supervised {
         }
         let child = cmd
             .spawn()
-            .with_context(|| format!("cannot start {} ({})", self.stage.binary(), bin.display()))?;
+            .with_context(|| format!("cannot start `{}`", crate::stage::invocation(self.stage)))?;
         tracing::debug!(stage = self.stage.name(), pid = child.id(), "started");
         self.child = Some(child);
         self.started = Instant::now();
@@ -445,7 +433,7 @@ fn supervise(
                         crashes = s.crashes.len(),
                         last = %describe(status),
                         "stage keeps dying; giving it up (the pipeline runs on) — run `{}` alone to see why",
-                        s.stage.binary()
+                        crate::stage::invocation(s.stage)
                     );
                     s.finished = true;
                     continue;
@@ -456,7 +444,7 @@ fn supervise(
                         s.stage.name(),
                         s.crashes.len(),
                         describe(status),
-                        s.stage.binary()
+                        crate::stage::invocation(s.stage)
                     );
                 }
                 tracing::warn!(

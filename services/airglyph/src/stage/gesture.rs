@@ -1,4 +1,4 @@
-//! `airglyph-gesture`: the gesture stage process. Follows the drawing hand through the
+//! `airglyph stage gesture`: the gesture stage process. Follows the drawing hand through the
 //! skeleton stream, spots and classifies gestures, publishes each as an event.
 
 use airglyph_gesture::{Hand, Model, SpottedGesture, Spotter, SpotterConfig};
@@ -7,7 +7,6 @@ use airglyph_ipc::stats::Telemetry;
 use airglyph_ipc::wire::Hand as WireHand;
 use airglyph_ipc::{shutdown, DecisionMsg, GestureEventMsg, LatencyChain, Pipeline, Stage};
 use anyhow::Context;
-use clap::Parser;
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -16,19 +15,14 @@ use std::time::Duration;
 ///
 /// The pipeline it joins is set by AIRGLYPH_IPC_ROOT / AIRGLYPH_IPC_PREFIX (or the
 /// config file named by AIRGLYPH_CONFIG). Normally started by `airglyph run`.
-#[derive(Parser)]
-#[command(name = "airglyph-gesture", version)]
-struct Args {
+#[derive(clap::Args, Debug)]
+pub struct Args {
     /// The gesture model (from `airglyph train`); default: the shipped 36-symbol model.
     #[arg(long)]
     model: Option<PathBuf>,
     /// Fault-injection for tests: sleep this long on every skeleton (a slow stage).
     #[arg(long, hide = true, default_value_t = 0)]
     delay_ms: u64,
-}
-
-fn main() -> std::process::ExitCode {
-    airglyph_ipc::process::main("airglyph-gesture", || run(Args::parse()))
 }
 
 /// Sends one gesture event; `chain` is the latency chain of the frame that closed it.
@@ -63,7 +57,7 @@ fn publish(
     Ok(())
 }
 
-fn run(args: Args) -> anyhow::Result<()> {
+pub fn run(args: Args) -> anyhow::Result<()> {
     let path = args
         .model
         .clone()
