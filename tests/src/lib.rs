@@ -42,7 +42,12 @@ impl Isolated {
 
     /// A command for one of the workspace's binaries, joined to this pipeline.
     pub fn command(&self, binary: &str) -> Command {
-        let mut cmd = Command::new(binary_path(binary));
+        self.command_at(&binary_path(binary))
+    }
+
+    /// A command for the executable at `program`, joined to this pipeline.
+    pub fn command_at(&self, program: &Path) -> Command {
+        let mut cmd = Command::new(program);
         cmd.env("AIRGLYPH_IPC_ROOT", format!("{}/", self.root.display()))
             .env("AIRGLYPH_IPC_PREFIX", &self.prefix)
             .env("RUST_LOG", "warn");

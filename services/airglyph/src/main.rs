@@ -36,6 +36,8 @@ enum Command {
     Profile(cmd::profile::Args),
     /// Render a synthetic person into a recording with exact ground-truth joints.
     Synth(cmd::synth::Args),
+    /// Fetch the MakeHuman body for `synth --body makehuman` into the asset cache.
+    FetchAssets(cmd::fetch_assets::Args),
     Collect(cmd::collect::Args),
     /// Train a gesture model from trajectory JSONL files.
     Train(cmd::train::Args),
@@ -102,6 +104,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Command::Snapshot(a) => cmd::snapshot::run(a),
         Command::Profile(a) => cmd::profile::run(a),
         Command::Synth(a) => cmd::synth::run(a),
+        Command::FetchAssets(a) => cmd::fetch_assets::run(a),
         Command::Collect(a) => cmd::collect::run(a),
         Command::Train(a) => cmd::train::run(a),
         Command::EvalGestures(a) => cmd::eval_gestures::run(a),

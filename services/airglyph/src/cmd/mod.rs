@@ -6,6 +6,7 @@ pub mod devices;
 pub mod eval_gestures;
 pub mod eval_pose;
 pub mod eval_spotting;
+pub mod fetch_assets;
 pub mod pose;
 pub mod profile;
 pub mod record;

@@ -3,7 +3,7 @@
 use crate::cmd::demo::drawn_for;
 use airglyph_core::recording::Recording;
 use airglyph_core::{Joint, Skeleton};
-use airglyph_gesture::{Model, Spotter};
+use airglyph_gesture::{Model, ModelSource, Spotter};
 use airglyph_pose::{PoseConfig, PoseEstimator};
 use airglyph_synth::GestureTruth;
 use anyhow::Context;
@@ -24,7 +24,7 @@ pub struct Args {
     /// frame a line) instead of estimating the pose again.
     #[arg(long, value_name = "FILE")]
     poses: Option<PathBuf>,
-    /// The gesture model (default: the shipped 36-symbol model).
+    /// The gesture model (default: $AIRGLYPH_MODEL, else the built-in 36-symbol model).
     #[arg(long)]
     model: Option<PathBuf>,
     /// One JSON object a line.
@@ -120,11 +120,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.truth && !rec.has_joints() {
         anyhow::bail!("{}: --truth needs a joints.csv", args.dir.display());
     }
-    let path = args
-        .model
-        .clone()
-        .unwrap_or_else(airglyph_gesture::model::default_model_path);
-    let model = Model::load(&path)?;
+    let model = ModelSource::choose(args.model.as_deref()).load()?;
     let scfg = crate::cmd::eval_spotting::spotter_config(args.spotter.as_deref())?;
     let mut spotter = Spotter::new(model, scfg)?;
     spotter.set_trace(args.trace);

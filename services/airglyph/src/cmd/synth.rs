@@ -3,14 +3,16 @@
 
 use airglyph_core::camera::Preset;
 use airglyph_core::Intrinsics;
-use airglyph_synth::{Background, BodySpec, MotionSpec, Placement, ProceduralBody, SceneConfig};
+use airglyph_synth::{
+    Background, BodySpec, MotionSpec, Placement, ProceduralBody, SceneConfig, SynthError,
+};
 use anyhow::{bail, Context};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// The body: `procedural` (built in) or `makehuman` (needs `scripts/fetch-assets`).
+    /// The body: `procedural` (built in) or `makehuman` (fetched by `airglyph fetch-assets`).
     #[arg(long, default_value = "procedural")]
     pub body: String,
     /// What the person does: `poses` (the scripted poses in turn), `pose:NAME` (one of
@@ -59,7 +61,8 @@ pub struct Args {
     /// travel removed, its turns and jumps kept), so a clip that walks away stays in view.
     #[arg(long)]
     pub follow: bool,
-    /// Folder holding the MakeHuman assets (mpfb2/); default .cache/assets.
+    /// Folder holding the MakeHuman assets (mpfb2/); default $AIRGLYPH_ASSETS, else
+    /// ~/.cache/airglyph/assets.
     #[arg(long)]
     pub assets: Option<PathBuf>,
     /// With draw:SYMBOLS, take the shapes from this trajectory JSONL (.jsonl or .jsonl.gz).
@@ -124,7 +127,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         seed: args.seed,
     };
     // Learn the motion's length first, for the progress bar and the default count.
-    let len = airglyph_synth::Synthesizer::new(cfg.clone())?.len();
+    let len = airglyph_synth::Synthesizer::new(cfg.clone())
+        .map_err(|e| match e {
+            SynthError::MissingAssets { missing } => anyhow::anyhow!(
+                "the MakeHuman body is not there ({} is missing): fetch it with `airglyph fetch-assets`, or set AIRGLYPH_ASSETS to the folder that holds mpfb2/",
+                missing.display()
+            ),
+            e => e.into(),
+        })?
+        .len();
     let frames = match (args.frames, len) {
         (Some(n), Some(len)) => n.min(len),
         (Some(n), None) => n,
