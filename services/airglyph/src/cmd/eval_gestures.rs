@@ -262,10 +262,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             },
         ));
     }
-    if let Some(dir) = &args.plots {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("{}: cannot create plot directory", dir.display()))?;
-    }
     for (name, file, n, out) in &results {
         let ms = 1e3 * out.seconds / out.decisions.max(1) as f64;
         let recall: serde_json::Map<String, serde_json::Value> = out
@@ -307,14 +303,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 .collect();
             println!("  top confusions: {}", top.join(", "));
         }
-        if let Some(dir) = &args.plots {
-            let path = dir.join(format!("confusion-{file}.png"));
+    }
+    // The pictures after every figure: one that fails loses none of them.
+    if let Some(dir) = &args.plots {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("{}: cannot create plot directory", dir.display()))?;
+        for (_, file, _, out) in &results {
+            let title = format!("{file}: {:.2} %", 100.0 * out.conf.accuracy());
             out.conf
-                .plot(
-                    &path,
-                    &format!("{file}: {:.2} %", 100.0 * out.conf.accuracy()),
-                )
-                .map_err(anyhow::Error::msg)?;
+                .plot(&dir.join(format!("confusion-{file}.png")), &title)?;
         }
     }
     Ok(())

@@ -264,9 +264,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             )
         })
         .collect();
-    // Per stream: its score, each drawn symbol's label and whether it was spotted
-    // right, its length in frames, its dump.
-    type StreamResult = (SpottingScore, Vec<(String, bool)>, usize, Vec<String>);
+    if args.plot.is_some() && args.plot_stream >= chunks.len() {
+        bail!(
+            "--plot-stream {}: there are {} streams (0–{})",
+            args.plot_stream,
+            chunks.len(),
+            chunks.len() - 1
+        );
+    }
     let scores: Vec<anyhow::Result<StreamResult>> = chunks
         .par_iter()
         .map(|(index, seed, c)| {
@@ -282,28 +287,34 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             } else {
                 Vec::new()
             };
-            if let Some(path) = args.plot.as_ref().filter(|_| *index == args.plot_stream) {
-                plot(path, &s, &spotted, &cfg, args.plot_from, args.plot_seconds)?;
-            }
             let m = matched(&s.truth, &spotted);
             let drawn = s.truth.iter().map(|t| t.label.clone()).zip(m.correct);
-            Ok((m.score, drawn.collect(), s.points.len(), dumped))
+            Ok(StreamResult {
+                score: m.score,
+                drawn: drawn.collect(),
+                frames: s.points.len(),
+                dump: dumped,
+                plotted: (args.plot.is_some() && *index == args.plot_stream)
+                    .then_some((s, spotted)),
+            })
         })
         .collect();
     let mut total = SpottingScore::default();
     let mut by_label = BTreeMap::<String, LabelCount>::new();
     let mut frames = 0;
     let mut dump = Vec::new();
-    for s in scores {
-        let (s, drawn, f, d) = s?;
-        total.add(&s);
-        for (label, right) in drawn {
+    let mut plotted = None;
+    for r in scores {
+        let r = r?;
+        total.add(&r.score);
+        for (label, right) in r.drawn {
             let e = by_label.entry(label).or_default();
             e.drawn += 1;
             e.correct += usize::from(right);
         }
-        frames += f;
-        dump.extend(d);
+        frames += r.frames;
+        dump.extend(r.dump);
+        plotted = plotted.or(r.plotted);
     }
     if let Some(path) = &args.dump {
         std::fs::write(path, dump.join("\n") + "\n")?;
@@ -372,7 +383,23 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             }
         );
     }
+    // The picture after every figure: if it fails, none of them is lost.
+    if let (Some(path), Some((s, spotted))) = (&args.plot, plotted) {
+        plot(path, &s, &spotted, &cfg, args.plot_from, args.plot_seconds)?;
+    }
     Ok(())
+}
+
+/// What one stream gave.
+struct StreamResult {
+    score: SpottingScore,
+    /// Each drawn symbol's label and whether it was spotted right.
+    drawn: Vec<(String, bool)>,
+    frames: usize,
+    /// Its lines of --dump.
+    dump: Vec<String>,
+    /// The stream and what was spotted in it, when it is the one --plot draws.
+    plotted: Option<(SyntheticStream, Vec<SpottedGesture>)>,
 }
 
 /// One stream as JSON lines: each drawn symbol (and the classifier's label of its own
@@ -457,8 +484,7 @@ fn plot(
         cfg.fps,
         &drawn,
         &found,
-    )
-    .map_err(anyhow::Error::msg)?;
+    )?;
     eprintln!("wrote {}", path.display());
     Ok(())
 }

@@ -2,6 +2,7 @@
 
 use airglyph_capture::SourceSpec;
 use airglyph_ipc::{shutdown, LatencyChain, Pipeline, Stage, StageStatsMsg};
+use airglyph_plot::PlotError;
 use anyhow::Context;
 use plotters::prelude::*;
 use std::collections::BTreeMap;
@@ -150,6 +151,7 @@ fn measure(args: &Args) -> anyhow::Result<()> {
 
     let mut summary = serde_json::Map::new();
     let mut csv = String::from("measure,count,p50_ms,p90_ms,p99_ms,max_ms\n");
+    let mut measured = Vec::new();
     for (name, of) in MEASURES {
         let mut v: Vec<u64> = frames.values().filter_map(of).collect();
         if v.is_empty() {
@@ -167,7 +169,7 @@ fn measure(args: &Args) -> anyhow::Result<()> {
             name.into(),
             serde_json::json!({"count": v.len(), "p50_ms": p50, "p90_ms": p90, "p99_ms": p99, "max_ms": max}),
         );
-        histogram_png(&args.out.join(format!("{name}.png")), name, &v)?;
+        measured.push((name, v));
     }
     let mut drops = serde_json::Map::new();
     for (stage, last) in &last_stats {
@@ -201,6 +203,10 @@ fn measure(args: &Args) -> anyhow::Result<()> {
         println!("{}", serde_json::to_string_pretty(&report["stages"])?);
         eprintln!("report in {}", args.out.display());
     }
+    // The pictures last: one that fails loses none of the figures written above.
+    for (name, v) in &measured {
+        histogram_png(&args.out.join(format!("{name}.png")), name, v)?;
+    }
     Ok(())
 }
 
@@ -224,7 +230,7 @@ fn write_frames_csv(path: &Path, frames: &BTreeMap<(u64, u64), FrameTimes>) -> a
     Ok(())
 }
 
-fn histogram_png(path: &Path, title: &str, sorted_ns: &[u64]) -> anyhow::Result<()> {
+fn histogram_png(path: &Path, title: &str, sorted_ns: &[u64]) -> Result<(), PlotError> {
     let ms: Vec<f64> = sorted_ns.iter().map(|&n| n as f64 * 1e-6).collect();
     let hi = quantile(sorted_ns, 0.999).max(0.01) * 1.05;
     let bins = 60usize;
@@ -234,35 +240,34 @@ fn histogram_png(path: &Path, title: &str, sorted_ns: &[u64]) -> anyhow::Result<
         counts[((v / width) as usize).min(bins - 1)] += 1;
     }
     let top = *counts.iter().max().unwrap_or(&1) as f64 * 1.1;
-    let root = BitMapBackend::new(path, (800, 400)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(format!("{title} (n = {})", ms.len()), ("sans-serif", 22))
-        .margin(10)
-        .x_label_area_size(40)
-        .y_label_area_size(50)
-        .build_cartesian_2d(0.0..hi, 0.0..top)?;
-    chart
-        .configure_mesh()
-        .x_desc("ms")
-        .y_desc("frames")
-        .draw()?;
-    chart.draw_series(counts.iter().enumerate().map(|(i, &c)| {
-        let x0 = i as f64 * width;
-        Rectangle::new([(x0, 0.0), (x0 + width, c as f64)], BLUE.mix(0.6).filled())
-    }))?;
-    for (q, color) in [(0.5, GREEN), (0.99, RED)] {
-        let x = quantile(sorted_ns, q);
+    airglyph_plot::png(path, (800, 400), |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(format!("{title} (n = {})", ms.len()), ("sans-serif", 22))
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(50)
+            .build_cartesian_2d(0.0..hi, 0.0..top)?;
         chart
-            .draw_series(LineSeries::new([(x, 0.0), (x, top)], color.stroke_width(2)))?
-            .label(format!("p{} = {x:.2} ms", (q * 100.0) as u32))
-            .legend(move |(x, y)| PathElement::new([(x, y), (x + 15, y)], color));
-    }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()?;
-    root.present()?;
-    Ok(())
+            .configure_mesh()
+            .x_desc("ms")
+            .y_desc("frames")
+            .draw()?;
+        chart.draw_series(counts.iter().enumerate().map(|(i, &c)| {
+            let x0 = i as f64 * width;
+            Rectangle::new([(x0, 0.0), (x0 + width, c as f64)], BLUE.mix(0.6).filled())
+        }))?;
+        for (q, color) in [(0.5, GREEN), (0.99, RED)] {
+            let x = quantile(sorted_ns, q);
+            chart
+                .draw_series(LineSeries::new([(x, 0.0), (x, top)], color.stroke_width(2)))?
+                .label(format!("p{} = {x:.2} ms", (q * 100.0) as u32))
+                .legend(move |(x, y)| PathElement::new([(x, y), (x + 15, y)], color));
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()?;
+        Ok(())
+    })
 }
