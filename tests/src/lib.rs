@@ -142,6 +142,29 @@ pub fn ramp(width: u32, height: u32, frame: usize) -> DepthImage {
     DepthImage::new(width, height, px).unwrap()
 }
 
+/// Trajectory JSONL: each label's built-in glyph `copies` times, each copy a little
+/// slanted (another "writer"), so the samples are not all one trajectory.
+pub fn write_glyphs(path: &Path, labels: &str, copies: usize) {
+    let mut lines = Vec::new();
+    for c in labels.chars() {
+        let glyph = airglyph_synth::glyphs::template(c).expect("a built-in glyph");
+        for k in 0..copies {
+            let slant = 0.05 * k as f32;
+            let strokes: Vec<Vec<[f32; 2]>> = glyph
+                .strokes
+                .iter()
+                .map(|s| s.iter().map(|p| [p.x + slant * p.y, p.y]).collect())
+                .collect();
+            lines.push(
+                serde_json::json!({"label": c.to_string(), "subject": format!("w{k}"),
+                                   "strokes": strokes})
+                .to_string(),
+            );
+        }
+    }
+    std::fs::write(path, lines.join("\n") + "\n").unwrap();
+}
+
 /// Sends SIGTERM (or another signal) to a child.
 pub fn signal(child: &Child, sig: i32) {
     // SAFETY: kill(2) on a child we have not reaped.

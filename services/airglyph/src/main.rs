@@ -3,6 +3,7 @@
 //! processes, which `airglyph run` starts as `airglyph stage NAME`, under `stage/`.
 
 mod cmd;
+mod interrupt;
 mod stage;
 
 use clap::{Parser, Subcommand};

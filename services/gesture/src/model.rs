@@ -174,8 +174,9 @@ impl Model {
         serde_json::to_string(self).unwrap_or_default()
     }
 
+    /// Writes the model whole: a writer stopped half-way leaves the old file as it was.
     pub fn save(&self, path: &Path) -> std::io::Result<()> {
-        std::fs::write(path, self.to_json())
+        airglyph_core::file::write_whole(path, self.to_json())
     }
 
     /// Index of a label.

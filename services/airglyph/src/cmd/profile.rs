@@ -1,5 +1,6 @@
 //! `airglyph profile`: per-stage latency of a running pipeline, frame by frame.
 
+use crate::interrupt::Interrupted;
 use airglyph_capture::SourceSpec;
 use airglyph_ipc::{shutdown, LatencyChain, Pipeline, Stage, StageStatsMsg};
 use airglyph_plot::PlotError;
@@ -88,28 +89,42 @@ fn quantile(sorted: &[u64], q: f64) -> f64 {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    shutdown::install();
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     let mut pipeline_child = match &args.source {
-        Some(source) => {
-            let child = crate::stage::own_executable()
+        Some(source) => Some(
+            crate::stage::own_executable()
                 .args(["run", "--source", &source.to_string(), "--loop"])
                 .stdout(std::process::Stdio::null())
                 .spawn()
-                .context("cannot start the pipeline")?;
-            std::thread::sleep(Duration::from_secs_f64(args.warmup));
-            Some(child)
-        }
+                .context("cannot start the pipeline")?,
+        ),
         None => None,
     };
-    let result = measure(&args);
+    let settled = pipeline_child.is_none() || settle(Duration::from_secs_f64(args.warmup));
+    let result = if settled {
+        measure(&args)
+    } else {
+        Err(Interrupted::new("nothing was measured").into())
+    };
     if let Some(child) = pipeline_child.as_mut() {
         // SAFETY: kill(2) on our own, unreaped child.
         unsafe { libc::kill(child.id() as i32, libc::SIGTERM) };
         let _ = child.wait();
     }
     result
+}
+
+/// Lets a pipeline just started settle for `warmup`; false when a signal came first.
+fn settle(warmup: Duration) -> bool {
+    let until = Instant::now() + warmup;
+    while Instant::now() < until {
+        if shutdown::requested() {
+            return false;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    true
 }
 
 fn measure(args: &Args) -> anyhow::Result<()> {
@@ -123,6 +138,7 @@ fn measure(args: &Args) -> anyhow::Result<()> {
     let mut frames: BTreeMap<(u64, u64), FrameTimes> = BTreeMap::new();
     let mut first_stats: BTreeMap<&str, StageStatsMsg> = BTreeMap::new();
     let mut last_stats: BTreeMap<&str, StageStatsMsg> = BTreeMap::new();
+    eprintln!("measuring for {} s", args.seconds);
     let started = Instant::now();
     let bar = indicatif::ProgressBar::new((args.seconds * 10.0) as u64);
     while started.elapsed().as_secs_f64() < args.seconds && !shutdown::requested() {
@@ -145,6 +161,9 @@ fn measure(args: &Args) -> anyhow::Result<()> {
     }
     bar.finish_and_clear();
     let elapsed = started.elapsed().as_secs_f64();
+    if frames.is_empty() && shutdown::requested() {
+        return Err(Interrupted::new("nothing was measured").into());
+    }
     if frames.is_empty() {
         anyhow::bail!("no skeletons arrived in {elapsed:.1} s: is a pipeline running? (start one with `airglyph run`, or pass --source)");
     }
@@ -206,6 +225,13 @@ fn measure(args: &Args) -> anyhow::Result<()> {
     // The pictures last: one that fails loses none of the figures written above.
     for (name, v) in &measured {
         histogram_png(&args.out.join(format!("{name}.png")), name, v)?;
+    }
+    if shutdown::requested() {
+        return Err(Interrupted::new(format!(
+            "the report in {} covers the {elapsed:.1} s measured",
+            args.out.display()
+        ))
+        .into());
     }
     Ok(())
 }

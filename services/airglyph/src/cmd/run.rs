@@ -4,7 +4,6 @@ use airglyph_capture::SourceSpec;
 use airglyph_ipc::{shutdown, GestureEventMsg, Pipeline, Stage};
 use anyhow::{bail, Context};
 use std::collections::VecDeque;
-use std::os::unix::process::CommandExt;
 use std::process::{Child, ExitStatus};
 use std::time::{Duration, Instant};
 
@@ -105,18 +104,8 @@ struct Supervised {
 
 impl Supervised {
     fn spawn(&mut self) -> anyhow::Result<()> {
-        let mut cmd = crate::stage::command(self.stage);
-        cmd.args(&self.args);
-        // SAFETY: prctl is async-signal-safe; the closure touches nothing else.
-        unsafe {
-            // A stage whose supervisor died (even by SIGKILL) stops too, instead of
-            // running on unsupervised.
-            cmd.pre_exec(|| {
-                libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM);
-                Ok(())
-            });
-        }
-        let child = cmd
+        let child = crate::stage::command(self.stage)
+            .args(&self.args)
             .spawn()
             .with_context(|| format!("cannot start `{}`", crate::stage::invocation(self.stage)))?;
         tracing::debug!(stage = self.stage.name(), pid = child.id(), "started");

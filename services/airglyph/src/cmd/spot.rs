@@ -1,9 +1,11 @@
 //! `airglyph spot DIR`: the gesture stage's spotter over a recording, offline.
 
 use crate::cmd::demo::drawn_for;
+use crate::interrupt::Interrupted;
 use airglyph_core::recording::Recording;
 use airglyph_core::{Joint, Skeleton};
 use airglyph_gesture::{Model, ModelSource, Spotter};
+use airglyph_ipc::shutdown;
 use airglyph_pose::{PoseConfig, PoseEstimator};
 use airglyph_synth::GestureTruth;
 use anyhow::Context;
@@ -140,7 +142,22 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut hand: Vec<Option<[f32; 2]>> = Vec::new();
     let mut found = Vec::new();
     let poses = args.poses.as_deref().map(read_poses).transpose()?;
+    eprintln!(
+        "spotting gestures in {} ({} frames, {})",
+        args.dir.display(),
+        rec.len(),
+        match (&args.poses, args.truth) {
+            (Some(p), _) => format!("the skeletons of {}", p.display()),
+            (None, true) => "its ground-truth joints".into(),
+            (None, false) => "the pose estimated frame by frame".into(),
+        }
+    );
+    let mut stopped = None;
     for i in 0..rec.len() {
+        if shutdown::requested() {
+            stopped = Some(i);
+            break;
+        }
         let skeleton = if let Some(p) = &poses {
             p.get(i).copied().flatten()
         } else if args.truth {
@@ -158,8 +175,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         found.extend(spotter.push(&s, i as u64, rec.capture_ns(i)));
         trace(&spotter.take_trace(), spotter.model());
     }
-    found.extend(spotter.finish());
-    trace(&spotter.take_trace(), spotter.model());
+    if stopped.is_none() {
+        found.extend(spotter.finish());
+        trace(&spotter.take_trace(), spotter.model());
+    }
     for g in found {
         spotted += 1;
         let drawn = drawn_for(&truth, g.start_seq, g.end_seq);
@@ -183,6 +202,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 drawn.map_or(String::new(), |d| format!("   drawn: {d}"))
             );
         }
+    }
+    if let Some(i) = stopped {
+        return Err(Interrupted::new(format!(
+            "stopped at frame {i} of {}: the gestures spotted before it are printed; no summary",
+            rec.len()
+        ))
+        .into());
     }
     if args.alone {
         for t in &truth {

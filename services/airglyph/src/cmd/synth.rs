@@ -1,14 +1,18 @@
 //! `airglyph synth`: render a synthetic person into a recording with exact ground truth
 //! (depth PNGs, frames.csv, joints.csv, and gestures.csv for air-drawing).
 
+use crate::interrupt::Interrupted;
 use airglyph_core::camera::Preset;
 use airglyph_core::Intrinsics;
+use airglyph_ipc::shutdown;
 use airglyph_synth::{
-    Background, BodySpec, MotionSpec, Placement, ProceduralBody, SceneConfig, SynthError,
+    write_gestures_csv, Background, BodySpec, GestureTruth, MotionSpec, Placement, ProceduralBody,
+    SceneConfig, SynthError,
 };
 use anyhow::{bail, Context};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
+use std::sync::mpsc;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -126,16 +130,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         },
         seed: args.seed,
     };
-    // Learn the motion's length first, for the progress bar and the default count.
-    let len = airglyph_synth::Synthesizer::new(cfg.clone())
-        .map_err(|e| match e {
-            SynthError::MissingAssets { missing } => anyhow::anyhow!(
-                "the MakeHuman body is not there ({} is missing): fetch it with `airglyph fetch-assets`, or set AIRGLYPH_ASSETS to the folder that holds mpfb2/",
-                missing.display()
-            ),
-            e => e.into(),
-        })?
-        .len();
+    // Learn the motion's length first, for the progress bar and the default count, and
+    // its gestures, for a recording cut short.
+    let motion = airglyph_synth::Synthesizer::new(cfg.clone()).map_err(|e| match e {
+        SynthError::MissingAssets { missing } => anyhow::anyhow!(
+            "the MakeHuman body is not there ({} is missing): fetch it with `airglyph fetch-assets`, or set AIRGLYPH_ASSETS to the folder that holds mpfb2/",
+            missing.display()
+        ),
+        e => e.into(),
+    })?;
+    let (len, gestures) = (motion.len(), motion.gestures());
+    drop(motion);
     let frames = match (args.frames, len) {
         (Some(n), Some(len)) => n.min(len),
         (Some(n), None) => n,
@@ -151,9 +156,47 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ProgressStyle::with_template("{bar:40} {pos}/{len} frames  {per_sec}  eta {eta}")
             .expect("valid template"),
     );
-    let summary =
-        airglyph_synth::write_recording(cfg, frames, &args.out, |n| bar.set_position(n as u64))
-            .with_context(|| format!("writing {}", args.out.display()))?;
+    let draws = matches!(cfg.motion, MotionSpec::Draw(_));
+    let (stopped, stopped_at) = mpsc::channel();
+    let writer = {
+        let (bar, out) = (bar.clone(), args.out.clone());
+        std::thread::spawn(move || {
+            airglyph_synth::write_recording(cfg, frames, &out, |n| {
+                bar.set_position(n as u64);
+                if shutdown::requested() {
+                    // write_recording cannot be stopped, so it is held here for good,
+                    // between two frames, where the n it wrote are whole (each frame's
+                    // CSV rows are flushed with it) while the process ends.
+                    let _ = stopped.send(n);
+                    loop {
+                        std::thread::park();
+                    }
+                }
+            })
+        })
+    };
+    // Either the writer stops between two frames, or it finishes and drops the sender.
+    if let Ok(n) = stopped_at.recv() {
+        bar.finish_and_clear();
+        let done: Vec<GestureTruth> = gestures.into_iter().filter(|g| g.end_frame < n).collect();
+        if draws {
+            write_gestures_csv(&args.out.join("gestures.csv"), &done)?;
+        }
+        return Err(Interrupted::new(format!(
+            "kept the first {n} of {frames} frames in {}, a whole recording{}",
+            args.out.display(),
+            if draws {
+                format!(" with the {} symbols drawn in them", done.len())
+            } else {
+                String::new()
+            }
+        ))
+        .into());
+    }
+    let summary = writer
+        .join()
+        .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+        .with_context(|| format!("writing {}", args.out.display()))?;
     bar.finish_and_clear();
     if args.json {
         let line = serde_json::json!({

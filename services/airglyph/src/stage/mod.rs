@@ -49,7 +49,8 @@ pub fn invocation(stage: Stage) -> String {
     format!("airglyph stage {}", stage.name())
 }
 
-/// A command that runs this very executable again (a stage, or a pipeline to profile).
+/// A command that runs this very executable again (a stage, or a pipeline to profile)
+/// as a child that ends with this process.
 ///
 /// It runs `/proc/self/exe`, the image this process was started from, rather than the
 /// file at its path: a stage restarted after that file was replaced (a `cargo build` or
@@ -60,6 +61,15 @@ pub fn own_executable() -> std::process::Command {
     let mut cmd = std::process::Command::new("/proc/self/exe");
     if let Ok(path) = std::env::current_exe() {
         cmd.arg0(path);
+    }
+    // SAFETY: prctl is async-signal-safe; the closure touches nothing else.
+    unsafe {
+        // A child whose parent died (even by SIGKILL) stops too, instead of running on
+        // unsupervised.
+        cmd.pre_exec(|| {
+            libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM);
+            Ok(())
+        });
     }
     cmd
 }
