@@ -23,8 +23,8 @@ pub struct Args {
     /// One JSON object a line; the last one is the summary {"drawn":…,"correct":…}.
     #[arg(long)]
     json: bool,
-    /// The gesture model (default: the shipped 36-symbol model).
-    #[arg(long)]
+    /// The gesture model (default: $AIRGLYPH_MODEL, else the built-in 36-symbol model).
+    #[arg(long, value_name = "FILE")]
     model: Option<std::path::PathBuf>,
     /// Also start the viewer: watch the person, skeleton and gestures in a browser.
     #[arg(long)]
@@ -102,14 +102,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         Ok(())
     };
-    let mut stage_args = Vec::new();
-    if let Some(m) = &args.model {
-        stage_args.push(format!("gesture=--model {}", m.display()));
-    }
     run_with(
         RunArgs {
             json: args.json,
-            stage_args,
+            model: args.model,
             view: args.view,
             listen: args.listen,
             truth: args.truth,

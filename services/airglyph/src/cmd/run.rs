@@ -1,9 +1,12 @@
 //! `airglyph run`: starts the stages as child processes, supervises them, prints gestures.
 
+use crate::stage::StageArgs;
 use airglyph_capture::SourceSpec;
 use airglyph_ipc::{shutdown, GestureEventMsg, Pipeline, Stage};
 use anyhow::{bail, Context};
 use std::collections::VecDeque;
+use std::ffi::OsString;
+use std::path::PathBuf;
 use std::process::{Child, ExitStatus};
 use std::time::{Duration, Instant};
 
@@ -38,9 +41,16 @@ pub struct Args {
     /// Stop capture after this many frames.
     #[arg(long)]
     pub frames: Option<u64>,
-    /// Extra arguments for one stage, as STAGE=ARGS (e.g. `gesture=--model m.json`).
+    /// The gesture model (from `airglyph train`; default: $AIRGLYPH_MODEL, else the
+    /// built-in 36-symbol model).
+    #[arg(long, value_name = "FILE")]
+    pub model: Option<PathBuf>,
+    /// Extra arguments for one stage, as STAGE=ARGS, split as a shell splits them
+    /// (`--stage-args "gesture=--model 'my model.json'"`); repeat it for more stages.
+    /// The stages: capture, pose, gesture, viewer; `airglyph stage NAME --help` lists
+    /// each one's arguments, which are checked before the pipeline starts.
     #[arg(long = "stage-args", value_name = "STAGE=ARGS")]
-    pub stage_args: Vec<String>,
+    pub stage_args: Vec<StageArgs>,
     /// Crash-loop restarts of one stage (deaths within 2 s of starting) within a minute
     /// after which the pipeline gives up.
     #[arg(long, default_value_t = 5)]
@@ -90,7 +100,7 @@ const VIEWER_WAIT: Duration = Duration::from_secs(3);
 /// One supervised stage.
 struct Supervised {
     stage: Stage,
-    args: Vec<String>,
+    args: Vec<OsString>,
     child: Option<Child>,
     started: Instant,
     backoff: Duration,
@@ -196,11 +206,11 @@ fn start_in_order(stages: &mut [Supervised], pipeline: &Pipeline) -> anyhow::Res
 }
 
 /// The command-line arguments `airglyph run` gives one stage.
-fn stage_args(stage: Stage, args: &Args) -> anyhow::Result<Vec<String>> {
-    let mut out = Vec::new();
+fn stage_args(stage: Stage, args: &Args) -> Vec<OsString> {
+    let mut out: Vec<OsString> = Vec::new();
     match stage {
         Stage::Capture => {
-            out.extend(["--source".to_owned(), args.source.to_string()]);
+            out.extend(["--source".into(), args.source.to_string().into()]);
             if args.fast {
                 out.push("--fast".into());
             }
@@ -208,7 +218,7 @@ fn stage_args(stage: Stage, args: &Args) -> anyhow::Result<Vec<String>> {
                 out.push("--loop".into());
             }
             if let Some(n) = args.frames {
-                out.extend(["--frames".to_owned(), n.to_string()]);
+                out.extend(["--frames".into(), n.to_string().into()]);
             }
             if args.truth {
                 // Capture publishes the skeletons itself.
@@ -217,20 +227,20 @@ fn stage_args(stage: Stage, args: &Args) -> anyhow::Result<Vec<String>> {
         }
         Stage::Viewer => {
             if let Some(addr) = args.listen {
-                out.extend(["--listen".to_owned(), addr.to_string()]);
+                out.extend(["--listen".into(), addr.to_string().into()]);
             }
         }
-        Stage::Pose | Stage::Gesture => {}
-    }
-    for extra in &args.stage_args {
-        let (target, rest) = extra
-            .split_once('=')
-            .with_context(|| format!("--stage-args {extra:?} must be STAGE=ARGS"))?;
-        if target == stage.name() {
-            out.extend(rest.split_whitespace().map(str::to_owned));
+        Stage::Gesture => {
+            if let Some(model) = &args.model {
+                out.extend(["--model".into(), model.into()]);
+            }
         }
+        Stage::Pose => {}
     }
-    Ok(out)
+    for extra in args.stage_args.iter().filter(|e| e.stage == stage) {
+        out.extend(extra.args.iter().map(OsString::from));
+    }
+    out
 }
 
 /// What the supervisor does with the pipeline's output while the stages run.
@@ -347,11 +357,31 @@ pub fn run_listening<L: Listener>(
     if args.view {
         names.push(Stage::Viewer);
     }
+    for extra in &args.stage_args {
+        if !names.contains(&extra.stage) {
+            bail!(
+                "--stage-args {}=…: the {} stage does not run here{}",
+                extra.stage.name(),
+                extra.stage.name(),
+                match extra.stage {
+                    Stage::Viewer => " (add --view)",
+                    Stage::Pose if args.truth => " (--truth runs none)",
+                    _ => " (see --stages)",
+                }
+            );
+        }
+    }
+    if args.model.is_some() && !names.contains(&Stage::Gesture) {
+        bail!("--model: the gesture stage does not run here (see --stages)");
+    }
     let mut stages = Vec::new();
     for stage in names {
+        let args = stage_args(stage, &args);
+        crate::stage::check_args(stage, &args)
+            .map_err(|e| anyhow::anyhow!("the arguments of the {} stage: {e}", stage.name()))?;
         stages.push(Supervised {
             stage,
-            args: stage_args(stage, &args)?,
+            args,
             child: None,
             started: Instant::now(),
             backoff: MIN_BACKOFF,

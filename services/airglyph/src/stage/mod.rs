@@ -12,6 +12,7 @@ pub mod pose;
 pub mod viewer;
 
 use airglyph_ipc::Stage;
+use std::ffi::OsString;
 use std::os::unix::process::CommandExt;
 
 /// One stage's process. Started by `airglyph run` (or a systemd unit), not by hand
@@ -42,6 +43,44 @@ impl StageCommand {
             StageCommand::Viewer(a) => viewer::run(a),
         }
     }
+}
+
+/// Extra arguments for one stage: `--stage-args STAGE=ARGS`, ARGS split as a shell
+/// splits them (quotes keep spaces: `gesture=--model 'my model.json'`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct StageArgs {
+    pub stage: Stage,
+    pub args: Vec<String>,
+}
+
+impl std::str::FromStr for StageArgs {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        let names = || Stage::ALL.map(Stage::name).join(", ");
+        let (name, args) = s
+            .split_once('=')
+            .ok_or_else(|| format!("expected STAGE=ARGS, one of the stages {}", names()))?;
+        let stage = Stage::from_name(name)
+            .ok_or_else(|| format!("unknown stage {name:?}: the stages are {}", names()))?;
+        let args = shlex::split(args).ok_or_else(|| format!("{args:?}: a quote is not closed"))?;
+        Ok(Self { stage, args })
+    }
+}
+
+/// Whether `stage` takes `args`, as its process would when started with them: a bad one
+/// is refused before the pipeline starts, not by a stage dying again and again.
+pub fn check_args(stage: Stage, args: &[OsString]) -> Result<(), String> {
+    #[derive(clap::Parser)]
+    #[command(name = "airglyph stage")]
+    struct Stages {
+        #[command(subcommand)]
+        stage: StageCommand,
+    }
+    let argv = ["airglyph stage", stage.name()].map(OsString::from);
+    <Stages as clap::Parser>::try_parse_from(argv.into_iter().chain(args.iter().cloned()))
+        .map(drop)
+        .map_err(|e| e.to_string().trim_end().to_owned())
 }
 
 /// How a person runs `stage` by hand, for messages that send them there.
