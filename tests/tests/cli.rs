@@ -1,7 +1,7 @@
 //! The command line itself: what it refuses and how it says so, arguments that carry
 //! spaces, and what it prints.
 
-use airglyph_system_tests::{fail, json_lines, one_at_a_time, stop, Isolated};
+use airglyph_system_tests::{fail, json_lines, one_at_a_time, stop, succeed, Isolated};
 use std::path::Path;
 use std::process::Stdio;
 use std::time::Duration;
@@ -79,4 +79,76 @@ fn a_model_whose_path_has_a_space_reaches_the_gesture_stage() {
         let g = first_gesture(&p, args);
         assert_eq!(g["label"], "3", "{args:?}: {g}");
     }
+}
+
+/// The keys of an object, sorted.
+fn keys(v: &serde_json::Value) -> Vec<&str> {
+    let mut k: Vec<&str> = v.as_object().unwrap().keys().map(String::as_str).collect();
+    k.sort();
+    k
+}
+
+#[test]
+fn a_gesture_has_the_same_keys_from_run_demo_and_spot() {
+    let _one = one_at_a_time();
+    let p = Isolated::new();
+    let every = [
+        "end_frame",
+        "end_ns",
+        "event",
+        "hand",
+        "label",
+        "score",
+        "start_frame",
+        "start_ns",
+    ];
+    let with = |extra: &[&'static str]| {
+        let mut k: Vec<&str> = every.iter().chain(extra).copied().collect();
+        k.sort();
+        k
+    };
+
+    let run = first_gesture(&p, &[]);
+    assert_eq!(keys(&run), with(&["latency_ms"]), "{run}");
+
+    let out = succeed(
+        p.command("airglyph")
+            .args(["demo", "--symbols", "3", "--truth", "--json"]),
+    );
+    let lines: Vec<serde_json::Value> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let (summary, gestures) = lines.split_last().unwrap();
+    assert_eq!(summary["event"], "summary", "{summary}");
+    assert_eq!(gestures[0]["label"], "3", "{}", gestures[0]);
+    assert_eq!(gestures[0]["drawn"], "3", "{}", gestures[0]);
+    assert_eq!(keys(&gestures[0]), with(&["drawn", "latency_ms"]));
+
+    let tmp = tempfile::tempdir().unwrap();
+    let rec = tmp.path().join("rec");
+    succeed(
+        p.command("airglyph")
+            .args([
+                "synth",
+                "--motion",
+                "draw:3",
+                "--resolution",
+                "320x240",
+                "--out",
+            ])
+            .arg(&rec),
+    );
+    let out = succeed(
+        p.command("airglyph")
+            .args(["spot", "--truth", "--json"])
+            .arg(&rec),
+    );
+    let first: serde_json::Value =
+        serde_json::from_str(String::from_utf8_lossy(&out.stdout).lines().next().unwrap()).unwrap();
+    assert_eq!(keys(&first), with(&["drawn"]), "{first}");
+    assert_eq!(
+        (&first["label"], &first["drawn"]),
+        (&"3".into(), &"3".into())
+    );
 }

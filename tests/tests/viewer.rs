@@ -265,10 +265,7 @@ fn the_page_shows_the_skeleton_and_a_recognized_gesture() {
         .expect("a gesture is spotted within a minute");
     let label = event["label"].as_str().unwrap().to_owned();
     let score = format!("{:.2}", event["score"].as_f64().unwrap());
-    let frames = format!(
-        "frames {}–{}",
-        event["start_sequence"], event["end_sequence"]
-    );
+    let frames = format!("frames {}–{}", event["start_frame"], event["end_frame"]);
     let deadline = Instant::now() + Duration::from_secs(10);
     let seen = loop {
         let s = state(addr);

@@ -26,7 +26,9 @@ pub struct Args {
     /// Where frames come from: synthetic, recording:DIR, v4l2:/dev/videoN, openni2 (the first device) or openni2:URI.
     #[arg(long, default_value = "synthetic")]
     pub source: SourceSpec,
-    /// Print one JSON object a line instead of plain text.
+    /// Print each gesture as one JSON object a line instead of plain text:
+    /// {"event":"gesture","label","score","start_frame","end_frame","hand","start_ns",
+    /// "end_ns","latency_ms"} (README, "JSON output").
     #[arg(long)]
     pub json: bool,
     /// The stages to start, comma-separated (e.g. `capture,pose` to profile pose alone).

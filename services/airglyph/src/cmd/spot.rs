@@ -1,6 +1,7 @@
 //! `airglyph spot DIR`: the gesture stage's spotter over a recording, offline.
 
 use crate::cmd::demo::drawn_for;
+use crate::cmd::gesture_json::GestureJson;
 use crate::interrupt::Interrupted;
 use airglyph_core::recording::Recording;
 use airglyph_core::{Joint, Skeleton};
@@ -29,7 +30,9 @@ pub struct Args {
     /// The gesture model (default: $AIRGLYPH_MODEL, else the built-in 36-symbol model).
     #[arg(long)]
     model: Option<PathBuf>,
-    /// One JSON object a line.
+    /// One JSON object a line: each gesture ({"event":"gesture","label":…; README, "JSON
+    /// output"), with --alone each drawn symbol's label alone ({"event":"alone",…}), and
+    /// when the drawn symbols are known the summary ({"event":"summary",…}).
     #[arg(long)]
     json: bool,
     /// Spotter settings as JSON (fields of SpotterConfig), e.g. '{"hold_seconds":1.0}'.
@@ -187,11 +190,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         let drawn = drawn.map(|d| truth[d].label.as_str());
         if args.json {
-            println!(
-                "{}",
-                serde_json::json!({"label": g.label, "score": g.score, "start_frame": g.start_seq,
-                    "end_frame": g.end_seq, "drawn": drawn})
-            );
+            let line = GestureJson::spotted(&g);
+            // Beside the symbol drawn there when the recording says what was drawn.
+            let line = if truth.is_empty() {
+                line
+            } else {
+                line.drawn(drawn)
+            };
+            println!("{}", line.line());
         } else {
             println!(
                 "frames {}–{}: {} (score {:.2}){}",
@@ -225,8 +231,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             if args.json {
                 println!(
                     "{}",
-                    serde_json::json!({"drawn": t.label, "alone": label, "score": c.score,
-                        "start_frame": t.start_frame, "end_frame": t.end_frame})
+                    serde_json::json!({"event": "alone", "drawn": t.label, "label": label,
+                        "score": c.score, "start_frame": t.start_frame, "end_frame": t.end_frame})
                 );
             } else {
                 println!(
@@ -242,8 +248,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .zip(&recognized)
             .filter(|(t, r)| r.as_deref() == Some(t.label.as_str()))
             .count();
-        let summary =
-            serde_json::json!({"drawn": truth.len(), "correct": correct, "spotted": spotted});
+        let summary = serde_json::json!({"event": "summary", "drawn": truth.len(),
+            "correct": correct, "spotted": spotted});
         if args.json {
             println!("{summary}");
         } else {
