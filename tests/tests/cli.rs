@@ -2,6 +2,7 @@
 //! spaces, and what it prints.
 
 use airglyph_system_tests::{fail, json_lines, one_at_a_time, stop, succeed, Isolated};
+use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
 use std::process::Stdio;
 use std::time::Duration;
@@ -151,4 +152,45 @@ fn a_gesture_has_the_same_keys_from_run_demo_and_spot() {
         (&first["label"], &first["drawn"]),
         (&"3".into(), &"3".into())
     );
+}
+
+#[test]
+fn top_into_a_pipe_is_a_filter_and_ends_quietly_when_its_reader_goes() {
+    let _one = one_at_a_time();
+    let p = Isolated::new();
+    let supervisor = p
+        .command("airglyph")
+        .args(["run", "--source", "synthetic:poses"])
+        .stdout(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut top = p
+        .command("airglyph")
+        .arg("top")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut rows = BufReader::new(top.stdout.take().unwrap()).lines();
+    let mut seen = Vec::new();
+    // The header once, then rows, until every stage has shown a frame rate.
+    while !["capture", "pose", "gesture"].iter().all(|s| {
+        seen.iter()
+            .any(|r: &String| r.starts_with(s) && !r.contains("not running"))
+    }) {
+        seen.push(rows.next().expect("a row").unwrap());
+    }
+    assert!(seen[0].starts_with("stage"), "{seen:?}");
+    assert_eq!(seen.iter().filter(|r| r.starts_with("stage")).count(), 1);
+    assert!(
+        !seen.iter().any(|r| r.contains('\x1b')),
+        "no terminal codes: {seen:?}"
+    );
+    // `airglyph top | head`: the reader goes; top ends by itself, quietly.
+    drop(rows);
+    let status = top.wait().unwrap();
+    let mut err = String::new();
+    top.stderr.take().unwrap().read_to_string(&mut err).unwrap();
+    assert!(status.success() && err.is_empty(), "{status}: {err}");
+    stop(supervisor);
 }
