@@ -194,3 +194,70 @@ fn top_into_a_pipe_is_a_filter_and_ends_quietly_when_its_reader_goes() {
     assert!(status.success() && err.is_empty(), "{status}: {err}");
     stop(supervisor);
 }
+
+/// What `airglyph run` logs capturing three frames, with stderr a pipe or, through
+/// script(1), a terminal.
+fn logs(p: &Isolated, terminal: bool, no_color: Option<&str>) -> String {
+    let args = [
+        "run",
+        "--stages",
+        "capture",
+        "--source",
+        "synthetic",
+        "--frames",
+        "3",
+    ];
+    let mut cmd = if terminal {
+        let exe = airglyph_system_tests::binary_path("airglyph");
+        let mut script = std::process::Command::new("script");
+        script
+            .args(["--quiet", "--return", "--command"])
+            .arg(format!("{} {}", exe.display(), args.join(" ")))
+            .arg("/dev/null");
+        script
+    } else {
+        let mut cmd = p.command("airglyph");
+        cmd.args(args);
+        cmd
+    };
+    // The pipeline's environment, in case the command above is script's.
+    cmd.env("AIRGLYPH_IPC_ROOT", format!("{}/", p.root.display()))
+        .env("AIRGLYPH_IPC_PREFIX", &p.prefix)
+        .env("RUST_LOG", "info")
+        .env_remove("NO_COLOR");
+    if let Some(v) = no_color {
+        cmd.env("NO_COLOR", v);
+    }
+    let out = succeed(&mut cmd);
+    let mut text = String::from_utf8_lossy(&out.stdout).into_owned();
+    text += &String::from_utf8_lossy(&out.stderr);
+    assert!(text.contains("capturing"), "{text}");
+    text
+}
+
+#[test]
+fn logs_are_coloured_only_on_a_terminal_and_never_under_no_color() {
+    let p = Isolated::new();
+    assert!(
+        !logs(&p, false, None).contains('\x1b'),
+        "no colour into a pipe"
+    );
+    if std::process::Command::new("script")
+        .arg("--version")
+        .output()
+        .is_err()
+    {
+        eprintln!("skipping the terminal half: no script(1) (util-linux) here");
+        return;
+    }
+    assert!(
+        logs(&p, true, None).contains('\x1b'),
+        "colours on a terminal"
+    );
+    assert!(
+        !logs(&p, true, Some("1")).contains('\x1b'),
+        "none under NO_COLOR"
+    );
+    // An empty NO_COLOR is no request (no-color.org).
+    assert!(logs(&p, true, Some("")).contains('\x1b'));
+}
