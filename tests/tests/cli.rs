@@ -261,3 +261,26 @@ fn logs_are_coloured_only_on_a_terminal_and_never_under_no_color() {
     // An empty NO_COLOR is no request (no-color.org).
     assert!(logs(&p, true, Some("")).contains('\x1b'));
 }
+
+#[test]
+fn version_names_the_commit_and_help_the_environment() {
+    let p = Isolated::new();
+    let out = succeed(p.command("airglyph").arg("--version"));
+    let version = String::from_utf8_lossy(&out.stdout);
+    let commit = std::process::Command::new("git")
+        .args(["log", "-1", "--format=%h"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_owned());
+    match commit {
+        Some(commit) => assert!(version.contains(&format!("({commit} ")), "{version}"),
+        None => eprintln!("not a git checkout: {version}"),
+    }
+    let out = succeed(p.command("airglyph").arg("--help"));
+    let help = String::from_utf8_lossy(&out.stdout);
+    for var in ["RUST_LOG", "NO_COLOR", "AIRGLYPH_MODEL", "AIRGLYPH_ASSETS"] {
+        assert!(help.contains(var), "{var}: {help}");
+    }
+}

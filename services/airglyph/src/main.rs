@@ -8,9 +8,30 @@ mod stage;
 
 use clap::{Parser, Subcommand};
 
+/// `airglyph --version`: the package's version and the commit it was built from.
+const VERSION: &str = concat!(
+    env!("CARGO_PKG_VERSION"),
+    " (",
+    env!("AIRGLYPH_COMMIT"),
+    ")"
+);
+
+/// What the environment changes, for `--help`.
+const ENVIRONMENT: &str = "\
+Environment:
+  RUST_LOG          what is logged to stderr: a level or a filter (default info;
+                    e.g. RUST_LOG=debug, RUST_LOG=warn,airglyph::cmd::run=debug)
+  NO_COLOR          no colours in the logs (there are none off a terminal anyway)
+  AIRGLYPH_MODEL    the gesture model when no --model is given (default: built in)
+  AIRGLYPH_ASSETS   the MakeHuman body (default: ~/.cache/airglyph/assets, or
+                    $XDG_CACHE_HOME/airglyph/assets; `airglyph fetch-assets`)
+  AIRGLYPH_IPC_ROOT, AIRGLYPH_IPC_PREFIX, AIRGLYPH_CONFIG
+                    which pipeline to join (several run side by side; a TOML file
+                    with [ipc] root and prefix)";
+
 /// Recognize gestures drawn in the air in front of a depth camera.
 #[derive(Parser)]
-#[command(name = "airglyph", version)]
+#[command(name = "airglyph", version = VERSION, after_help = ENVIRONMENT)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
