@@ -284,3 +284,41 @@ fn version_names_the_commit_and_help_the_environment() {
         assert!(help.contains(var), "{var}: {help}");
     }
 }
+
+#[test]
+fn completions_and_man_pages_come_from_the_command_definitions() {
+    let p = Isolated::new();
+    for shell in ["bash", "zsh", "fish"] {
+        let out = succeed(p.command("airglyph").args(["completions", shell]));
+        let script = String::from_utf8_lossy(&out.stdout);
+        for word in ["fetch-assets", "eval-spotting", "--stage-args"] {
+            assert!(script.contains(word), "{shell}: {word}");
+        }
+    }
+    let out = succeed(p.command("airglyph").arg("man"));
+    let page = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        page.starts_with(".ie") && page.contains(".TH airglyph 1"),
+        "{page}"
+    );
+    assert!(page.contains("RUST_LOG"), "the environment: {page}");
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("man1");
+    succeed(p.command("airglyph").args(["man", "--dir"]).arg(&dir));
+    let pages: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    for page in [
+        "airglyph.1",
+        "airglyph-demo.1",
+        "airglyph-run.1",
+        "airglyph-top.1",
+    ] {
+        assert!(pages.iter().any(|p| p == page), "{page} in {pages:?}");
+    }
+    assert!(
+        !pages.iter().any(|p| p.starts_with("airglyph-stage")),
+        "the stages are not for the manual: {pages:?}"
+    );
+}

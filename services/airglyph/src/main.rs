@@ -6,7 +6,7 @@ mod cmd;
 mod interrupt;
 mod stage;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, Parser, Subcommand};
 
 /// `airglyph --version`: the package's version and the commit it was built from.
 const VERSION: &str = concat!(
@@ -70,6 +70,8 @@ enum Command {
     Pose(cmd::pose::Args),
     /// Pose error against a recording's ground truth (e_m, e_j, within 10 cm, mAP, fps).
     EvalPose(cmd::eval_pose::Args),
+    Completions(cmd::completions::Args),
+    Man(cmd::man::Args),
     /// Run one stage's process (what `airglyph run` starts; by hand, to run a stage alone).
     #[command(subcommand, hide = true)]
     Stage(stage::StageCommand),
@@ -95,6 +97,8 @@ impl Command {
         matches!(
             self,
             Command::Spot(_)
+                | Command::Completions(_)
+                | Command::Man(_)
                 | Command::Devices(_)
                 | Command::Synth(_)
                 | Command::Train(_)
@@ -133,6 +137,8 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Command::EvalSpotting(a) => cmd::eval_spotting::run(a),
         Command::Pose(a) => cmd::pose::run(a),
         Command::EvalPose(a) => cmd::eval_pose::run(a),
+        Command::Completions(a) => cmd::completions::run(a, Cli::command()),
+        Command::Man(a) => cmd::man::run(a, Cli::command()),
         Command::Stage(s) => s.run(),
     }
 }

@@ -1,6 +1,7 @@
 //! One module a subcommand: its clap `Args` and a `run(args) -> anyhow::Result<()>`.
 
 pub mod collect;
+pub mod completions;
 pub mod demo;
 pub mod devices;
 pub mod eval_gestures;
@@ -8,6 +9,7 @@ pub mod eval_pose;
 pub mod eval_spotting;
 pub mod fetch_assets;
 pub mod gesture_json;
+pub mod man;
 pub mod pose;
 pub mod profile;
 pub mod record;
