@@ -120,6 +120,31 @@ fn eval_spotting_accounts_for_every_drawn_symbol_by_label() {
 }
 
 #[test]
+fn eval_spotting_draws_as_many_gestures_as_asked_for_from_fewer_samples() {
+    let p = Isolated::new();
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("glyphs.jsonl");
+    write_glyphs(&data, "01234", 1);
+    let out = succeed(
+        p.command("airglyph")
+            .args(["eval-spotting", "--json", "--model"])
+            .arg(shipped_model())
+            .arg("--data")
+            .arg(&data)
+            .args(["--gestures", "12", "--random-seconds", "5"]),
+    );
+    let s = &json_lines(&out.stdout)[0];
+    assert_eq!(s["gestures"], 12, "{s}");
+    let drawn: u64 = s["by_label"]
+        .as_object()
+        .unwrap()
+        .values()
+        .map(|v| v["drawn"].as_u64().unwrap())
+        .sum();
+    assert_eq!(drawn, 12, "{s}");
+}
+
+#[test]
 fn eval_spotting_refuses_data_without_a_label_the_model_knows() {
     let p = Isolated::new();
     let tmp = tempfile::tempdir().unwrap();

@@ -336,7 +336,7 @@ fn eval_spotting_writes_and_prints_nothing() {
             .arg("--dump")
             .arg(&dump),
     );
-    eval.says("gestures in");
+    eval.says("spotting 2000 gestures");
     let (status, printed, said) = eval.terminate();
     assert_eq!(status.code(), Some(STOPPED), "{said}");
     assert!(printed.is_empty(), "{printed:?}");

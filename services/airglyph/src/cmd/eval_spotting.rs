@@ -50,7 +50,8 @@ pub struct Args {
     /// One JSON object a line.
     #[arg(long)]
     pub json: bool,
-    /// Gestures in all streams together (samples drawn at random).
+    /// Gestures in all streams together: the samples in a random order, each again (in
+    /// another order) when there are fewer samples than this.
     #[arg(long, default_value_t = 500)]
     pub gestures: usize,
     /// Gestures per stream.
@@ -314,19 +315,18 @@ fn evaluate(args: &Args) -> anyhow::Result<Evaluation> {
         );
     }
     let samples = load_many(&args.data)?;
-    let mut known: Vec<&Sample> = samples
+    let pool: Vec<&Sample> = samples
         .iter()
         .filter(|s| model.label_index(&s.label).is_some())
         .collect();
-    if known.is_empty() {
+    if pool.is_empty() {
         bail!(
             "{}: no sample has a label the model knows",
             args.data[0].display()
         );
     }
     let mut rng = ChaCha8Rng::seed_from_u64(args.seed);
-    known.shuffle(&mut rng);
-    known.truncate(args.gestures.max(1));
+    let known = draw(&pool, args.gestures.max(1), &mut rng);
     if !(0.0..=1.0).contains(&args.pause_prob) {
         bail!("--pause-prob {} is not in [0, 1]", args.pause_prob);
     }
@@ -429,6 +429,18 @@ fn evaluate(args: &Args) -> anyhow::Result<Evaluation> {
         plotted,
         alarms,
     })
+}
+
+/// `count` samples of `pool` in a random order: each once, and again in another order
+/// while more are wanted (the first `pool.len()` are as a plain shuffle would have them).
+fn draw<'a>(pool: &[&'a Sample], count: usize, rng: &mut ChaCha8Rng) -> Vec<&'a Sample> {
+    let mut out = Vec::with_capacity(count);
+    while out.len() < count {
+        let mut round = pool.to_vec();
+        round.shuffle(rng);
+        out.extend(round.into_iter().take(count - out.len()));
+    }
+    out
 }
 
 /// What one stream gave.
