@@ -15,12 +15,19 @@ fn main() {
         "cargo:rustc-env=AIRGLYPH_COMMIT={}",
         commit.as_deref().unwrap_or("commit unknown")
     );
-    // Run again when HEAD moves: HEAD itself, the branch it names, the packed refs.
+    // Run again when HEAD moves: HEAD, its log (written at every move), the branch it
+    // names and the packed refs. Only files that exist: cargo reruns a build script
+    // that watches a missing file at every build, and a fresh clone has no loose ref.
     println!("cargo:rerun-if-changed=build.rs");
     let branch = git(&["symbolic-ref", "-q", "HEAD"]);
-    for name in ["HEAD", "packed-refs"].into_iter().chain(branch.as_deref()) {
+    let watched = ["HEAD", "logs/HEAD", "packed-refs"]
+        .into_iter()
+        .chain(branch.as_deref());
+    for name in watched {
         if let Some(path) = git(&["rev-parse", "--git-path", name]) {
-            println!("cargo:rerun-if-changed={path}");
+            if std::path::Path::new(&path).exists() {
+                println!("cargo:rerun-if-changed={path}");
+            }
         }
     }
 }
