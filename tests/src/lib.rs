@@ -142,6 +142,23 @@ pub fn ramp(width: u32, height: u32, frame: usize) -> DepthImage {
     DepthImage::new(width, height, px).unwrap()
 }
 
+/// Writes a 320×240 synthetic recording of the person doing `motion` (`airglyph synth
+/// --motion`: `draw:SYMBOLS`, `pose:NAME`, …) into `out`, ground truth and all.
+pub fn synth(p: &Isolated, motion: &str, out: &Path) {
+    succeed(
+        p.command("airglyph")
+            .args([
+                "synth",
+                "--motion",
+                motion,
+                "--resolution",
+                "320x240",
+                "--out",
+            ])
+            .arg(out),
+    );
+}
+
 /// Trajectory JSONL: each label's built-in glyph `copies` times, each copy a little
 /// slanted (another "writer"), so the samples are not all one trajectory.
 pub fn write_glyphs(path: &Path, labels: &str, copies: usize) {

@@ -1,7 +1,7 @@
 //! The command line itself: what it refuses and how it says so, arguments that carry
 //! spaces, and what it prints.
 
-use airglyph_system_tests::{fail, json_lines, one_at_a_time, stop, succeed, Isolated};
+use airglyph_system_tests::{fail, json_lines, one_at_a_time, stop, succeed, synth, Isolated};
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
 use std::process::Stdio;
@@ -128,18 +128,7 @@ fn a_gesture_has_the_same_keys_from_run_demo_and_spot() {
 
     let tmp = tempfile::tempdir().unwrap();
     let rec = tmp.path().join("rec");
-    succeed(
-        p.command("airglyph")
-            .args([
-                "synth",
-                "--motion",
-                "draw:3",
-                "--resolution",
-                "320x240",
-                "--out",
-            ])
-            .arg(&rec),
-    );
+    synth(&p, "draw:3", &rec);
     let out = succeed(
         p.command("airglyph")
             .args(["spot", "--truth", "--json"])

@@ -3,7 +3,7 @@
 //! files a command looks for by default are found at run time, where the environment
 //! says, never at a path fixed when it was built.
 
-use airglyph_system_tests::{binary_path, fail, succeed, Isolated};
+use airglyph_system_tests::{binary_path, fail, succeed, synth, Isolated};
 use std::path::Path;
 
 /// An empty home: no caches, no data directories, nothing of the build tree.
@@ -50,18 +50,7 @@ fn airglyph_model_names_the_model_unless_model_does() {
     let p = Isolated::new();
     let tmp = tempfile::tempdir().unwrap();
     let rec = tmp.path().join("rec");
-    succeed(
-        p.command("airglyph")
-            .args([
-                "synth",
-                "--motion",
-                "draw:1",
-                "--resolution",
-                "320x240",
-                "--out",
-            ])
-            .arg(&rec),
-    );
+    synth(&p, "draw:1", &rec);
     let missing = tmp.path().join("no-such-model.json");
     let mut spot = p.command("airglyph");
     spot.env("AIRGLYPH_MODEL", &missing)

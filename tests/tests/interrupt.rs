@@ -4,7 +4,7 @@
 //! its own in collect.rs.)
 
 use airglyph_core::recording::Recording;
-use airglyph_system_tests::{one_at_a_time, signal, succeed, write_glyphs, Isolated};
+use airglyph_system_tests::{one_at_a_time, signal, synth, write_glyphs, Isolated};
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 use std::process::{Child, ExitStatus, Stdio};
@@ -122,19 +122,7 @@ fn drawn_digits() -> &'static Path {
     &DIR.get_or_init(|| {
         let tmp = tempfile::tempdir().unwrap();
         let rec = tmp.path().join("digits");
-        succeed(
-            Isolated::new()
-                .command("airglyph")
-                .args([
-                    "synth",
-                    "--motion",
-                    "draw:01234567",
-                    "--resolution",
-                    "320x240",
-                ])
-                .arg("--out")
-                .arg(&rec),
-        );
+        synth(&Isolated::new(), "draw:01234567", &rec);
         (tmp, rec)
     })
     .1
