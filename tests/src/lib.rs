@@ -42,10 +42,22 @@ impl Isolated {
 
     /// A command for one of the workspace's binaries, joined to this pipeline.
     pub fn command(&self, binary: &str) -> Command {
-        let mut cmd = Command::new(binary_path(binary));
+        self.command_at(&binary_path(binary))
+    }
+
+    /// A command for the executable at `program`, joined to this pipeline.
+    pub fn command_at(&self, program: &Path) -> Command {
+        let mut cmd = Command::new(program);
         cmd.env("AIRGLYPH_IPC_ROOT", format!("{}/", self.root.display()))
             .env("AIRGLYPH_IPC_PREFIX", &self.prefix)
             .env("RUST_LOG", "warn");
+        cmd
+    }
+
+    /// A command for one stage's process (`airglyph stage NAME`), joined to this pipeline.
+    pub fn stage(&self, name: &str) -> Command {
+        let mut cmd = self.command("airglyph");
+        cmd.args(["stage", name]);
         cmd
     }
 
@@ -94,7 +106,7 @@ pub fn binary_path(name: &str) -> PathBuf {
     let path = dir.join(name);
     assert!(
         path.exists(),
-        "{} is not built: run `cargo build --workspace` (scripts/test does)",
+        "{} is not built: run `cargo build --workspace --bins` (scripts/test does)",
         path.display()
     );
     path
@@ -130,14 +142,55 @@ pub fn ramp(width: u32, height: u32, frame: usize) -> DepthImage {
     DepthImage::new(width, height, px).unwrap()
 }
 
+/// Writes a 320×240 synthetic recording of the person doing `motion` (`airglyph synth
+/// --motion`: `draw:SYMBOLS`, `pose:NAME`, …) into `out`, ground truth and all.
+pub fn synth(p: &Isolated, motion: &str, out: &Path) {
+    succeed(
+        p.command("airglyph")
+            .args([
+                "synth",
+                "--motion",
+                motion,
+                "--resolution",
+                "320x240",
+                "--out",
+            ])
+            .arg(out),
+    );
+}
+
+/// Trajectory JSONL: each label's built-in glyph `copies` times, each copy a little
+/// slanted (another "writer"), so the samples are not all one trajectory.
+pub fn write_glyphs(path: &Path, labels: &str, copies: usize) {
+    let mut lines = Vec::new();
+    for c in labels.chars() {
+        let glyph = airglyph_synth::glyphs::template(c).expect("a built-in glyph");
+        for k in 0..copies {
+            let slant = 0.05 * k as f32;
+            let strokes: Vec<Vec<[f32; 2]>> = glyph
+                .strokes
+                .iter()
+                .map(|s| s.iter().map(|p| [p.x + slant * p.y, p.y]).collect())
+                .collect();
+            lines.push(
+                serde_json::json!({"label": c.to_string(), "subject": format!("w{k}"),
+                                   "strokes": strokes})
+                .to_string(),
+            );
+        }
+    }
+    std::fs::write(path, lines.join("\n") + "\n").unwrap();
+}
+
 /// Sends SIGTERM (or another signal) to a child.
 pub fn signal(child: &Child, sig: i32) {
     // SAFETY: kill(2) on a child we have not reaped.
     unsafe { libc::kill(child.id() as i32, sig) };
 }
 
-/// The pids of a process's direct children whose command name starts with `name`.
-pub fn children_named(parent: u32, name: &str) -> Vec<u32> {
+/// The pids of a process's direct children that run stage `name` (`airglyph stage
+/// NAME …`, told by their command line: every stage's process is `airglyph`).
+pub fn stage_children(parent: u32, name: &str) -> Vec<u32> {
     let mut out = Vec::new();
     for entry in std::fs::read_dir("/proc").into_iter().flatten().flatten() {
         let Ok(pid) = entry.file_name().to_string_lossy().parse::<u32>() else {
@@ -147,17 +200,22 @@ pub fn children_named(parent: u32, name: &str) -> Vec<u32> {
             continue;
         };
         // pid (comm) state ppid ...
-        let (Some(open), Some(close)) = (stat.find('('), stat.rfind(')')) else {
+        let Some(close) = stat.rfind(')') else {
             continue;
         };
-        let comm = &stat[open + 1..close];
         let ppid = stat[close + 2..]
             .split(' ')
             .nth(1)
             .and_then(|p| p.parse::<u32>().ok());
-        // comm is cut to 15 bytes by the kernel; a child between fork and exec still
-        // carries its parent's name.
-        if ppid == Some(parent) && comm == &name[..name.len().min(15)] {
+        if ppid != Some(parent) {
+            continue;
+        }
+        // A child between fork and exec still carries its parent's command line.
+        let Ok(cmdline) = std::fs::read(format!("/proc/{pid}/cmdline")) else {
+            continue;
+        };
+        let args: Vec<&[u8]> = cmdline.split(|&b| b == 0).skip(1).take(2).collect();
+        if args == [b"stage".as_slice(), name.as_bytes()] {
             out.push(pid);
         }
     }

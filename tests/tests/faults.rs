@@ -2,7 +2,7 @@
 //! a publisher of malformed frames. The pipeline must keep running and leave no shared
 //! memory behind.
 
-use airglyph_system_tests::{children_named, one_at_a_time, shut_down, top, Isolated};
+use airglyph_system_tests::{one_at_a_time, shut_down, stage_children, top, Isolated};
 use std::process::{Child, Stdio};
 use std::time::{Duration, Instant};
 
@@ -35,7 +35,7 @@ fn start_pipeline(p: &Isolated, extra: &[&str]) -> Child {
 }
 
 fn pid_of(supervisor: &Child, stage: &str) -> Option<u32> {
-    let pids = children_named(supervisor.id(), &format!("airglyph-{stage}"));
+    let pids = stage_children(supervisor.id(), stage);
     assert!(pids.len() <= 1, "two {stage} stages at once: {pids:?}");
     pids.first().copied()
 }

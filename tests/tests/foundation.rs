@@ -2,7 +2,7 @@
 
 use airglyph_core::recording::Recording;
 use airglyph_system_tests::{
-    children_named, ramp, start_probe, stop, write_ramp_recording, Isolated,
+    ramp, stage_children, start_probe, stop, write_ramp_recording, Isolated,
 };
 use std::process::Stdio;
 use std::time::{Duration, Instant};
@@ -27,7 +27,7 @@ fn capture_replays_a_recording_to_another_process_bit_exact_in_order() {
         ],
     );
     let capture = p
-        .command("airglyph-capture")
+        .stage("capture")
         .args(["--source", &format!("recording:{}", src.display())])
         .status()
         .unwrap();
@@ -113,7 +113,7 @@ fn a_killed_capture_stage_is_restarted_and_leaves_no_shared_memory() {
     let first = rx
         .recv_timeout(Duration::from_secs(10))
         .expect("frames flow");
-    let captures = children_named(supervisor.id(), "airglyph-capture");
+    let captures = stage_children(supervisor.id(), "capture");
     assert_eq!(captures.len(), 1, "one capture child: {captures:?}");
     let before_kill = p.shm_files();
     assert!(!before_kill.is_empty());
@@ -133,7 +133,7 @@ fn a_killed_capture_stage_is_restarted_and_leaves_no_shared_memory() {
     let gap = killed_at.elapsed();
     assert!(gap < Duration::from_secs(2), "frames again after {gap:?}");
     assert_eq!(restarted["sequence"], 0, "a new session counts from 0");
-    let now = children_named(supervisor.id(), "airglyph-capture");
+    let now = stage_children(supervisor.id(), "capture");
     assert_eq!(now.len(), 1);
     assert_ne!(now[0], captures[0]);
     // The dead publisher's data segment is gone while the pipeline runs on.
@@ -200,7 +200,7 @@ fn a_corrupt_frame_is_skipped_and_counted_and_the_stream_goes_on() {
 
     let (probe, rx) = start_probe(&p, &["--frames", "9"]);
     let out = p
-        .command("airglyph-capture")
+        .stage("capture")
         .args(["--source", &format!("recording:{}", src.display())])
         .stderr(Stdio::piped())
         .output()
@@ -221,7 +221,7 @@ fn bad_sources_fail_with_a_clear_message() {
     let p = Isolated::new();
     let tmp = tempfile::tempdir().unwrap();
     let out = p
-        .command("airglyph-capture")
+        .stage("capture")
         .args(["--source", &format!("recording:{}", tmp.path().display())])
         .output()
         .unwrap();
@@ -232,7 +232,7 @@ fn bad_sources_fail_with_a_clear_message() {
         "{err}"
     );
     let out = p
-        .command("airglyph-capture")
+        .stage("capture")
         .args(["--source", "kinect"])
         .output()
         .unwrap();
@@ -255,7 +255,7 @@ fn a_pipeline_left_running_by_a_failed_test_goes_with_its_isolation() {
     let stages = loop {
         let found: Vec<u32> = ["capture", "pose", "gesture"]
             .iter()
-            .flat_map(|s| children_named(supervisor.id(), &format!("airglyph-{s}")))
+            .flat_map(|s| stage_children(supervisor.id(), s))
             .collect();
         if found.len() == 3 {
             break found;

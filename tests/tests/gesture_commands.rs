@@ -2,35 +2,11 @@
 //! with the shipped model: `airglyph eval-gestures --json --plots` and
 //! `airglyph eval-spotting --json` (and its summary in words).
 
-use airglyph_synth::glyphs::template;
-use airglyph_system_tests::{fail, succeed, Isolated};
+use airglyph_system_tests::{fail, succeed, write_glyphs, Isolated};
 use std::path::{Path, PathBuf};
 
 fn shipped_model() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../models/unipen-36.json")
-}
-
-/// Trajectory JSONL: each label's built-in glyph `copies` times, each copy a little
-/// slanted (another "writer"), so the samples are not all one trajectory.
-fn write_glyphs(path: &Path, labels: &str, copies: usize) {
-    let mut lines = Vec::new();
-    for c in labels.chars() {
-        let glyph = template(c).expect("a built-in glyph");
-        for k in 0..copies {
-            let slant = 0.05 * k as f32;
-            let strokes: Vec<Vec<[f32; 2]>> = glyph
-                .strokes
-                .iter()
-                .map(|s| s.iter().map(|p| [p.x + slant * p.y, p.y]).collect())
-                .collect();
-            lines.push(
-                serde_json::json!({"label": c.to_string(), "subject": format!("w{k}"),
-                                   "strokes": strokes})
-                .to_string(),
-            );
-        }
-    }
-    std::fs::write(path, lines.join("\n") + "\n").unwrap();
 }
 
 fn json_lines(stdout: &[u8]) -> Vec<serde_json::Value> {
@@ -141,6 +117,31 @@ fn eval_spotting_accounts_for_every_drawn_symbol_by_label() {
         "{text}"
     );
     assert!(text.contains("found least often: \""), "{text}");
+}
+
+#[test]
+fn eval_spotting_draws_as_many_gestures_as_asked_for_from_fewer_samples() {
+    let p = Isolated::new();
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("glyphs.jsonl");
+    write_glyphs(&data, "01234", 1);
+    let out = succeed(
+        p.command("airglyph")
+            .args(["eval-spotting", "--json", "--model"])
+            .arg(shipped_model())
+            .arg("--data")
+            .arg(&data)
+            .args(["--gestures", "12", "--random-seconds", "5"]),
+    );
+    let s = &json_lines(&out.stdout)[0];
+    assert_eq!(s["gestures"], 12, "{s}");
+    let drawn: u64 = s["by_label"]
+        .as_object()
+        .unwrap()
+        .values()
+        .map(|v| v["drawn"].as_u64().unwrap())
+        .sum();
+    assert_eq!(drawn, 12, "{s}");
 }
 
 #[test]

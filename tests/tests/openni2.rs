@@ -36,7 +36,7 @@ fn capture_streams_60_frames_of_the_openni2_dummy_device_to_another_process() {
     let got = tmp.path().join("got");
     let (probe, rx) = start_probe(&p, &["--out", got.to_str().unwrap(), "--idle", "3"]);
     succeed(
-        p.command("airglyph-capture")
+        p.stage("capture")
             .args(["--source", "openni2:Dummy", "--frames", "60"]),
     );
     assert!(wait_exit(probe, 15).success());
@@ -124,7 +124,7 @@ fn an_oni_recorded_from_the_dummy_device_plays_back_through_capture_with_every_f
     // cannot keep up with --fast, and the pipeline drops frames rather than queue them).
     let (probe, rx) = start_probe(&p, &["--out", got.to_str().unwrap(), "--idle", "3"]);
     let capture = p
-        .command("airglyph-capture")
+        .stage("capture")
         .arg("--source")
         .arg(format!("openni2:{}", oni.display()))
         .output()
@@ -234,7 +234,7 @@ fn devices_lists_both_backends_and_cameras_that_are_not_there_fail_clearly() {
         ),
     ] {
         let out = p
-            .command("airglyph-capture")
+            .stage("capture")
             .args(["--source", source])
             .output()
             .unwrap();

@@ -42,10 +42,12 @@ fn pose_and_eval_pose_report_every_frame_against_the_truth() {
         }
     }
 
-    // The figures against joints.csv, and the seed's two plots.
+    // The figures against joints.csv, and the seed's two plots, drawn with the
+    // built-in font on a machine whose fontconfig knows no font at all.
     let plots = tmp.path().join("plots");
     let out = succeed(
         p.command("airglyph")
+            .env("FONTCONFIG_FILE", "/dev/null")
             .args(["eval-pose", "--json", "--plots"])
             .arg(&plots)
             .arg(&rec),
@@ -75,6 +77,25 @@ fn pose_and_eval_pose_report_every_frame_against_the_truth() {
         let im = image::open(plots.join(name)).unwrap();
         assert_eq!((im.width(), im.height()), size, "{name}");
     }
+
+    // A picture that cannot be written loses none of the figures, which come first, and
+    // leaves no part of itself.
+    let blocked = tmp.path().join("blocked");
+    std::fs::create_dir_all(blocked.join("error_per_frame.png")).unwrap();
+    let out = p
+        .command("airglyph")
+        .args(["eval-pose", "--json", "--plots"])
+        .arg(&blocked)
+        .arg(&rec)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let again: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(again["frames"], frames, "{again}");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("error_per_frame.png"), "{err}");
+    let left: Vec<_> = std::fs::read_dir(&blocked).unwrap().flatten().collect();
+    assert_eq!(left.len(), 1, "only the directory in the way: {left:?}");
 
     // Without ground truth there is nothing to evaluate against, and it says so.
     std::fs::remove_file(rec.join("joints.csv")).unwrap();

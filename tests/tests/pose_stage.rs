@@ -16,11 +16,11 @@ fn skeletons_carry_their_frames_sequence_and_timestamps() {
         .unwrap();
     let mut lines = BufReader::new(probe.stdout.take().unwrap()).lines();
     assert!(lines.next().unwrap().unwrap().contains("ready"));
-    let mut pose = p.command("airglyph-pose").spawn().unwrap();
+    let mut pose = p.stage("pose").spawn().unwrap();
     std::thread::sleep(Duration::from_millis(300));
     let frames = 45u64;
     let capture = p
-        .command("airglyph-capture")
+        .stage("capture")
         .args([
             "--source",
             "synthetic:pose:neutral",

@@ -3,7 +3,7 @@
 //! not slow capture, and a viewer that cannot start while the pipeline runs on.
 
 use airglyph_system_tests::{
-    children_named, json_lines, one_at_a_time, shut_down, succeed, top, Isolated,
+    json_lines, one_at_a_time, shut_down, stage_children, succeed, top, Isolated,
 };
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
@@ -265,10 +265,7 @@ fn the_page_shows_the_skeleton_and_a_recognized_gesture() {
         .expect("a gesture is spotted within a minute");
     let label = event["label"].as_str().unwrap().to_owned();
     let score = format!("{:.2}", event["score"].as_f64().unwrap());
-    let frames = format!(
-        "frames {}–{}",
-        event["start_sequence"], event["end_sequence"]
-    );
+    let frames = format!("frames {}–{}", event["start_frame"], event["end_frame"]);
     let deadline = Instant::now() + Duration::from_secs(10);
     let seen = loop {
         let s = state(addr);
@@ -332,7 +329,7 @@ fn the_page_shows_the_skeleton_and_a_recognized_gesture() {
 
     // A frozen viewer (a browser that hangs it, a stopped process) holds nothing back:
     // capture and pose keep their rate, and the viewer catches up when it runs again.
-    let viewer = children_named(supervisor.id(), "airglyph-viewer");
+    let viewer = stage_children(supervisor.id(), "viewer");
     assert_eq!(viewer.len(), 1, "one viewer child: {viewer:?}");
     let before = state_soon(addr)["viewer"]["frames_in"].as_u64().unwrap();
     // SAFETY: kill(2) on the viewer child we just found.
@@ -400,7 +397,7 @@ fn a_viewer_that_cannot_listen_is_given_up_and_the_pipeline_runs_on() {
         stats["stages"]["capture"]["fps"].as_f64().unwrap_or(0.0) > 20.0,
         "{stats}"
     );
-    assert!(children_named(supervisor.id(), "airglyph-viewer").is_empty());
+    assert!(stage_children(supervisor.id(), "viewer").is_empty());
     drop(taken);
     shut_down(&p, supervisor);
 }

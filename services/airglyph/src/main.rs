@@ -1,13 +1,37 @@
 //! `airglyph`: the front door. Starts and supervises the three stages, and carries the
-//! offline tools. Each subcommand lives in its own module under `cmd/`.
+//! offline tools. Each subcommand lives in its own module under `cmd/`; the stages'
+//! processes, which `airglyph run` starts as `airglyph stage NAME`, under `stage/`.
 
 mod cmd;
+mod interrupt;
+mod stage;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, Parser, Subcommand};
+
+/// `airglyph --version`: the package's version and the commit it was built from.
+const VERSION: &str = concat!(
+    env!("CARGO_PKG_VERSION"),
+    " (",
+    env!("AIRGLYPH_COMMIT"),
+    ")"
+);
+
+/// What the environment changes, for `--help`.
+const ENVIRONMENT: &str = "\
+Environment:
+  RUST_LOG          what is logged to stderr: a level or a filter (default info;
+                    e.g. RUST_LOG=debug, RUST_LOG=warn,airglyph::cmd::run=debug)
+  NO_COLOR          no colours in the logs (there are none off a terminal anyway)
+  AIRGLYPH_MODEL    the gesture model when no --model is given (default: built in)
+  AIRGLYPH_ASSETS   the MakeHuman body (default: ~/.cache/airglyph/assets, or
+                    $XDG_CACHE_HOME/airglyph/assets; `airglyph fetch-assets`)
+  AIRGLYPH_IPC_ROOT, AIRGLYPH_IPC_PREFIX, AIRGLYPH_CONFIG
+                    which pipeline to join (several run side by side; a TOML file
+                    with [ipc] root and prefix)";
 
 /// Recognize gestures drawn in the air in front of a depth camera.
 #[derive(Parser)]
-#[command(name = "airglyph", version)]
+#[command(name = "airglyph", version = VERSION, after_help = ENVIRONMENT)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -34,6 +58,8 @@ enum Command {
     Profile(cmd::profile::Args),
     /// Render a synthetic person into a recording with exact ground-truth joints.
     Synth(cmd::synth::Args),
+    /// Fetch the MakeHuman body for `synth --body makehuman` into the asset cache.
+    FetchAssets(cmd::fetch_assets::Args),
     Collect(cmd::collect::Args),
     /// Train a gesture model from trajectory JSONL files.
     Train(cmd::train::Args),
@@ -44,6 +70,11 @@ enum Command {
     Pose(cmd::pose::Args),
     /// Pose error against a recording's ground truth (e_m, e_j, within 10 cm, mAP, fps).
     EvalPose(cmd::eval_pose::Args),
+    Completions(cmd::completions::Args),
+    Man(cmd::man::Args),
+    /// Run one stage's process (what `airglyph run` starts; by hand, to run a stage alone).
+    #[command(subcommand, hide = true)]
+    Stage(stage::StageCommand),
 }
 
 fn main() -> std::process::ExitCode {
@@ -51,7 +82,11 @@ fn main() -> std::process::ExitCode {
     if cli.command.is_filter() {
         die_quietly_on_a_closed_pipe();
     }
-    airglyph_ipc::process::main("airglyph", || dispatch(cli))
+    let name = match &cli.command {
+        Command::Stage(s) => stage::invocation(s.stage()),
+        _ => "airglyph".to_owned(),
+    };
+    airglyph_ipc::process::main(&name, || dispatch(cli))
 }
 
 impl Command {
@@ -62,6 +97,8 @@ impl Command {
         matches!(
             self,
             Command::Spot(_)
+                | Command::Completions(_)
+                | Command::Man(_)
                 | Command::Devices(_)
                 | Command::Synth(_)
                 | Command::Train(_)
@@ -93,11 +130,15 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Command::Snapshot(a) => cmd::snapshot::run(a),
         Command::Profile(a) => cmd::profile::run(a),
         Command::Synth(a) => cmd::synth::run(a),
+        Command::FetchAssets(a) => cmd::fetch_assets::run(a),
         Command::Collect(a) => cmd::collect::run(a),
         Command::Train(a) => cmd::train::run(a),
         Command::EvalGestures(a) => cmd::eval_gestures::run(a),
         Command::EvalSpotting(a) => cmd::eval_spotting::run(a),
         Command::Pose(a) => cmd::pose::run(a),
         Command::EvalPose(a) => cmd::eval_pose::run(a),
+        Command::Completions(a) => cmd::completions::run(a, Cli::command()),
+        Command::Man(a) => cmd::man::run(a, Cli::command()),
+        Command::Stage(s) => s.run(),
     }
 }

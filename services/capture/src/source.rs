@@ -248,9 +248,17 @@ impl FromStr for SourceSpec {
     type Err = String;
 
     fn from_str(s: &str) -> Result<Self, String> {
+        // `KIND:ARG`, or `KIND?OPTIONS` for a device named by nothing but its options
+        // (`openni2?mode=640x480@30`: the first OpenNI2 device).
         let (kind, arg) = match s.split_once(':') {
-            Some((k, a)) => (k, Some(a)),
-            None => (s, None),
+            Some((k, a)) if !k.contains('?') => (k, Some(a)),
+            _ => match s.split_once('?') {
+                Some((k, _)) if k == "recording" || k == "synthetic" => {
+                    return Err(format!("{k} takes no camera options (after `?`)"))
+                }
+                Some((k, _)) => (k, Some(&s[k.len()..])),
+                None => (s, None),
+            },
         };
         let nonempty = |a: Option<&str>| a.filter(|a| !a.is_empty()).map(str::to_owned);
         match kind {
@@ -282,8 +290,8 @@ impl std::fmt::Display for SourceSpec {
             SourceSpec::Synthetic(None) => write!(f, "synthetic"),
             SourceSpec::Synthetic(Some(s)) => write!(f, "synthetic:{s}"),
             SourceSpec::V4l2(d, o) => write!(f, "v4l2:{}{o}", d.display()),
-            SourceSpec::OpenNi2(None, o) if o.is_empty() => write!(f, "openni2"),
-            SourceSpec::OpenNi2(u, o) => write!(f, "openni2:{}{o}", u.as_deref().unwrap_or("")),
+            SourceSpec::OpenNi2(None, o) => write!(f, "openni2{o}"),
+            SourceSpec::OpenNi2(Some(u), o) => write!(f, "openni2:{u}{o}"),
         }
     }
 }
@@ -358,6 +366,7 @@ mod tests {
             "openni2",
             "openni2:Dummy",
             "openni2:/data/a.oni?mode=320x240@30&start=12",
+            "openni2?mode=640x480@30",
             "v4l2:/dev/video0?mode=848x480@30&format=Z16&intrinsics=realsense-d435&scale=0.1",
             "v4l2:/dev/video0?mode=@60&intrinsics=380,381,320,240",
         ] {
@@ -376,6 +385,19 @@ mod tests {
             .parse::<SourceSpec>()
             .unwrap_err()
             .contains("recording:DIR"));
+        assert!("recording?mode=@30"
+            .parse::<SourceSpec>()
+            .unwrap_err()
+            .contains("no camera options"));
+        assert!("v4l2?mode=@30"
+            .parse::<SourceSpec>()
+            .unwrap_err()
+            .contains("v4l2:/dev/videoN"));
+        // Both ways of naming the first OpenNI2 device with options are one source.
+        assert_eq!(
+            "openni2:?mode=@30".parse::<SourceSpec>(),
+            "openni2?mode=@30".parse::<SourceSpec>()
+        );
     }
 
     #[test]

@@ -1,19 +1,13 @@
 //! Classifying one gesture against the 36-symbol vocabulary with the shipped default
-//! model (models/unipen-36.json), and one spotter step.
+//! model (models/unipen-36.json, built in), and one spotter step.
 
-use airglyph_gesture::{Model, Trajectory};
+use airglyph_gesture::{ModelSource, Trajectory};
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
-use std::path::Path;
 
 fn bench(c: &mut Criterion) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/unipen-36.json");
-    let model = match Model::load(&path) {
-        Ok(m) => m,
-        Err(e) => {
-            eprintln!("skipping: {e}");
-            return;
-        }
-    };
+    let model = ModelSource::Shipped
+        .load()
+        .expect("the shipped model loads");
     // A hand-drawn-like "8": two loops, 60 points.
     let pts: Vec<[f32; 2]> = (0..60)
         .map(|i| {

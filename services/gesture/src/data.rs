@@ -67,7 +67,8 @@ impl Sample {
 /// What can be wrong with a dataset; every variant names the file and the line.
 #[derive(Debug, thiserror::Error)]
 pub enum DataError {
-    #[error("{path}: cannot read: {source}")]
+    // The reason is the source, which error reports print after this (`{:#}`).
+    #[error("{path}: cannot read")]
     Io {
         path: PathBuf,
         #[source]

@@ -1,6 +1,7 @@
 //! Evaluation: confusion matrices, accuracy, per-class recall, and the confusion-matrix
-//! picture (plotters).
+//! picture (plotters, through airglyph-plot).
 
+use airglyph_plot::PlotError;
 use plotters::prelude::*;
 use std::path::Path;
 
@@ -66,64 +67,60 @@ impl Confusion {
     }
 
     /// Draws the row-normalized matrix as a PNG heat map.
-    pub fn plot(&self, path: &Path, title: &str) -> Result<(), String> {
+    pub fn plot(&self, path: &Path, title: &str) -> Result<(), PlotError> {
         let n = self.labels.len().max(1);
         let cell = if n <= 12 { 48 } else { 24 };
         let size = (cell * n as u32 + 120, cell * n as u32 + 140);
-        let root = BitMapBackend::new(path, size).into_drawing_area();
-        let err = |e: &dyn std::fmt::Display| format!("{}: {e}", path.display());
-        root.fill(&WHITE).map_err(|e| err(&e))?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 18))
-            .margin(10)
-            .x_label_area_size(40)
-            .y_label_area_size(40)
-            .build_cartesian_2d((0..n - 1).into_segmented(), (0..n - 1).into_segmented())
-            .map_err(|e| err(&e))?;
-        let labels = self.labels.clone();
-        let labels2 = self.labels.clone();
-        chart
-            .configure_mesh()
-            .disable_mesh()
-            .x_labels(n)
-            .y_labels(n)
-            .x_desc("predicted")
-            .y_desc("true")
-            .x_label_formatter(&move |v| match v {
-                SegmentValue::CenterOf(i) => labels.get(*i).cloned().unwrap_or_default(),
-                _ => String::new(),
-            })
-            .y_label_formatter(&move |v| match v {
-                SegmentValue::CenterOf(i) if *i < n => labels2[n - 1 - *i].clone(),
-                _ => String::new(),
-            })
-            .draw()
-            .map_err(|e| err(&e))?;
-        let mut rects = Vec::new();
-        for i in 0..self.m.len() {
-            let tot: u32 = self.m[i].iter().sum::<u32>().max(1);
-            for j in 0..self.m.len() {
-                let v = self.m[i][j] as f64 / tot as f64;
-                // White to dark blue; sqrt to make small confusions visible.
-                let s = v.sqrt();
-                let c = RGBColor(
-                    (255.0 * (1.0 - s)) as u8,
-                    (255.0 * (1.0 - 0.8 * s)) as u8,
-                    255,
-                );
-                let y = n - 1 - i;
-                rects.push(Rectangle::new(
-                    [
-                        (SegmentValue::Exact(j), SegmentValue::Exact(y)),
-                        (SegmentValue::Exact(j + 1), SegmentValue::Exact(y + 1)),
-                    ],
-                    c.filled(),
-                ));
+        airglyph_plot::png(path, size, |root| {
+            let mut chart = ChartBuilder::on(root)
+                .caption(title, ("sans-serif", 18))
+                .margin(10)
+                .x_label_area_size(40)
+                .y_label_area_size(40)
+                .build_cartesian_2d((0..n - 1).into_segmented(), (0..n - 1).into_segmented())?;
+            let labels = self.labels.clone();
+            let labels2 = self.labels.clone();
+            chart
+                .configure_mesh()
+                .disable_mesh()
+                .x_labels(n)
+                .y_labels(n)
+                .x_desc("predicted")
+                .y_desc("true")
+                .x_label_formatter(&move |v| match v {
+                    SegmentValue::CenterOf(i) => labels.get(*i).cloned().unwrap_or_default(),
+                    _ => String::new(),
+                })
+                .y_label_formatter(&move |v| match v {
+                    SegmentValue::CenterOf(i) if *i < n => labels2[n - 1 - *i].clone(),
+                    _ => String::new(),
+                })
+                .draw()?;
+            let mut rects = Vec::new();
+            for i in 0..self.m.len() {
+                let tot: u32 = self.m[i].iter().sum::<u32>().max(1);
+                for j in 0..self.m.len() {
+                    let v = self.m[i][j] as f64 / tot as f64;
+                    // White to dark blue; sqrt to make small confusions visible.
+                    let s = v.sqrt();
+                    let c = RGBColor(
+                        (255.0 * (1.0 - s)) as u8,
+                        (255.0 * (1.0 - 0.8 * s)) as u8,
+                        255,
+                    );
+                    let y = n - 1 - i;
+                    rects.push(Rectangle::new(
+                        [
+                            (SegmentValue::Exact(j), SegmentValue::Exact(y)),
+                            (SegmentValue::Exact(j + 1), SegmentValue::Exact(y + 1)),
+                        ],
+                        c.filled(),
+                    ));
+                }
             }
-        }
-        chart.draw_series(rects).map_err(|e| err(&e))?;
-        root.present().map_err(|e| err(&e))?;
-        Ok(())
+            chart.draw_series(rects)?;
+            Ok(())
+        })
     }
 }
 
@@ -147,102 +144,86 @@ pub fn plot_timeline(
     fps: f32,
     drawn: &[Span],
     spotted: &[Span],
-) -> Result<(), String> {
-    let err = |e: &dyn std::fmt::Display| format!("{}: {e}", path.display());
+) -> Result<(), PlotError> {
     let n = points.len().max(2);
     let x0 = first as f64;
     let x1 = (first + n as u64 - 1) as f64;
     let width = (n as u32 * 3).clamp(800, 6000);
-    let root = BitMapBackend::new(path, (width, 620)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| err(&e))?;
-    let root = root
-        .titled(title, ("sans-serif", 18))
-        .map_err(|e| err(&e))?;
-    let panels = root.split_evenly((3, 1));
-    let speed: Vec<f64> = (0..points.len())
-        .map(|i| {
-            let (a, b) = (points[i.saturating_sub(1)], points[i]);
-            (((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt() * fps) as f64
-        })
-        .collect();
-    let series: [(&str, Vec<f64>); 3] = [
-        ("x (sw)", points.iter().map(|p| p[0] as f64).collect()),
-        ("y (sw)", points.iter().map(|p| p[1] as f64).collect()),
-        ("speed (sw/s)", speed),
-    ];
-    for (k, (panel, (name, v))) in panels.iter().zip(series.iter()).enumerate() {
-        let lo = v.iter().cloned().fold(f64::MAX, f64::min).min(0.0);
-        let hi = v.iter().cloned().fold(f64::MIN, f64::max).max(lo + 0.1);
-        let pad = 0.25 * (hi - lo);
-        let (lo, hi) = (lo - pad, hi + 0.1 * (hi - lo));
-        let mut chart = ChartBuilder::on(panel)
-            .margin(6)
-            .x_label_area_size(if k == 2 { 30 } else { 0 })
-            .y_label_area_size(60)
-            .build_cartesian_2d(x0..x1, lo..hi)
-            .map_err(|e| err(&e))?;
-        chart
-            .configure_mesh()
-            .y_desc(*name)
-            .x_labels(20)
-            .light_line_style(WHITE)
-            .draw()
-            .map_err(|e| err(&e))?;
-        let inside = |s: &Span| (s.end as f64) >= x0 && (s.start as f64) <= x1;
-        chart
-            .draw_series(drawn.iter().filter(|s| inside(s)).map(|s| {
+    airglyph_plot::png(path, (width, 620), |root| {
+        let root = root.titled(title, ("sans-serif", 18))?;
+        let panels = root.split_evenly((3, 1));
+        let speed: Vec<f64> = (0..points.len())
+            .map(|i| {
+                let (a, b) = (points[i.saturating_sub(1)], points[i]);
+                (((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt() * fps) as f64
+            })
+            .collect();
+        let series: [(&str, Vec<f64>); 3] = [
+            ("x (sw)", points.iter().map(|p| p[0] as f64).collect()),
+            ("y (sw)", points.iter().map(|p| p[1] as f64).collect()),
+            ("speed (sw/s)", speed),
+        ];
+        for (k, (panel, (name, v))) in panels.iter().zip(series.iter()).enumerate() {
+            let lo = v.iter().cloned().fold(f64::MAX, f64::min).min(0.0);
+            let hi = v.iter().cloned().fold(f64::MIN, f64::max).max(lo + 0.1);
+            let pad = 0.25 * (hi - lo);
+            let (lo, hi) = (lo - pad, hi + 0.1 * (hi - lo));
+            let mut chart = ChartBuilder::on(panel)
+                .margin(6)
+                .x_label_area_size(if k == 2 { 30 } else { 0 })
+                .y_label_area_size(60)
+                .build_cartesian_2d(x0..x1, lo..hi)?;
+            chart
+                .configure_mesh()
+                .y_desc(*name)
+                .x_labels(20)
+                .light_line_style(WHITE)
+                .draw()?;
+            let inside = |s: &Span| (s.end as f64) >= x0 && (s.start as f64) <= x1;
+            chart.draw_series(drawn.iter().filter(|s| inside(s)).map(|s| {
                 Rectangle::new(
                     [(s.start as f64, lo), (s.end as f64, hi)],
                     RGBColor(200, 240, 200).filled(),
                 )
-            }))
-            .map_err(|e| err(&e))?;
-        chart
-            .draw_series(LineSeries::new(
+            }))?;
+            chart.draw_series(LineSeries::new(
                 v.iter().enumerate().map(|(i, &y)| (x0 + i as f64, y)),
                 &BLACK,
-            ))
-            .map_err(|e| err(&e))?;
-        if k == 0 {
-            chart
-                .draw_series(drawn.iter().filter(|s| inside(s)).map(|s| {
+            ))?;
+            if k == 0 {
+                chart.draw_series(drawn.iter().filter(|s| inside(s)).map(|s| {
                     Text::new(
                         s.label.clone(),
                         (s.start as f64, hi - 0.02 * (hi - lo)),
                         ("sans-serif", 16).into_font().color(&RGBColor(0, 120, 0)),
                     )
-                }))
-                .map_err(|e| err(&e))?;
-        }
-        let bar = lo + 0.1 * (hi - lo);
-        let h = 0.08 * (hi - lo);
-        for s in spotted.iter().filter(|s| inside(s)) {
-            let ok = drawn
-                .iter()
-                .any(|d| d.label == s.label && d.start.max(s.start) < d.end.min(s.end));
-            let c = if ok { BLUE } else { RED };
-            chart
-                .draw_series([Rectangle::new(
+                }))?;
+            }
+            let bar = lo + 0.1 * (hi - lo);
+            let h = 0.08 * (hi - lo);
+            for s in spotted.iter().filter(|s| inside(s)) {
+                let ok = drawn
+                    .iter()
+                    .any(|d| d.label == s.label && d.start.max(s.start) < d.end.min(s.end));
+                let c = if ok { BLUE } else { RED };
+                chart.draw_series([Rectangle::new(
                     [
                         (s.start as f64, bar - h / 2.0),
                         (s.end as f64, bar + h / 2.0),
                     ],
                     c.mix(0.6).filled(),
-                )])
-                .map_err(|e| err(&e))?;
-            if k == 2 {
-                chart
-                    .draw_series([Text::new(
+                )])?;
+                if k == 2 {
+                    chart.draw_series([Text::new(
                         s.label.clone(),
                         (s.start as f64, bar + h),
                         ("sans-serif", 16).into_font().color(&c),
-                    )])
-                    .map_err(|e| err(&e))?;
+                    )])?;
+                }
             }
         }
-    }
-    root.present().map_err(|e| err(&e))?;
-    Ok(())
+        Ok(())
+    })
 }
 
 #[cfg(test)]

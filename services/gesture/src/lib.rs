@@ -37,7 +37,7 @@ pub mod tracker;
 pub mod train;
 
 pub use data::{load_jsonl, load_many, Sample, Trajectory};
-pub use model::{Classification, Model, ModelError};
+pub use model::{Classification, Model, ModelError, ModelSource};
 pub use spot::{RankBy, SpotError, SpottedGesture, Spotter, SpotterConfig};
 pub use tracker::{Hand, HandPoint, HandTracker, OneEuro, TrackerConfig};
 pub use train::{train, ClassifierKind, TrainConfig};

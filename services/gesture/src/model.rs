@@ -25,7 +25,8 @@ pub const MAX_LABEL_BYTES: usize = airglyph_ipc::wire::LABEL_CAPACITY;
 /// Why a model could not be loaded.
 #[derive(Debug, thiserror::Error)]
 pub enum ModelError {
-    #[error("{path}: cannot read model: {source}")]
+    // The reason is the source, which error reports print after this (`{:#}`).
+    #[error("{path}: cannot read model")]
     Io {
         path: PathBuf,
         #[source]
@@ -173,8 +174,9 @@ impl Model {
         serde_json::to_string(self).unwrap_or_default()
     }
 
+    /// Writes the model whole: a writer stopped half-way leaves the old file as it was.
     pub fn save(&self, path: &Path) -> std::io::Result<()> {
-        std::fs::write(path, self.to_json())
+        airglyph_core::file::write_whole(path, self.to_json())
     }
 
     /// Index of a label.
@@ -387,17 +389,51 @@ fn softmax(ll: &[f64]) -> Vec<f64> {
     e.iter().map(|v| v / s).collect()
 }
 
-/// The shipped 36-symbol model, relative to the repository.
-pub const DEFAULT_MODEL: &str = "models/unipen-36.json";
+/// The shipped 36-symbol model (0–9, A–Z; `models/unipen-36.json`), built into the
+/// library: an installed, copied or cross-built binary has it without any file beside
+/// it. (The file lies outside this crate, which is built from its repository only.)
+const SHIPPED_JSON: &str = include_str!("../../../models/unipen-36.json");
 
-/// Where the shipped model is: under the working directory, else in the source tree
-/// this crate was built from.
-pub fn default_model_path() -> std::path::PathBuf {
-    let here = std::path::PathBuf::from(DEFAULT_MODEL);
-    if here.exists() {
-        return here;
+/// The environment variable naming the model to use when a command is given none.
+pub const MODEL_ENV: &str = "AIRGLYPH_MODEL";
+
+/// Where a gesture model comes from.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ModelSource {
+    /// A model file (from `airglyph train`).
+    File(PathBuf),
+    /// The shipped 36-symbol model, built in.
+    Shipped,
+}
+
+impl ModelSource {
+    /// The model a command uses: `path` (its `--model`) when given, else the file
+    /// `$AIRGLYPH_MODEL` names when it is set and not empty, else the shipped one.
+    pub fn choose(path: Option<&Path>) -> Self {
+        let named = path.map(Path::to_path_buf).or_else(|| {
+            std::env::var_os(MODEL_ENV)
+                .filter(|v| !v.is_empty())
+                .map(PathBuf::from)
+        });
+        named.map_or(ModelSource::Shipped, ModelSource::File)
     }
-    std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../..")
-        .join(DEFAULT_MODEL)
+
+    pub fn load(&self) -> Result<Model, ModelError> {
+        match self {
+            ModelSource::File(path) => Model::load(path),
+            ModelSource::Shipped => Model::from_json_str(SHIPPED_JSON, Path::new(SHIPPED_NAME)),
+        }
+    }
+}
+
+/// How the shipped model is named in logs and errors.
+const SHIPPED_NAME: &str = "the built-in model unipen-36";
+
+impl std::fmt::Display for ModelSource {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ModelSource::File(path) => write!(f, "{}", path.display()),
+            ModelSource::Shipped => f.write_str(SHIPPED_NAME),
+        }
+    }
 }

@@ -4,12 +4,14 @@
 //! 3-minute demo (the "4" once went up its stem first and was read as a "C").
 
 use airglyph_gesture::data::Trajectory;
-use airglyph_gesture::model::{default_model_path, Model};
+use airglyph_gesture::ModelSource;
 use airglyph_synth::glyphs::{template, BUILT_IN};
 
 #[test]
 fn every_built_in_glyph_is_read_as_itself_by_the_shipped_model() {
-    let model = Model::load(&default_model_path()).expect("the shipped model loads");
+    let model = ModelSource::Shipped
+        .load()
+        .expect("the shipped model loads");
     let mut wrong = Vec::new();
     for c in BUILT_IN.chars() {
         let glyph = template(c).expect("a built-in glyph");

@@ -3,19 +3,20 @@
 //! 30 fps; several alternating runs, medians.
 //!
 //! ```sh
-//! cargo build --release -p airglyph -p airglyph-capture -p airglyph-pose -p airglyph-gesture -p airglyph-viewer
+//! cargo build --release -p airglyph
 //! cargo run --release -p airglyph-viewer --example cost -- --runs 5 --seconds 20
 //! ```
 //! `--fast` lets capture run as fast as it can, so the pipeline is CPU-bound and any
 //! cycle the viewer or the browser takes shows in its frame rate. Run it on an otherwise
 //! idle machine: other work moves the figures more than the viewer does.
 
+use airglyph_system_tests::{binary_path, stage_children, stop};
 use anyhow::{bail, Context};
 use clap::Parser;
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::path::PathBuf;
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 #[derive(Parser)]
@@ -53,16 +54,6 @@ struct Run {
     viewer_cpu: f64,
 }
 
-/// The workspace's binaries: beside this example's directory (target/<profile>/).
-fn bin_dir() -> anyhow::Result<PathBuf> {
-    let exe = std::env::current_exe()?;
-    let dir = exe
-        .parent()
-        .and_then(Path::parent)
-        .context("target/<profile>/examples/..")?;
-    Ok(dir.to_owned())
-}
-
 fn get(addr: SocketAddr, path: &str) -> anyhow::Result<serde_json::Value> {
     let mut s = TcpStream::connect_timeout(&addr, Duration::from_secs(2))?;
     s.set_read_timeout(Some(Duration::from_secs(5)))?;
@@ -93,31 +84,7 @@ fn cpu_seconds(pid: u32) -> f64 {
 }
 
 /// The pid of the supervisor's child running `name`.
-fn child_named(parent: u32, name: &str) -> Option<u32> {
-    std::fs::read_dir("/proc").ok()?.flatten().find_map(|e| {
-        let pid: u32 = e.file_name().to_str()?.parse().ok()?;
-        let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
-        let (open, close) = (stat.find('(')?, stat.rfind(')')?);
-        let ppid: u32 = stat[close + 2..].split(' ').nth(1)?.parse().ok()?;
-        (ppid == parent && name.starts_with(&stat[open + 1..close])).then_some(pid)
-    })
-}
-
-fn stop(mut child: Child) {
-    // SAFETY: kill(2) on our own, unreaped child.
-    unsafe { libc::kill(child.id() as i32, libc::SIGTERM) };
-    let deadline = Instant::now() + Duration::from_secs(5);
-    while Instant::now() < deadline {
-        if let Ok(Some(_)) = child.try_wait() {
-            return;
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    let _ = child.kill();
-    let _ = child.wait();
-}
-
-fn one_run(args: &Args, bin: &Path, view: bool, n: usize) -> anyhow::Result<Run> {
+fn one_run(args: &Args, view: bool, n: usize) -> anyhow::Result<Run> {
     let root = std::env::temp_dir().join(format!("airglyph-cost-{}-{n}/", std::process::id()));
     let prefix = format!("agcost{}x{n}_", std::process::id());
     let env = |c: &mut Command| {
@@ -126,7 +93,7 @@ fn one_run(args: &Args, bin: &Path, view: bool, n: usize) -> anyhow::Result<Run>
             .env("RUST_LOG", "warn");
     };
     let addr = TcpListener::bind("127.0.0.1:0")?.local_addr()?;
-    let mut run = Command::new(bin.join("airglyph"));
+    let mut run = Command::new(binary_path("airglyph"));
     run.args(["run", "--source", &args.source]);
     if args.fast {
         run.arg("--fast");
@@ -166,7 +133,7 @@ fn one_run(args: &Args, bin: &Path, view: bool, n: usize) -> anyhow::Result<Run>
     }
     std::thread::sleep(Duration::from_secs_f64(args.warmup));
     let viewer = if view {
-        child_named(supervisor.id(), "airglyph-viewer")
+        stage_children(supervisor.id(), "viewer").first().copied()
     } else {
         None
     };
@@ -179,7 +146,7 @@ fn one_run(args: &Args, bin: &Path, view: bool, n: usize) -> anyhow::Result<Run>
     let t0 = Instant::now();
     let out_dir =
         std::env::temp_dir().join(format!("airglyph-cost-profile-{}-{n}", std::process::id()));
-    let mut profile_cmd = Command::new(bin.join("airglyph"));
+    let mut profile_cmd = Command::new(binary_path("airglyph"));
     profile_cmd
         .args([
             "profile",
@@ -238,11 +205,10 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 fn main() -> anyhow::Result<()> {
     let args = Args::parse();
-    let bin = bin_dir()?;
     let (mut without, mut with) = (Vec::new(), Vec::new());
     for i in 0..args.runs {
         for view in [false, true] {
-            let r = one_run(&args, &bin, view, i * 2 + view as usize)?;
+            let r = one_run(&args, view, i * 2 + view as usize)?;
             println!(
                 "run {} {:<14} capture {:5.2}  pose {:5.2}  gesture {:5.2} fps  pose dropped {:4}  browser {:4.1} pictures/s  viewer {:4.1} % of a core",
                 i + 1,

@@ -7,6 +7,7 @@
 
 pub mod camera;
 pub mod depth;
+pub mod file;
 pub mod filter;
 pub mod recording;
 pub mod skeleton;

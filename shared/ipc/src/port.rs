@@ -32,6 +32,8 @@ pub enum Stage {
 impl Stage {
     /// The stages `airglyph run` starts, in pipeline order.
     pub const PIPELINE: [Stage; 3] = [Stage::Capture, Stage::Pose, Stage::Gesture];
+    /// Every stage: the pipeline's, then the viewer (`airglyph run --view`).
+    pub const ALL: [Stage; 4] = [Stage::Capture, Stage::Pose, Stage::Gesture, Stage::Viewer];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -43,20 +45,11 @@ impl Stage {
     }
 
     pub fn from_name(name: &str) -> Option<Stage> {
-        [Stage::Capture, Stage::Pose, Stage::Gesture, Stage::Viewer]
-            .into_iter()
-            .find(|s| s.name() == name)
+        Stage::ALL.into_iter().find(|s| s.name() == name)
     }
 
     pub fn from_u32(v: u32) -> Option<Stage> {
-        [Stage::Capture, Stage::Pose, Stage::Gesture, Stage::Viewer]
-            .into_iter()
-            .find(|s| *s as u32 == v)
-    }
-
-    /// The executable that runs this stage.
-    pub fn binary(self) -> String {
-        format!("airglyph-{}", self.name())
+        Stage::ALL.into_iter().find(|s| *s as u32 == v)
     }
 }
 

@@ -24,25 +24,22 @@ pub const OBJ: &str = "mpfb2/3dobjs/base.obj";
 pub const RIG: &str = "mpfb2/rigs/standard/rig.cmu_mb.json";
 pub const WEIGHTS: &str = "mpfb2/rigs/standard/weights.cmu_mb.json";
 
-/// Where the asset cache is looked for: `$AIRGLYPH_ASSETS`, else the first
-/// `.cache/assets` holding `mpfb2/` in the current directory or one of its parents, else
-/// the repository's `.cache/assets` (as built).
+/// Where the asset cache is: `$AIRGLYPH_ASSETS` when set, else `airglyph/assets` in
+/// the user's XDG cache directory (`$XDG_CACHE_HOME`, else `~/.cache`), where
+/// `airglyph fetch-assets` puts it. Found at run time, so an installed or copied binary
+/// finds it as well as one in the source tree.
 pub fn default_assets_dir() -> PathBuf {
-    if let Some(p) = std::env::var_os("AIRGLYPH_ASSETS") {
-        return PathBuf::from(p);
+    let var = |name| std::env::var_os(name).filter(|v| !v.is_empty());
+    if let Some(dir) = var("AIRGLYPH_ASSETS") {
+        return dir.into();
     }
-    if let Ok(mut dir) = std::env::current_dir() {
-        loop {
-            let c = dir.join(".cache/assets");
-            if c.join("mpfb2").is_dir() {
-                return c;
-            }
-            if !dir.pop() {
-                break;
-            }
-        }
-    }
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../.cache/assets")
+    // The XDG base directory specification: a relative XDG_CACHE_HOME is ignored.
+    let cache = var("XDG_CACHE_HOME")
+        .map(PathBuf::from)
+        .filter(|p| p.is_absolute())
+        .or_else(|| var("HOME").map(|home| Path::new(&home).join(".cache")))
+        .unwrap_or_else(|| PathBuf::from(".cache"));
+    cache.join("airglyph").join("assets")
 }
 
 /// Whether the cache at `dir` holds all three files.

@@ -2,6 +2,7 @@
 //! vocabulary of one's own; every repetition becomes a line of trajectory JSONL.
 
 use crate::cmd::run::{run_listening, Args as RunArgs, Listener, Poll};
+use crate::interrupt::Interrupted;
 use airglyph_capture::SourceSpec;
 use airglyph_gesture::collect::{RepetitionConfig, RepetitionSegmenter};
 use airglyph_gesture::model::MAX_LABEL_BYTES;
@@ -181,12 +182,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         })
     })?;
     if c.written < c.count && airglyph_ipc::shutdown::requested() {
-        bail!(
-            "interrupted after {} of {} repetitions (those are in {})",
+        return Err(Interrupted::new(format!(
+            "{} of {} repetitions were recorded (appended to {}, each line whole)",
             c.written,
             c.count,
             args.out.display()
-        );
+        ))
+        .into());
     }
     // A finished source may stop in the middle of the last movement.
     if c.written < c.count {

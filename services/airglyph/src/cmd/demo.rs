@@ -1,6 +1,7 @@
 //! `airglyph demo`: the synthetic person draws symbols in front of a virtual camera; the
 //! full three-process pipeline names them.
 
+use crate::cmd::gesture_json::GestureJson;
 use crate::cmd::run::{run_with, Args as RunArgs};
 use airglyph_capture::synthetic::{scene, DEMO_SYMBOLS};
 use airglyph_capture::SourceSpec;
@@ -20,11 +21,12 @@ pub struct Args {
     /// The symbols to draw, in order (0–9, A–Z).
     #[arg(long, default_value = DEMO_SYMBOLS)]
     symbols: String,
-    /// One JSON object a line; the last one is the summary {"drawn":…,"correct":…}.
+    /// One JSON object a line: each gesture ({"event":"gesture","label":…,"drawn":…,…};
+    /// README, "JSON output"), then the summary {"event":"summary","drawn":N,"correct":…}.
     #[arg(long)]
     json: bool,
-    /// The gesture model (default: the shipped 36-symbol model).
-    #[arg(long)]
+    /// The gesture model (default: $AIRGLYPH_MODEL, else the built-in 36-symbol model).
+    #[arg(long, value_name = "FILE")]
     model: Option<std::path::PathBuf>,
     /// Also start the viewer: watch the person, skeleton and gestures in a browser.
     #[arg(long)]
@@ -75,10 +77,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             Some(i) if recognized[i].is_none() => {
                 let drawn = &truth[i].label;
                 if json {
-                    let line = serde_json::json!({"drawn": drawn, "recognized": label,
-                        "score": e.score, "start_frame": e.start_sequence,
-                        "end_frame": e.end_sequence});
-                    writeln!(out, "{line}")?;
+                    writeln!(out, "{}", GestureJson::live(e).drawn(Some(drawn)).line())?;
                 } else {
                     let mark = if *drawn == label { "✓" } else { "✗" };
                     writeln!(
@@ -92,9 +91,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             _ => {
                 stray += 1;
                 if json {
-                    let line = serde_json::json!({"drawn": null, "recognized": label,
-                        "score": e.score});
-                    writeln!(out, "{line}")?;
+                    writeln!(out, "{}", GestureJson::live(e).drawn(None).line())?;
                 } else {
                     writeln!(out, "(spotted {label} while no symbol was drawn)")?;
                 }
@@ -102,14 +99,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         Ok(())
     };
-    let mut stage_args = Vec::new();
-    if let Some(m) = &args.model {
-        stage_args.push(format!("gesture=--model {}", m.display()));
-    }
     run_with(
         RunArgs {
             json: args.json,
-            stage_args,
+            model: args.model,
             view: args.view,
             listen: args.listen,
             truth: args.truth,
@@ -131,7 +124,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.json {
         println!(
             "{}",
-            serde_json::json!({"drawn": truth.len(), "correct": correct, "missed": missed.len(), "stray": stray})
+            serde_json::json!({"event": "summary", "drawn": truth.len(), "correct": correct,
+                "missed": missed.len(), "stray": stray})
         );
     } else {
         println!(

@@ -4,6 +4,7 @@
 //! with `--baselines`, the template baseline (DTW 1-NN), the seed's pipeline and the CRF
 //! trained on the same data in the same run.
 
+use crate::interrupt::unless_interrupted;
 use airglyph_gesture::data::{folds_by_subject, labels_of, load_many, Sample};
 use airglyph_gesture::dtw::DtwClassifier;
 use airglyph_gesture::eval::Confusion;
@@ -15,7 +16,7 @@ use serde_json::json;
 use std::path::PathBuf;
 use std::time::Instant;
 
-#[derive(clap::Args)]
+#[derive(clap::Args, Clone)]
 pub struct Args {
     /// The model (its classifier and training parameters).
     #[arg(long)]
@@ -153,7 +154,20 @@ fn test(p: &Predictor, test_set: &[Sample], labels: &[String], stride: usize, ou
     out.decisions += timed as u64;
 }
 
+/// One method's results: its name, its file name, its Bezier points, its outcome.
+type Scored = (String, String, usize, Outcome);
+
 pub fn run(args: Args) -> anyhow::Result<()> {
+    // The evaluation writes nothing until it is done: a signal leaves it where it is.
+    let results = unless_interrupted("nothing was printed or drawn", {
+        let args = args.clone();
+        move || evaluate(&args)
+    })??;
+    print_and_plot(&args, &results)
+}
+
+/// Trains and tests what the arguments ask for.
+fn evaluate(args: &Args) -> anyhow::Result<Vec<Scored>> {
     let model = Model::load(&args.model)?;
     let samples = load_many(&args.data)?;
     let labels = labels_of(&samples);
@@ -193,11 +207,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             methods.push(Method::Crf(15));
         }
     }
-    let mut results: Vec<(String, String, usize, Outcome)> = Vec::new();
+    let mut results: Vec<Scored> = Vec::new();
     if let Some(k) = args.folds {
         if k < 2 {
             bail!("--folds {k}: need at least 2");
         }
+        eprintln!(
+            "cross-validating {} over {k} folds by subject on {} samples",
+            methods
+                .iter()
+                .map(Method::name)
+                .collect::<Vec<_>>()
+                .join(", "),
+            samples.len()
+        );
         let fold = folds_by_subject(&samples, k, args.seed);
         let bar = ProgressBar::new((k * methods.len()) as u64);
         bar.set_style(
@@ -236,6 +259,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         bar.finish_and_clear();
     } else {
+        eprintln!(
+            "classifying {} samples with {}",
+            samples.len(),
+            args.model.display()
+        );
         // The model's own labels (a superset of the data's).
         let mut conf = Confusion::new(model.labels.clone());
         let preds: Vec<usize> = samples
@@ -262,11 +290,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             },
         ));
     }
-    if let Some(dir) = &args.plots {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("{}: cannot create plot directory", dir.display()))?;
-    }
-    for (name, file, n, out) in &results {
+    Ok(results)
+}
+
+/// Prints every result, then draws the confusion matrices.
+fn print_and_plot(args: &Args, results: &[Scored]) -> anyhow::Result<()> {
+    for (name, file, n, out) in results {
         let ms = 1e3 * out.seconds / out.decisions.max(1) as f64;
         let recall: serde_json::Map<String, serde_json::Value> = out
             .conf
@@ -307,14 +336,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 .collect();
             println!("  top confusions: {}", top.join(", "));
         }
-        if let Some(dir) = &args.plots {
-            let path = dir.join(format!("confusion-{file}.png"));
+    }
+    // The pictures after every figure: one that fails loses none of them.
+    if let Some(dir) = &args.plots {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("{}: cannot create plot directory", dir.display()))?;
+        for (_, file, _, out) in results {
+            let title = format!("{file}: {:.2} %", 100.0 * out.conf.accuracy());
             out.conf
-                .plot(
-                    &path,
-                    &format!("{file}: {:.2} %", 100.0 * out.conf.accuracy()),
-                )
-                .map_err(anyhow::Error::msg)?;
+                .plot(&dir.join(format!("confusion-{file}.png")), &title)?;
         }
     }
     Ok(())

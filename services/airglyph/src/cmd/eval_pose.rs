@@ -4,8 +4,11 @@
 //! Every frame is scored on the joints the truth has in view; the seed's figure, over
 //! the frames that hold the whole body, is given beside it.
 
+use crate::interrupt::Interrupted;
 use airglyph_core::recording::Recording;
 use airglyph_core::Joint;
+use airglyph_ipc::shutdown;
+use airglyph_plot::PlotError;
 use airglyph_pose::metrics::{PoseEval, Summary};
 use airglyph_pose::{overlay, PoseConfig, PoseEstimator};
 use anyhow::{bail, Context};
@@ -53,7 +56,23 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ProgressStyle::with_template("{bar:40} {pos}/{len} frames {per_sec} eta {eta}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
+    // An overlay that cannot be written stops the overlays, not the measurement.
+    let mut overlay_failed: Option<anyhow::Error> = None;
     for i in 0..rec.len() {
+        if shutdown::requested() {
+            bar.finish_and_clear();
+            let overlays = match (&args.plots, args.overlay_every) {
+                (Some(d), Some(n)) if n > 0 => {
+                    format!("; the overlays in {} are whole", d.display())
+                }
+                _ => String::new(),
+            };
+            return Err(Interrupted::new(format!(
+                "stopped after {i} of {} frames: no figures{overlays}",
+                rec.len()
+            ))
+            .into());
+        }
         rec.read_frame_into(i, &mut px)?;
         let view = airglyph_core::DepthView::new(k.width, k.height, &px)?;
         let t = Instant::now();
@@ -63,31 +82,37 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ev.seconds += dt;
         ev.add(&r, truth, &k);
         if let (Some(d), Some(n)) = (&args.plots, args.overlay_every) {
-            if n > 0 && i % n == 0 {
+            if n > 0 && i % n == 0 && overlay_failed.is_none() {
                 let mut im = overlay::depth_image(&view, Some(est.mask()));
                 overlay::skeleton(&mut im, &k, truth, overlay::GREEN);
                 if r.person_found {
                     overlay::skeleton(&mut im, &k, &r.skeleton, overlay::RED);
                 }
                 let p = d.join(format!("overlay_{i:06}.png"));
-                im.save(&p)
-                    .with_context(|| format!("writing {}", p.display()))?;
+                if let Err(e) = im.save(&p) {
+                    overlay_failed =
+                        Some(anyhow::Error::new(e).context(format!("writing {}", p.display())));
+                }
             }
         }
         bar.inc(1);
     }
     bar.finish_and_clear();
     let s = ev.summary();
-    if let Some(d) = &args.plots {
-        plot_frames(&ev, &d.join("error_per_frame.png"))?;
-        plot_joints(&s, &d.join("error_per_joint.png"))?;
-    }
+    // The figures first: a picture that fails below loses none of them.
     if args.json {
         println!("{}", serde_json::to_string(&s)?);
     } else {
         print_human(&s);
     }
-    Ok(())
+    if let Some(d) = &args.plots {
+        plot_frames(&ev, &d.join("error_per_frame.png"))?;
+        plot_joints(&s, &d.join("error_per_joint.png"))?;
+    }
+    match overlay_failed {
+        Some(e) => Err(e.context("no overlay was written after it; the figures are complete")),
+        None => Ok(()),
+    }
 }
 
 fn print_human(s: &Summary) {
@@ -122,12 +147,8 @@ fn print_human(s: &Summary) {
     }
 }
 
-fn plot_err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
-    anyhow::anyhow!("plotting: {e:?}")
-}
-
 /// Fig. 16.10: mean and largest joint error of each frame.
-fn plot_frames(ev: &PoseEval, path: &Path) -> anyhow::Result<()> {
+fn plot_frames(ev: &PoseEval, path: &Path) -> Result<(), PlotError> {
     let mean: Vec<(f64, f64)> = ev
         .frames
         .iter()
@@ -143,47 +164,40 @@ fn plot_frames(ev: &PoseEval, path: &Path) -> anyhow::Result<()> {
         .map(|(i, f)| (i as f64, f.max() as f64 * 100.0))
         .collect();
     let top = max.iter().map(|p| p.1).fold(10.0, f64::max).min(200.0) * 1.05;
-    let root = BitMapBackend::new(path, (1000, 500)).into_drawing_area();
-    root.fill(&WHITE).map_err(plot_err)?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption("Joint error per frame", ("sans-serif", 22))
-        .margin(12)
-        .x_label_area_size(40)
-        .y_label_area_size(50)
-        .build_cartesian_2d(0f64..(ev.frames.len().max(1) as f64), 0f64..top)
-        .map_err(plot_err)?;
-    chart
-        .configure_mesh()
-        .x_desc("frame (of those in view)")
-        .y_desc("error (cm)")
-        .draw()
-        .map_err(plot_err)?;
-    chart
-        .draw_series(LineSeries::new(mean, &BLUE))
-        .map_err(plot_err)?
-        .label("mean e_m")
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLUE));
-    chart
-        .draw_series(LineSeries::new(max, &RED))
-        .map_err(plot_err)?
-        .label("max e_h")
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED));
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()
-        .map_err(plot_err)?;
-    root.present()
-        .with_context(|| format!("writing {}", path.display()))?;
-    Ok(())
+    airglyph_plot::png(path, (1000, 500), |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption("Joint error per frame", ("sans-serif", 22))
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(50)
+            .build_cartesian_2d(0f64..(ev.frames.len().max(1) as f64), 0f64..top)?;
+        chart
+            .configure_mesh()
+            .x_desc("frame (of those in view)")
+            .y_desc("error (cm)")
+            .draw()?;
+        chart
+            .draw_series(LineSeries::new(mean, &BLUE))?
+            .label("mean e_m")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLUE));
+        chart
+            .draw_series(LineSeries::new(max, &RED))?
+            .label("max e_h")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED));
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()?;
+        Ok(())
+    })
 }
 
 /// The seed's per-joint error on its own data (e_j ≤ 4.1 cm, §16.5).
 const SEED_JOINT_CM: f64 = 4.1;
 
 /// Fig. 16.11: mean error of each joint.
-fn plot_joints(s: &Summary, path: &Path) -> anyhow::Result<()> {
+fn plot_joints(s: &Summary, path: &Path) -> Result<(), PlotError> {
     let vals: Vec<f64> = Joint::ALL
         .iter()
         .map(|j| s.per_joint_cm[j.name()].unwrap_or(0.0).max(0.0))
@@ -192,57 +206,49 @@ fn plot_joints(s: &Summary, path: &Path) -> anyhow::Result<()> {
     // Bars across, one a row, the head at the top: the joints' names read level
     // beside them.
     let row = |i: usize| Joint::COUNT - 1 - i;
-    let root = BitMapBackend::new(path, (800, 560)).into_drawing_area();
-    root.fill(&WHITE).map_err(plot_err)?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption("Mean error per joint", ("sans-serif", 22))
-        .margin(12)
-        .x_label_area_size(40)
-        .y_label_area_size(110)
-        .build_cartesian_2d(0f64..top, (0..Joint::COUNT).into_segmented())
-        .map_err(plot_err)?;
-    chart
-        .configure_mesh()
-        .disable_y_mesh()
-        .x_desc("error (cm)")
-        .y_labels(Joint::COUNT)
-        .y_label_formatter(&|v| match v {
-            SegmentValue::CenterOf(i) if *i < Joint::COUNT => {
-                Joint::ALL[row(*i)].name().to_string()
-            }
-            _ => String::new(),
-        })
-        .y_label_style(("sans-serif", 13))
-        .draw()
-        .map_err(plot_err)?;
-    chart
-        .draw_series(
+    airglyph_plot::png(path, (800, 560), |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption("Mean error per joint", ("sans-serif", 22))
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(110)
+            .build_cartesian_2d(0f64..top, (0..Joint::COUNT).into_segmented())?;
+        chart
+            .configure_mesh()
+            .disable_y_mesh()
+            .x_desc("error (cm)")
+            .y_labels(Joint::COUNT)
+            .y_label_formatter(&|v| match v {
+                SegmentValue::CenterOf(i) if *i < Joint::COUNT => {
+                    Joint::ALL[row(*i)].name().to_string()
+                }
+                _ => String::new(),
+            })
+            .y_label_style(("sans-serif", 13))
+            .draw()?;
+        chart.draw_series(
             Histogram::horizontal(&chart)
                 .style(BLUE.mix(0.7).filled())
                 .margin(4)
                 .data(vals.iter().enumerate().map(|(i, v)| (row(i), *v))),
-        )
-        .map_err(plot_err)?;
-    // The seed's own figure for every joint.
-    chart
-        .draw_series(LineSeries::new(
-            [
-                (SEED_JOINT_CM, SegmentValue::Exact(0)),
-                (SEED_JOINT_CM, SegmentValue::Last),
-            ],
-            RED.stroke_width(2),
-        ))
-        .map_err(plot_err)?
-        .label(format!("seed: every joint within {SEED_JOINT_CM} cm"))
-        .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], RED.stroke_width(2)));
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::LowerRight)
-        .background_style(WHITE.mix(0.9))
-        .border_style(BLACK)
-        .draw()
-        .map_err(plot_err)?;
-    root.present()
-        .with_context(|| format!("writing {}", path.display()))?;
-    Ok(())
+        )?;
+        // The seed's own figure for every joint.
+        chart
+            .draw_series(LineSeries::new(
+                [
+                    (SEED_JOINT_CM, SegmentValue::Exact(0)),
+                    (SEED_JOINT_CM, SegmentValue::Last),
+                ],
+                RED.stroke_width(2),
+            ))?
+            .label(format!("seed: every joint within {SEED_JOINT_CM} cm"))
+            .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], RED.stroke_width(2)));
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::LowerRight)
+            .background_style(WHITE.mix(0.9))
+            .border_style(BLACK)
+            .draw()?;
+        Ok(())
+    })
 }

@@ -3,6 +3,7 @@
 //! deleted and inserted gestures. Also runs ordinary movement alone, where every
 //! spotted gesture is an insertion.
 
+use crate::interrupt::unless_interrupted;
 use airglyph_gesture::data::{load_many, Sample};
 use airglyph_gesture::eval::{plot_timeline, Span};
 use airglyph_gesture::spot::Candidate;
@@ -36,7 +37,7 @@ use std::path::PathBuf;
 /// --pause-prob it also rests there 0.1–0.5 s. Tracking noise of ±0.004 shoulder widths
 /// is added. A spotted gesture matches a drawn one when their frames overlap by half
 /// of the shorter; reliability = correct / (gestures + insertions).
-#[derive(clap::Args)]
+#[derive(clap::Args, Clone)]
 pub struct Args {
     /// The gesture model (with spotting HMMs).
     #[arg(long)]
@@ -49,7 +50,8 @@ pub struct Args {
     /// One JSON object a line.
     #[arg(long)]
     pub json: bool,
-    /// Gestures in all streams together (samples drawn at random).
+    /// Gestures in all streams together: the samples in a random order, each again (in
+    /// another order) when there are fewer samples than this.
     #[arg(long, default_value_t = 500)]
     pub gestures: usize,
     /// Gestures per stream.
@@ -212,6 +214,99 @@ fn explain(
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
+    // The evaluation writes nothing until it is done: a signal leaves it where it is.
+    let e = unless_interrupted("nothing was written or printed", {
+        let args = args.clone();
+        move || evaluate(&args)
+    })??;
+    if let Some(path) = &args.dump {
+        std::fs::write(path, e.dump.join("\n") + "\n")?;
+    }
+    let total = e.total;
+    let false_alarms = e.alarms.len();
+    // Which symbols ordinary movement passes for: the vocabulary's weak spots.
+    let mut alarms_by_label = BTreeMap::<&str, usize>::new();
+    for g in &e.alarms {
+        *alarms_by_label.entry(g.label.as_str()).or_default() += 1;
+    }
+    if args.json {
+        println!(
+            "{}",
+            json!({
+                "gestures": total.gestures,
+                "correct": total.correct,
+                "substitutions": total.substitutions,
+                "deletions": total.deletions,
+                "insertions": total.insertions,
+                "reliability": total.reliability,
+                "by_label": e.by_label,
+            })
+        );
+        println!(
+            "{}",
+            json!({
+                "random_movement_seconds": args.random_seconds,
+                "insertions": false_alarms,
+                "insertions_by_label": alarms_by_label,
+            })
+        );
+    } else {
+        println!(
+            "{} gestures in {:.0} s of stream: {} correct, {} substituted, {} deleted, {} inserted; reliability {:.2} %",
+            total.gestures,
+            e.frames as f32 / e.cfg.fps,
+            total.correct,
+            total.substitutions,
+            total.deletions,
+            total.insertions,
+            100.0 * total.reliability
+        );
+        let mut hardest: Vec<(&String, &LabelCount)> = e.by_label.iter().collect();
+        hardest.sort_by(|a, b| a.1.recall().total_cmp(&b.1.recall()));
+        let hardest: Vec<String> = hardest
+            .iter()
+            .take(3)
+            .map(|(l, n)| format!("\"{l}\" {} of {}", n.correct, n.drawn))
+            .collect();
+        println!("found least often: {}", hardest.join(", "));
+        let labels: Vec<String> = alarms_by_label
+            .iter()
+            .map(|(l, n)| format!("{n} × \"{l}\""))
+            .collect();
+        println!(
+            "{:.0} s of random movement only: {false_alarms} gestures spotted (insertions){}",
+            args.random_seconds,
+            if labels.is_empty() {
+                String::new()
+            } else {
+                format!(": {}", labels.join(", "))
+            }
+        );
+    }
+    // The picture after every figure: if it fails, none of them is lost.
+    if let (Some(path), Some((s, spotted))) = (&args.plot, &e.plotted) {
+        plot(path, s, spotted, &e.cfg, args.plot_from, args.plot_seconds)?;
+    }
+    Ok(())
+}
+
+/// What the streams and the ordinary movement gave.
+struct Evaluation {
+    cfg: StreamConfig,
+    total: SpottingScore,
+    by_label: BTreeMap<String, LabelCount>,
+    /// The streams' length, frames.
+    frames: usize,
+    /// The lines of --dump.
+    dump: Vec<String>,
+    /// The stream --plot draws and what was spotted in it.
+    plotted: Option<(SyntheticStream, Vec<SpottedGesture>)>,
+    /// What was spotted in ordinary movement alone: every one an insertion.
+    alarms: Vec<SpottedGesture>,
+}
+
+/// Draws the streams and the ordinary movement and spots in them.
+fn evaluate(args: &Args) -> anyhow::Result<Evaluation> {
     let model = Model::load(&args.model)?;
     if model.spotting.is_none() {
         bail!(
@@ -220,19 +315,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
     let samples = load_many(&args.data)?;
-    let mut known: Vec<&Sample> = samples
+    let pool: Vec<&Sample> = samples
         .iter()
         .filter(|s| model.label_index(&s.label).is_some())
         .collect();
-    if known.is_empty() {
+    if pool.is_empty() {
         bail!(
             "{}: no sample has a label the model knows",
             args.data[0].display()
         );
     }
     let mut rng = ChaCha8Rng::seed_from_u64(args.seed);
-    known.shuffle(&mut rng);
-    known.truncate(args.gestures.max(1));
+    let known = draw(&pool, args.gestures.max(1), &mut rng);
     if !(0.0..=1.0).contains(&args.pause_prob) {
         bail!("--pause-prob {} is not in [0, 1]", args.pause_prob);
     }
@@ -264,9 +358,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             )
         })
         .collect();
-    // Per stream: its score, each drawn symbol's label and whether it was spotted
-    // right, its length in frames, its dump.
-    type StreamResult = (SpottingScore, Vec<(String, bool)>, usize, Vec<String>);
+    if args.plot.is_some() && args.plot_stream >= chunks.len() {
+        bail!(
+            "--plot-stream {}: there are {} streams (0–{})",
+            args.plot_stream,
+            chunks.len(),
+            chunks.len() - 1
+        );
+    }
+    eprintln!(
+        "spotting {} gestures in {} streams, then in {} s of ordinary movement alone",
+        known.len(),
+        chunks.len(),
+        args.random_seconds
+    );
     let scores: Vec<anyhow::Result<StreamResult>> = chunks
         .par_iter()
         .map(|(index, seed, c)| {
@@ -282,97 +387,72 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             } else {
                 Vec::new()
             };
-            if let Some(path) = args.plot.as_ref().filter(|_| *index == args.plot_stream) {
-                plot(path, &s, &spotted, &cfg, args.plot_from, args.plot_seconds)?;
-            }
             let m = matched(&s.truth, &spotted);
             let drawn = s.truth.iter().map(|t| t.label.clone()).zip(m.correct);
-            Ok((m.score, drawn.collect(), s.points.len(), dumped))
+            Ok(StreamResult {
+                score: m.score,
+                drawn: drawn.collect(),
+                frames: s.points.len(),
+                dump: dumped,
+                plotted: (args.plot.is_some() && *index == args.plot_stream)
+                    .then_some((s, spotted)),
+            })
         })
         .collect();
     let mut total = SpottingScore::default();
     let mut by_label = BTreeMap::<String, LabelCount>::new();
     let mut frames = 0;
     let mut dump = Vec::new();
-    for s in scores {
-        let (s, drawn, f, d) = s?;
-        total.add(&s);
-        for (label, right) in drawn {
+    let mut plotted = None;
+    for r in scores {
+        let r = r?;
+        total.add(&r.score);
+        for (label, right) in r.drawn {
             let e = by_label.entry(label).or_default();
             e.drawn += 1;
             e.correct += usize::from(right);
         }
-        frames += f;
-        dump.extend(d);
-    }
-    if let Some(path) = &args.dump {
-        std::fs::write(path, dump.join("\n") + "\n")?;
+        frames += r.frames;
+        dump.extend(r.dump);
+        plotted = plotted.or(r.plotted);
     }
     // Pure random movement.
     let mut r = ChaCha8Rng::seed_from_u64(args.seed ^ 0xABCD);
     let rm = random_movement(args.random_seconds, &cfg, &mut r);
     let alarms = run_stream(&model, &scfg, &rm, &cfg)?;
-    let false_alarms = alarms.len();
-    // Which symbols ordinary movement passes for: the vocabulary's weak spots.
-    let mut alarms_by_label = BTreeMap::<&str, usize>::new();
-    for g in &alarms {
-        *alarms_by_label.entry(g.label.as_str()).or_default() += 1;
+    Ok(Evaluation {
+        cfg,
+        total,
+        by_label,
+        frames,
+        dump,
+        plotted,
+        alarms,
+    })
+}
+
+/// `count` samples of `pool` in a random order: each once, and again in another order
+/// while more are wanted (the first `pool.len()` are as a plain shuffle would have them).
+fn draw<'a>(pool: &[&'a Sample], count: usize, rng: &mut ChaCha8Rng) -> Vec<&'a Sample> {
+    let mut out = Vec::with_capacity(count);
+    while out.len() < count {
+        let mut round = pool.to_vec();
+        round.shuffle(rng);
+        out.extend(round.into_iter().take(count - out.len()));
     }
-    if args.json {
-        println!(
-            "{}",
-            json!({
-                "gestures": total.gestures,
-                "correct": total.correct,
-                "substitutions": total.substitutions,
-                "deletions": total.deletions,
-                "insertions": total.insertions,
-                "reliability": total.reliability,
-                "by_label": by_label,
-            })
-        );
-        println!(
-            "{}",
-            json!({
-                "random_movement_seconds": args.random_seconds,
-                "insertions": false_alarms,
-                "insertions_by_label": alarms_by_label,
-            })
-        );
-    } else {
-        println!(
-            "{} gestures in {:.0} s of stream: {} correct, {} substituted, {} deleted, {} inserted; reliability {:.2} %",
-            total.gestures,
-            frames as f32 / cfg.fps,
-            total.correct,
-            total.substitutions,
-            total.deletions,
-            total.insertions,
-            100.0 * total.reliability
-        );
-        let mut hardest: Vec<(&String, &LabelCount)> = by_label.iter().collect();
-        hardest.sort_by(|a, b| a.1.recall().total_cmp(&b.1.recall()));
-        let hardest: Vec<String> = hardest
-            .iter()
-            .take(3)
-            .map(|(l, n)| format!("\"{l}\" {} of {}", n.correct, n.drawn))
-            .collect();
-        println!("found least often: {}", hardest.join(", "));
-        let labels: Vec<String> = alarms_by_label
-            .iter()
-            .map(|(l, n)| format!("{n} × \"{l}\""))
-            .collect();
-        println!(
-            "{:.0} s of random movement only: {false_alarms} gestures spotted (insertions){}",
-            args.random_seconds,
-            if labels.is_empty() {
-                String::new()
-            } else {
-                format!(": {}", labels.join(", "))
-            }
-        );
-    }
-    Ok(())
+    out
+}
+
+/// What one stream gave.
+struct StreamResult {
+    score: SpottingScore,
+    /// Each drawn symbol's label and whether it was spotted right.
+    drawn: Vec<(String, bool)>,
+    frames: usize,
+    /// Its lines of --dump.
+    dump: Vec<String>,
+    /// The stream and what was spotted in it, when it is the one --plot draws.
+    plotted: Option<(SyntheticStream, Vec<SpottedGesture>)>,
 }
 
 /// One stream as JSON lines: each drawn symbol (and the classifier's label of its own
@@ -457,8 +537,7 @@ fn plot(
         cfg.fps,
         &drawn,
         &found,
-    )
-    .map_err(anyhow::Error::msg)?;
+    )?;
     eprintln!("wrote {}", path.display());
     Ok(())
 }

@@ -1,11 +1,15 @@
 //! One module a subcommand: its clap `Args` and a `run(args) -> anyhow::Result<()>`.
 
 pub mod collect;
+pub mod completions;
 pub mod demo;
 pub mod devices;
 pub mod eval_gestures;
 pub mod eval_pose;
 pub mod eval_spotting;
+pub mod fetch_assets;
+pub mod gesture_json;
+pub mod man;
 pub mod pose;
 pub mod profile;
 pub mod record;
@@ -17,38 +21,24 @@ pub mod top;
 pub mod train;
 
 use airglyph_ipc::GestureEventMsg;
+use gesture_json::GestureJson;
 
 /// Prints a gesture event as a line of text or of JSON. An error is stdout gone (a
 /// reader such as `head` that has what it wanted): the caller stops, it does not panic.
 pub fn print_gesture(event: &GestureEventMsg, json: bool) -> std::io::Result<()> {
     use std::io::Write;
-    let label = event.label().unwrap_or("?");
-    let latency_ms = (event
-        .chain
-        .gesture_publish_ns
-        .saturating_sub(event.chain.capture_ns)) as f64
-        * 1e-6;
+    let g = GestureJson::live(event);
     if json {
-        let line = serde_json::json!({
-            "event": "gesture",
-            "label": label,
-            "score": event.score,
-            "start_sequence": event.start_sequence,
-            "end_sequence": event.end_sequence,
-            "start_ns": event.start_ns,
-            "end_ns": event.end_ns,
-            "hand": if event.hand == 0 { "left" } else { "right" },
-            "latency_ms": latency_ms,
-        });
-        writeln!(std::io::stdout(), "{line}")
+        writeln!(std::io::stdout(), "{}", g.line())
     } else {
         writeln!(
             std::io::stdout(),
-            "{label}  (score {:.2}, frames {}–{}, {:.1} ms after capture)",
-            event.score,
-            event.start_sequence,
-            event.end_sequence,
-            latency_ms
+            "{}  (score {:.2}, frames {}–{}, {:.1} ms after capture)",
+            g.label,
+            g.score,
+            g.start_frame,
+            g.end_frame,
+            gesture_json::latency_ms(event)
         )
     }
 }

@@ -1,7 +1,9 @@
 //! `airglyph pose DIR [--json]`: the pose estimator over a recording, one line a frame.
 
+use crate::interrupt::Interrupted;
 use airglyph_core::recording::Recording;
 use airglyph_core::{Joint, Skeleton};
+use airglyph_ipc::shutdown;
 use airglyph_pose::{PoseConfig, PoseEstimator};
 use anyhow::Context;
 use std::io::Write;
@@ -52,6 +54,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let stdout = std::io::stdout();
     let mut out = std::io::BufWriter::new(stdout.lock());
     for i in 0..rec.len() {
+        if shutdown::requested() {
+            out.flush().context("writing to stdout")?;
+            return Err(Interrupted::new(format!(
+                "the lines of the first {i} of {} frames are written, each whole",
+                rec.len()
+            ))
+            .into());
+        }
         rec.read_frame_into(i, &mut px)?;
         let view = airglyph_core::DepthView::new(k.width, k.height, &px)?;
         let r = est.estimate(view);

@@ -1,7 +1,9 @@
 //! `airglyph profile`: per-stage latency of a running pipeline, frame by frame.
 
+use crate::interrupt::Interrupted;
 use airglyph_capture::SourceSpec;
 use airglyph_ipc::{shutdown, LatencyChain, Pipeline, Stage, StageStatsMsg};
+use airglyph_plot::PlotError;
 use anyhow::Context;
 use plotters::prelude::*;
 use std::collections::BTreeMap;
@@ -87,29 +89,42 @@ fn quantile(sorted: &[u64], q: f64) -> f64 {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    shutdown::install();
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     let mut pipeline_child = match &args.source {
-        Some(source) => {
-            let exe = std::env::current_exe()?;
-            let child = std::process::Command::new(exe)
+        Some(source) => Some(
+            crate::stage::own_executable()
                 .args(["run", "--source", &source.to_string(), "--loop"])
                 .stdout(std::process::Stdio::null())
                 .spawn()
-                .context("cannot start the pipeline")?;
-            std::thread::sleep(Duration::from_secs_f64(args.warmup));
-            Some(child)
-        }
+                .context("cannot start the pipeline")?,
+        ),
         None => None,
     };
-    let result = measure(&args);
+    let settled = pipeline_child.is_none() || settle(Duration::from_secs_f64(args.warmup));
+    let result = if settled {
+        measure(&args)
+    } else {
+        Err(Interrupted::new("nothing was measured").into())
+    };
     if let Some(child) = pipeline_child.as_mut() {
         // SAFETY: kill(2) on our own, unreaped child.
         unsafe { libc::kill(child.id() as i32, libc::SIGTERM) };
         let _ = child.wait();
     }
     result
+}
+
+/// Lets a pipeline just started settle for `warmup`; false when a signal came first.
+fn settle(warmup: Duration) -> bool {
+    let until = Instant::now() + warmup;
+    while Instant::now() < until {
+        if shutdown::requested() {
+            return false;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    true
 }
 
 fn measure(args: &Args) -> anyhow::Result<()> {
@@ -123,6 +138,7 @@ fn measure(args: &Args) -> anyhow::Result<()> {
     let mut frames: BTreeMap<(u64, u64), FrameTimes> = BTreeMap::new();
     let mut first_stats: BTreeMap<&str, StageStatsMsg> = BTreeMap::new();
     let mut last_stats: BTreeMap<&str, StageStatsMsg> = BTreeMap::new();
+    eprintln!("measuring for {} s", args.seconds);
     let started = Instant::now();
     let bar = indicatif::ProgressBar::new((args.seconds * 10.0) as u64);
     while started.elapsed().as_secs_f64() < args.seconds && !shutdown::requested() {
@@ -145,12 +161,16 @@ fn measure(args: &Args) -> anyhow::Result<()> {
     }
     bar.finish_and_clear();
     let elapsed = started.elapsed().as_secs_f64();
+    if frames.is_empty() && shutdown::requested() {
+        return Err(Interrupted::new("nothing was measured").into());
+    }
     if frames.is_empty() {
         anyhow::bail!("no skeletons arrived in {elapsed:.1} s: is a pipeline running? (start one with `airglyph run`, or pass --source)");
     }
 
     let mut summary = serde_json::Map::new();
     let mut csv = String::from("measure,count,p50_ms,p90_ms,p99_ms,max_ms\n");
+    let mut measured = Vec::new();
     for (name, of) in MEASURES {
         let mut v: Vec<u64> = frames.values().filter_map(of).collect();
         if v.is_empty() {
@@ -168,7 +188,7 @@ fn measure(args: &Args) -> anyhow::Result<()> {
             name.into(),
             serde_json::json!({"count": v.len(), "p50_ms": p50, "p90_ms": p90, "p99_ms": p99, "max_ms": max}),
         );
-        histogram_png(&args.out.join(format!("{name}.png")), name, &v)?;
+        measured.push((name, v));
     }
     let mut drops = serde_json::Map::new();
     for (stage, last) in &last_stats {
@@ -202,6 +222,17 @@ fn measure(args: &Args) -> anyhow::Result<()> {
         println!("{}", serde_json::to_string_pretty(&report["stages"])?);
         eprintln!("report in {}", args.out.display());
     }
+    // The pictures last: one that fails loses none of the figures written above.
+    for (name, v) in &measured {
+        histogram_png(&args.out.join(format!("{name}.png")), name, v)?;
+    }
+    if shutdown::requested() {
+        return Err(Interrupted::new(format!(
+            "the report in {} covers the {elapsed:.1} s measured",
+            args.out.display()
+        ))
+        .into());
+    }
     Ok(())
 }
 
@@ -225,7 +256,7 @@ fn write_frames_csv(path: &Path, frames: &BTreeMap<(u64, u64), FrameTimes>) -> a
     Ok(())
 }
 
-fn histogram_png(path: &Path, title: &str, sorted_ns: &[u64]) -> anyhow::Result<()> {
+fn histogram_png(path: &Path, title: &str, sorted_ns: &[u64]) -> Result<(), PlotError> {
     let ms: Vec<f64> = sorted_ns.iter().map(|&n| n as f64 * 1e-6).collect();
     let hi = quantile(sorted_ns, 0.999).max(0.01) * 1.05;
     let bins = 60usize;
@@ -235,35 +266,34 @@ fn histogram_png(path: &Path, title: &str, sorted_ns: &[u64]) -> anyhow::Result<
         counts[((v / width) as usize).min(bins - 1)] += 1;
     }
     let top = *counts.iter().max().unwrap_or(&1) as f64 * 1.1;
-    let root = BitMapBackend::new(path, (800, 400)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(format!("{title} (n = {})", ms.len()), ("sans-serif", 22))
-        .margin(10)
-        .x_label_area_size(40)
-        .y_label_area_size(50)
-        .build_cartesian_2d(0.0..hi, 0.0..top)?;
-    chart
-        .configure_mesh()
-        .x_desc("ms")
-        .y_desc("frames")
-        .draw()?;
-    chart.draw_series(counts.iter().enumerate().map(|(i, &c)| {
-        let x0 = i as f64 * width;
-        Rectangle::new([(x0, 0.0), (x0 + width, c as f64)], BLUE.mix(0.6).filled())
-    }))?;
-    for (q, color) in [(0.5, GREEN), (0.99, RED)] {
-        let x = quantile(sorted_ns, q);
+    airglyph_plot::png(path, (800, 400), |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(format!("{title} (n = {})", ms.len()), ("sans-serif", 22))
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(50)
+            .build_cartesian_2d(0.0..hi, 0.0..top)?;
         chart
-            .draw_series(LineSeries::new([(x, 0.0), (x, top)], color.stroke_width(2)))?
-            .label(format!("p{} = {x:.2} ms", (q * 100.0) as u32))
-            .legend(move |(x, y)| PathElement::new([(x, y), (x + 15, y)], color));
-    }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()?;
-    root.present()?;
-    Ok(())
+            .configure_mesh()
+            .x_desc("ms")
+            .y_desc("frames")
+            .draw()?;
+        chart.draw_series(counts.iter().enumerate().map(|(i, &c)| {
+            let x0 = i as f64 * width;
+            Rectangle::new([(x0, 0.0), (x0 + width, c as f64)], BLUE.mix(0.6).filled())
+        }))?;
+        for (q, color) in [(0.5, GREEN), (0.99, RED)] {
+            let x = quantile(sorted_ns, q);
+            chart
+                .draw_series(LineSeries::new([(x, 0.0), (x, top)], color.stroke_width(2)))?
+                .label(format!("p{} = {x:.2} ms", (q * 100.0) as u32))
+                .legend(move |(x, y)| PathElement::new([(x, y), (x + 15, y)], color));
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()?;
+        Ok(())
+    })
 }

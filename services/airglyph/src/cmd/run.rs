@@ -1,12 +1,13 @@
 //! `airglyph run`: starts the stages as child processes, supervises them, prints gestures.
 
+use crate::stage::StageArgs;
 use airglyph_capture::SourceSpec;
 use airglyph_ipc::{shutdown, GestureEventMsg, Pipeline, Stage};
 use anyhow::{bail, Context};
 use std::collections::VecDeque;
-use std::os::unix::process::CommandExt;
+use std::ffi::OsString;
 use std::path::PathBuf;
-use std::process::{Child, Command, ExitStatus};
+use std::process::{Child, ExitStatus};
 use std::time::{Duration, Instant};
 
 /// Start the pipeline and print each gesture it recognizes.
@@ -25,7 +26,9 @@ pub struct Args {
     /// Where frames come from: synthetic, recording:DIR, v4l2:/dev/videoN, openni2 (the first device) or openni2:URI.
     #[arg(long, default_value = "synthetic")]
     pub source: SourceSpec,
-    /// Print one JSON object a line instead of plain text.
+    /// Print each gesture as one JSON object a line instead of plain text:
+    /// {"event":"gesture","label","score","start_frame","end_frame","hand","start_ns",
+    /// "end_ns","latency_ms"} (README, "JSON output").
     #[arg(long)]
     pub json: bool,
     /// The stages to start, comma-separated (e.g. `capture,pose` to profile pose alone).
@@ -40,9 +43,16 @@ pub struct Args {
     /// Stop capture after this many frames.
     #[arg(long)]
     pub frames: Option<u64>,
-    /// Extra arguments for one stage, as STAGE=ARGS (e.g. `gesture=--model m.json`).
+    /// The gesture model (from `airglyph train`; default: $AIRGLYPH_MODEL, else the
+    /// built-in 36-symbol model).
+    #[arg(long, value_name = "FILE")]
+    pub model: Option<PathBuf>,
+    /// Extra arguments for one stage, as STAGE=ARGS, split as a shell splits them
+    /// (`--stage-args "gesture=--model 'my model.json'"`); repeat it for more stages.
+    /// The stages: capture, pose, gesture, viewer; `airglyph stage NAME --help` lists
+    /// each one's arguments, which are checked before the pipeline starts.
     #[arg(long = "stage-args", value_name = "STAGE=ARGS")]
-    pub stage_args: Vec<String>,
+    pub stage_args: Vec<StageArgs>,
     /// Crash-loop restarts of one stage (deaths within 2 s of starting) within a minute
     /// after which the pipeline gives up.
     #[arg(long, default_value_t = 5)]
@@ -89,20 +99,10 @@ const STOP_GRACE: Duration = Duration::from_secs(3);
 /// its first frame; a viewer that is not up by then is not waited for.
 const VIEWER_WAIT: Duration = Duration::from_secs(3);
 
-/// Finds a stage's executable: beside `airglyph`, else on PATH.
-pub fn stage_binary(stage: Stage) -> PathBuf {
-    let name = stage.binary();
-    std::env::current_exe()
-        .ok()
-        .and_then(|exe| exe.parent().map(|d| d.join(&name)))
-        .filter(|p| p.exists())
-        .unwrap_or_else(|| PathBuf::from(name))
-}
-
 /// One supervised stage.
 struct Supervised {
     stage: Stage,
-    args: Vec<String>,
+    args: Vec<OsString>,
     child: Option<Child>,
     started: Instant,
     backoff: Duration,
@@ -116,21 +116,10 @@ struct Supervised {
 
 impl Supervised {
     fn spawn(&mut self) -> anyhow::Result<()> {
-        let bin = stage_binary(self.stage);
-        let mut cmd = Command::new(&bin);
-        cmd.args(&self.args);
-        // SAFETY: prctl is async-signal-safe; the closure touches nothing else.
-        unsafe {
-            // A stage whose supervisor died (even by SIGKILL) stops too, instead of
-            // running on unsupervised.
-            cmd.pre_exec(|| {
-                libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM);
-                Ok(())
-            });
-        }
-        let child = cmd
+        let child = crate::stage::command(self.stage)
+            .args(&self.args)
             .spawn()
-            .with_context(|| format!("cannot start {} ({})", self.stage.binary(), bin.display()))?;
+            .with_context(|| format!("cannot start `{}`", crate::stage::invocation(self.stage)))?;
         tracing::debug!(stage = self.stage.name(), pid = child.id(), "started");
         self.child = Some(child);
         self.started = Instant::now();
@@ -219,11 +208,11 @@ fn start_in_order(stages: &mut [Supervised], pipeline: &Pipeline) -> anyhow::Res
 }
 
 /// The command-line arguments `airglyph run` gives one stage.
-fn stage_args(stage: Stage, args: &Args) -> anyhow::Result<Vec<String>> {
-    let mut out = Vec::new();
+fn stage_args(stage: Stage, args: &Args) -> Vec<OsString> {
+    let mut out: Vec<OsString> = Vec::new();
     match stage {
         Stage::Capture => {
-            out.extend(["--source".to_owned(), args.source.to_string()]);
+            out.extend(["--source".into(), args.source.to_string().into()]);
             if args.fast {
                 out.push("--fast".into());
             }
@@ -231,7 +220,7 @@ fn stage_args(stage: Stage, args: &Args) -> anyhow::Result<Vec<String>> {
                 out.push("--loop".into());
             }
             if let Some(n) = args.frames {
-                out.extend(["--frames".to_owned(), n.to_string()]);
+                out.extend(["--frames".into(), n.to_string().into()]);
             }
             if args.truth {
                 // Capture publishes the skeletons itself.
@@ -240,20 +229,20 @@ fn stage_args(stage: Stage, args: &Args) -> anyhow::Result<Vec<String>> {
         }
         Stage::Viewer => {
             if let Some(addr) = args.listen {
-                out.extend(["--listen".to_owned(), addr.to_string()]);
+                out.extend(["--listen".into(), addr.to_string().into()]);
             }
         }
-        Stage::Pose | Stage::Gesture => {}
-    }
-    for extra in &args.stage_args {
-        let (target, rest) = extra
-            .split_once('=')
-            .with_context(|| format!("--stage-args {extra:?} must be STAGE=ARGS"))?;
-        if target == stage.name() {
-            out.extend(rest.split_whitespace().map(str::to_owned));
+        Stage::Gesture => {
+            if let Some(model) = &args.model {
+                out.extend(["--model".into(), model.into()]);
+            }
         }
+        Stage::Pose => {}
     }
-    Ok(out)
+    for extra in args.stage_args.iter().filter(|e| e.stage == stage) {
+        out.extend(extra.args.iter().map(OsString::from));
+    }
+    out
 }
 
 /// What the supervisor does with the pipeline's output while the stages run.
@@ -370,11 +359,31 @@ pub fn run_listening<L: Listener>(
     if args.view {
         names.push(Stage::Viewer);
     }
+    for extra in &args.stage_args {
+        if !names.contains(&extra.stage) {
+            bail!(
+                "--stage-args {}=…: the {} stage does not run here{}",
+                extra.stage.name(),
+                extra.stage.name(),
+                match extra.stage {
+                    Stage::Viewer => " (add --view)",
+                    Stage::Pose if args.truth => " (--truth runs none)",
+                    _ => " (see --stages)",
+                }
+            );
+        }
+    }
+    if args.model.is_some() && !names.contains(&Stage::Gesture) {
+        bail!("--model: the gesture stage does not run here (see --stages)");
+    }
     let mut stages = Vec::new();
     for stage in names {
+        let args = stage_args(stage, &args);
+        crate::stage::check_args(stage, &args)
+            .map_err(|e| anyhow::anyhow!("the arguments of the {} stage: {e}", stage.name()))?;
         stages.push(Supervised {
             stage,
-            args: stage_args(stage, &args)?,
+            args,
             child: None,
             started: Instant::now(),
             backoff: MIN_BACKOFF,
@@ -445,7 +454,7 @@ fn supervise(
                         crashes = s.crashes.len(),
                         last = %describe(status),
                         "stage keeps dying; giving it up (the pipeline runs on) — run `{}` alone to see why",
-                        s.stage.binary()
+                        crate::stage::invocation(s.stage)
                     );
                     s.finished = true;
                     continue;
@@ -456,7 +465,7 @@ fn supervise(
                         s.stage.name(),
                         s.crashes.len(),
                         describe(status),
-                        s.stage.binary()
+                        crate::stage::invocation(s.stage)
                     );
                 }
                 tracing::warn!(

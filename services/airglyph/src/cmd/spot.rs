@@ -1,9 +1,12 @@
 //! `airglyph spot DIR`: the gesture stage's spotter over a recording, offline.
 
 use crate::cmd::demo::drawn_for;
+use crate::cmd::gesture_json::GestureJson;
+use crate::interrupt::Interrupted;
 use airglyph_core::recording::Recording;
 use airglyph_core::{Joint, Skeleton};
-use airglyph_gesture::{Model, Spotter};
+use airglyph_gesture::{Model, ModelSource, Spotter};
+use airglyph_ipc::shutdown;
 use airglyph_pose::{PoseConfig, PoseEstimator};
 use airglyph_synth::GestureTruth;
 use anyhow::Context;
@@ -24,10 +27,12 @@ pub struct Args {
     /// frame a line) instead of estimating the pose again.
     #[arg(long, value_name = "FILE")]
     poses: Option<PathBuf>,
-    /// The gesture model (default: the shipped 36-symbol model).
+    /// The gesture model (default: $AIRGLYPH_MODEL, else the built-in 36-symbol model).
     #[arg(long)]
     model: Option<PathBuf>,
-    /// One JSON object a line.
+    /// One JSON object a line: each gesture ({"event":"gesture","label":…; README, "JSON
+    /// output"), with --alone each drawn symbol's label alone ({"event":"alone",…}), and
+    /// when the drawn symbols are known the summary ({"event":"summary",…}).
     #[arg(long)]
     json: bool,
     /// Spotter settings as JSON (fields of SpotterConfig), e.g. '{"hold_seconds":1.0}'.
@@ -120,11 +125,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.truth && !rec.has_joints() {
         anyhow::bail!("{}: --truth needs a joints.csv", args.dir.display());
     }
-    let path = args
-        .model
-        .clone()
-        .unwrap_or_else(airglyph_gesture::model::default_model_path);
-    let model = Model::load(&path)?;
+    let model = ModelSource::choose(args.model.as_deref()).load()?;
     let scfg = crate::cmd::eval_spotting::spotter_config(args.spotter.as_deref())?;
     let mut spotter = Spotter::new(model, scfg)?;
     spotter.set_trace(args.trace);
@@ -144,7 +145,22 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut hand: Vec<Option<[f32; 2]>> = Vec::new();
     let mut found = Vec::new();
     let poses = args.poses.as_deref().map(read_poses).transpose()?;
+    eprintln!(
+        "spotting gestures in {} ({} frames, {})",
+        args.dir.display(),
+        rec.len(),
+        match (&args.poses, args.truth) {
+            (Some(p), _) => format!("the skeletons of {}", p.display()),
+            (None, true) => "its ground-truth joints".into(),
+            (None, false) => "the pose estimated frame by frame".into(),
+        }
+    );
+    let mut stopped = None;
     for i in 0..rec.len() {
+        if shutdown::requested() {
+            stopped = Some(i);
+            break;
+        }
         let skeleton = if let Some(p) = &poses {
             p.get(i).copied().flatten()
         } else if args.truth {
@@ -162,8 +178,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         found.extend(spotter.push(&s, i as u64, rec.capture_ns(i)));
         trace(&spotter.take_trace(), spotter.model());
     }
-    found.extend(spotter.finish());
-    trace(&spotter.take_trace(), spotter.model());
+    if stopped.is_none() {
+        found.extend(spotter.finish());
+        trace(&spotter.take_trace(), spotter.model());
+    }
     for g in found {
         spotted += 1;
         let drawn = drawn_for(&truth, g.start_seq, g.end_seq);
@@ -172,11 +190,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         let drawn = drawn.map(|d| truth[d].label.as_str());
         if args.json {
-            println!(
-                "{}",
-                serde_json::json!({"label": g.label, "score": g.score, "start_frame": g.start_seq,
-                    "end_frame": g.end_seq, "drawn": drawn})
-            );
+            let line = GestureJson::spotted(&g);
+            // Beside the symbol drawn there when the recording says what was drawn.
+            let line = if truth.is_empty() {
+                line
+            } else {
+                line.drawn(drawn)
+            };
+            println!("{}", line.line());
         } else {
             println!(
                 "frames {}–{}: {} (score {:.2}){}",
@@ -187,6 +208,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 drawn.map_or(String::new(), |d| format!("   drawn: {d}"))
             );
         }
+    }
+    if let Some(i) = stopped {
+        return Err(Interrupted::new(format!(
+            "stopped at frame {i} of {}: the gestures spotted before it are printed; no summary",
+            rec.len()
+        ))
+        .into());
     }
     if args.alone {
         for t in &truth {
@@ -203,8 +231,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             if args.json {
                 println!(
                     "{}",
-                    serde_json::json!({"drawn": t.label, "alone": label, "score": c.score,
-                        "start_frame": t.start_frame, "end_frame": t.end_frame})
+                    serde_json::json!({"event": "alone", "drawn": t.label, "label": label,
+                        "score": c.score, "start_frame": t.start_frame, "end_frame": t.end_frame})
                 );
             } else {
                 println!(
@@ -220,8 +248,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .zip(&recognized)
             .filter(|(t, r)| r.as_deref() == Some(t.label.as_str()))
             .count();
-        let summary =
-            serde_json::json!({"drawn": truth.len(), "correct": correct, "spotted": spotted});
+        let summary = serde_json::json!({"event": "summary", "drawn": truth.len(),
+            "correct": correct, "spotted": spotted});
         if args.json {
             println!("{summary}");
         } else {

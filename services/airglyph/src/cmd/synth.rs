@@ -1,19 +1,22 @@
 //! `airglyph synth`: render a synthetic person into a recording with exact ground truth
 //! (depth PNGs, frames.csv, joints.csv, and gestures.csv for air-drawing).
 
+use crate::interrupt::Interrupted;
 use airglyph_core::camera::Preset;
 use airglyph_core::Intrinsics;
+use airglyph_ipc::shutdown;
 use airglyph_synth::{
-    Background, BodySpec, Chair, MotionSpec, Placement, Posture, ProceduralBody, Prop, SceneConfig,
-    ScriptedPose, Table,
+    write_gestures_csv, Background, BodySpec, Chair, GestureTruth, MotionSpec, Placement, Posture,
+    ProceduralBody, Prop, SceneConfig, ScriptedPose, SynthError, Table,
 };
 use anyhow::{bail, Context};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
+use std::sync::mpsc;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// The body: `procedural` (built in) or `makehuman` (needs `scripts/fetch-assets`).
+    /// The body: `procedural` (built in) or `makehuman` (fetched by `airglyph fetch-assets`).
     #[arg(long, default_value = "procedural")]
     pub body: String,
     /// What the person does: `poses` (the hard cases in turn), `rest` (arms at rest:
@@ -89,7 +92,8 @@ pub struct Args {
     /// travel removed, its turns and jumps kept), so a clip that walks away stays in view.
     #[arg(long)]
     pub follow: bool,
-    /// Folder holding the MakeHuman assets (mpfb2/); default .cache/assets.
+    /// Folder holding the MakeHuman assets (mpfb2/); default $AIRGLYPH_ASSETS, else
+    /// ~/.cache/airglyph/assets.
     #[arg(long)]
     pub assets: Option<PathBuf>,
     /// With draw:SYMBOLS, take the shapes from this trajectory JSONL (.jsonl or .jsonl.gz).
@@ -185,13 +189,25 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         },
         seed: args.seed,
     };
+    let missing_assets = |e: SynthError| {
+        match e {
+        SynthError::MissingAssets { missing } => anyhow::anyhow!(
+            "the MakeHuman body is not there ({} is missing): fetch it with `airglyph fetch-assets`, or set AIRGLYPH_ASSETS to the folder that holds mpfb2/",
+            missing.display()
+        ),
+        e => e.into(),
+    }
+    };
     let cfg = match args.framing.as_str() {
         "fixed" => cfg,
-        "upper-body" => cfg.framing_upper_body()?,
+        "upper-body" => cfg.framing_upper_body().map_err(missing_assets)?,
         other => bail!("--framing {other:?}: expected fixed or upper-body"),
     };
-    // Learn the motion's length first, for the progress bar and the default count.
-    let len = airglyph_synth::Synthesizer::new(cfg.clone())?.len();
+    // Learn the motion's length first, for the progress bar and the default count, and
+    // its gestures, for a recording cut short.
+    let motion = airglyph_synth::Synthesizer::new(cfg.clone()).map_err(missing_assets)?;
+    let (len, gestures) = (motion.len(), motion.gestures());
+    drop(motion);
     let frames = match (args.frames, len) {
         (Some(n), Some(len)) => n.min(len),
         (Some(n), None) => n,
@@ -207,9 +223,47 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ProgressStyle::with_template("{bar:40} {pos}/{len} frames  {per_sec}  eta {eta}")
             .expect("valid template"),
     );
-    let summary =
-        airglyph_synth::write_recording(cfg, frames, &args.out, |n| bar.set_position(n as u64))
-            .with_context(|| format!("writing {}", args.out.display()))?;
+    let draws = matches!(cfg.motion, MotionSpec::Draw(_));
+    let (stopped, stopped_at) = mpsc::channel();
+    let writer = {
+        let (bar, out) = (bar.clone(), args.out.clone());
+        std::thread::spawn(move || {
+            airglyph_synth::write_recording(cfg, frames, &out, |n| {
+                bar.set_position(n as u64);
+                if shutdown::requested() {
+                    // write_recording cannot be stopped, so it is held here for good,
+                    // between two frames, where the n it wrote are whole (each frame's
+                    // CSV rows are flushed with it) while the process ends.
+                    let _ = stopped.send(n);
+                    loop {
+                        std::thread::park();
+                    }
+                }
+            })
+        })
+    };
+    // Either the writer stops between two frames, or it finishes and drops the sender.
+    if let Ok(n) = stopped_at.recv() {
+        bar.finish_and_clear();
+        let done: Vec<GestureTruth> = gestures.into_iter().filter(|g| g.end_frame < n).collect();
+        if draws {
+            write_gestures_csv(&args.out.join("gestures.csv"), &done)?;
+        }
+        return Err(Interrupted::new(format!(
+            "kept the first {n} of {frames} frames in {}, a whole recording{}",
+            args.out.display(),
+            if draws {
+                format!(" with the {} symbols drawn in them", done.len())
+            } else {
+                String::new()
+            }
+        ))
+        .into());
+    }
+    let summary = writer
+        .join()
+        .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+        .with_context(|| format!("writing {}", args.out.display()))?;
     bar.finish_and_clear();
     if args.json {
         let line = serde_json::json!({

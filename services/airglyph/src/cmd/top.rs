@@ -3,10 +3,15 @@
 use airglyph_ipc::wire::Percentiles;
 use airglyph_ipc::{shutdown, Pipeline, Receiver, Stage, StageStatsMsg};
 use std::collections::BTreeMap;
+use std::io::{IsTerminal, Write};
 use std::time::{Duration, Instant};
 
 /// Show each running stage's frame rate, drops and latency percentiles, refreshed every
 /// second from the stages' `airglyph/stats/<stage>` services.
+///
+/// On a terminal the table is redrawn in place; piped or redirected, it is a filter:
+/// the header once, then every stage's row each second, plain text
+/// (`airglyph top | grep pose`).
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// Print one snapshot as a JSON object and exit.
@@ -40,17 +45,30 @@ pub fn stats_json(s: &StageStatsMsg) -> serde_json::Value {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    shutdown::install();
-    let pipeline = Pipeline::join("top")?;
+    // Whoever reads the output has gone (`top | head`): stop as a filter does, quietly.
+    match show(&args) {
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+        other => other.map_err(Into::into),
+    }
+}
+
+fn show(args: &Args) -> std::io::Result<()> {
+    let pipeline = Pipeline::join("top").map_err(std::io::Error::other)?;
     let mut receivers: Vec<(Stage, Receiver<StageStatsMsg>)> = Stage::PIPELINE
         .iter()
         .map(|&s| Ok((s, pipeline.stats_receiver(s)?)))
-        .collect::<anyhow::Result<_>>()?;
+        .collect::<anyhow::Result<_>>()
+        .map_err(std::io::Error::other)?;
+    // On a terminal the table is redrawn in place; into a pipe or a file it is a
+    // filter's output: the header once, then each stage's row every second.
+    let on_terminal = std::io::stdout().is_terminal();
+    let mut out = std::io::stdout().lock();
     let mut latest: BTreeMap<&'static str, (Instant, StageStatsMsg)> = BTreeMap::new();
     let started = Instant::now();
+    let mut rounds = 0u64;
     loop {
         for (stage, rx) in receivers.iter_mut() {
-            while let Some(r) = rx.try_recv()? {
+            while let Some(r) = rx.try_recv().map_err(std::io::Error::other)? {
                 latest.insert(stage.name(), (Instant::now(), r.msg));
             }
         }
@@ -60,24 +78,29 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                     .iter()
                     .map(|(k, (_, s))| (k.to_string(), stats_json(s)))
                     .collect();
-                println!("{}", serde_json::json!({ "stages": stages }));
-                return Ok(());
+                return writeln!(out, "{}", serde_json::json!({ "stages": stages }));
             }
         } else {
-            print!("\x1b[2J\x1b[H");
-            println!(
-                "{:<8} {:>6} {:>9} {:>8} {:>8}   {:>27}   {:>27}",
-                "stage",
-                "fps",
-                "frames",
-                "dropped",
-                "rejected",
-                "processing p50/p99/max ms",
-                "capture→out p50/p99/max ms"
-            );
+            if on_terminal {
+                write!(out, "\x1b[2J\x1b[H")?;
+            }
+            if on_terminal || rounds == 0 {
+                writeln!(
+                    out,
+                    "{:<8} {:>6} {:>9} {:>8} {:>8}   {:>27}   {:>27}",
+                    "stage",
+                    "fps",
+                    "frames",
+                    "dropped",
+                    "rejected",
+                    "processing p50/p99/max ms",
+                    "capture→out p50/p99/max ms"
+                )?;
+            }
             for stage in Stage::PIPELINE {
                 match latest.get(stage.name()) {
-                    Some((at, s)) if at.elapsed() < Duration::from_secs(3) => println!(
+                    Some((at, s)) if at.elapsed() < Duration::from_secs(3) => writeln!(
+                        out,
                         "{:<8} {:>6.1} {:>9} {:>8} {:>8}   {:>9.2}{:>9.2}{:>9.2}   {:>9.2}{:>9.2}{:>9.2}",
                         stage.name(),
                         s.fps,
@@ -90,11 +113,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                         ms(s.latency.p50),
                         ms(s.latency.p99),
                         ms(s.latency.max),
-                    ),
-                    _ => println!("{:<8} (not running)", stage.name()),
+                    )?,
+                    _ => writeln!(out, "{:<8} (not running)", stage.name())?,
                 }
             }
-            println!("\nCtrl-C to quit");
+            if on_terminal {
+                writeln!(out, "\nCtrl-C to quit")?;
+            }
+            out.flush()?;
+            rounds += 1;
         }
         if shutdown::requested() {
             return Ok(());

@@ -1,11 +1,12 @@
 //! `airglyph train`: trains a gesture model from trajectory JSONL files.
 
-use airglyph_gesture::{load_many, train, ClassifierKind, TrainConfig};
+use crate::interrupt::unless_interrupted;
+use airglyph_gesture::{load_many, train, ClassifierKind, Model, TrainConfig};
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 
-#[derive(clap::Args)]
+#[derive(clap::Args, Clone)]
 pub struct Args {
     /// Trajectory JSONL files (.jsonl or .jsonl.gz).
     #[arg(long, num_args = 1.., required = true)]
@@ -104,6 +105,26 @@ pub fn config(args: &Args) -> anyhow::Result<TrainConfig> {
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     let cfg = config(&args)?;
+    // Training writes nothing until it is done: a signal leaves it where it is.
+    let kept = format!("no model was written ({} is as it was)", args.out.display());
+    let model = unless_interrupted(&kept, {
+        let args = args.clone();
+        move || model(&args, &cfg)
+    })??;
+    model
+        .save(&args.out)
+        .with_context(|| format!("{}: cannot write model", args.out.display()))?;
+    eprintln!(
+        "wrote {} ({} labels, {} bytes)",
+        args.out.display(),
+        model.labels.len(),
+        std::fs::metadata(&args.out).map(|m| m.len()).unwrap_or(0)
+    );
+    Ok(())
+}
+
+/// The model the arguments ask for, from their data.
+fn model(args: &Args, cfg: &TrainConfig) -> anyhow::Result<Model> {
     let samples = load_many(&args.data)?;
     eprintln!(
         "training {} on {} samples from {} file(s)",
@@ -122,7 +143,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         bar.set_position(done);
     };
     let model = match (&args.reuse_classifier, &args.recalibrate) {
-        (None, None) => train(&samples, &cfg, &progress)?,
+        (None, None) => train(&samples, cfg, &progress)?,
         (_, Some(path)) => {
             let mut model = reusable(path, &samples)?;
             let Some(verifier) = model.spotting.as_ref().and_then(|s| s.verifier.as_ref()) else {
@@ -166,24 +187,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     };
     bar.finish_and_clear();
-    model
-        .save(&args.out)
-        .with_context(|| format!("{}: cannot write model", args.out.display()))?;
-    eprintln!(
-        "wrote {} ({} labels, {} bytes)",
-        args.out.display(),
-        model.labels.len(),
-        std::fs::metadata(&args.out).map(|m| m.len()).unwrap_or(0)
-    );
-    Ok(())
+    Ok(model)
 }
 
 /// A model whose parts are kept: its labels must be the data's.
-fn reusable(
-    path: &std::path::Path,
-    samples: &[airglyph_gesture::Sample],
-) -> anyhow::Result<airglyph_gesture::Model> {
-    let model = airglyph_gesture::Model::load(path)?;
+fn reusable(path: &std::path::Path, samples: &[airglyph_gesture::Sample]) -> anyhow::Result<Model> {
+    let model = Model::load(path)?;
     if airglyph_gesture::data::labels_of(samples) != model.labels {
         anyhow::bail!(
             "{}: its labels differ from the data's; cannot reuse it",

@@ -1,4 +1,4 @@
-//! `airglyph-pose`: the pose stage process. Subscribes to depth frames, publishes a
+//! `airglyph stage pose`: the pose stage process. Subscribes to depth frames, publishes a
 //! skeleton for each frame it takes (person-found false when there is none) and its stats.
 
 use airglyph_core::recording::Recording;
@@ -8,7 +8,6 @@ use airglyph_ipc::stats::Telemetry;
 use airglyph_ipc::wire::{DepthHeader, LatencyChain};
 use airglyph_ipc::{shutdown, Pipeline, SkeletonMsg, Stage};
 use airglyph_pose::{PoseConfig, PoseEstimator};
-use clap::Parser;
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -19,17 +18,12 @@ use std::time::Duration;
 /// `airglyph/skeleton`. The pipeline it joins is set by AIRGLYPH_IPC_ROOT /
 /// AIRGLYPH_IPC_PREFIX (or the config file named by AIRGLYPH_CONFIG). Normally started
 /// by `airglyph run`.
-#[derive(Parser)]
-#[command(name = "airglyph-pose", version)]
-struct Args {
+#[derive(clap::Args, Debug)]
+pub struct Args {
     /// Run alone: read frames from this recording instead of the capture stage, publish
     /// their skeletons as fast as possible, then exit (to profile this stage by itself).
     #[arg(long)]
     recording: Option<PathBuf>,
-}
-
-fn main() -> std::process::ExitCode {
-    airglyph_ipc::process::main("airglyph-pose", || run(Args::parse()))
 }
 
 /// One estimator for the stream; remade when the camera changes.
@@ -74,7 +68,7 @@ fn skeleton_msg(h: &DepthHeader, receive_ns: u64, r: &airglyph_pose::PoseResult)
     msg
 }
 
-fn run(args: Args) -> anyhow::Result<()> {
+pub fn run(args: Args) -> anyhow::Result<()> {
     let pipeline = Pipeline::join("pose")?;
     let publisher = pipeline.skeleton_publisher()?;
     let mut telemetry = Telemetry::new(&pipeline, Stage::Pose)?;

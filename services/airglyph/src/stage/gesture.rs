@@ -1,13 +1,12 @@
-//! `airglyph-gesture`: the gesture stage process. Follows the drawing hand through the
+//! `airglyph stage gesture`: the gesture stage process. Follows the drawing hand through the
 //! skeleton stream, spots and classifies gestures, publishes each as an event.
 
-use airglyph_gesture::{Hand, Model, SpottedGesture, Spotter, SpotterConfig};
+use airglyph_gesture::{Hand, ModelSource, SpottedGesture, Spotter, SpotterConfig};
 use airglyph_ipc::clock::monotonic_ns;
 use airglyph_ipc::stats::Telemetry;
 use airglyph_ipc::wire::Hand as WireHand;
 use airglyph_ipc::{shutdown, DecisionMsg, GestureEventMsg, LatencyChain, Pipeline, Stage};
 use anyhow::Context;
-use clap::Parser;
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -16,19 +15,15 @@ use std::time::Duration;
 ///
 /// The pipeline it joins is set by AIRGLYPH_IPC_ROOT / AIRGLYPH_IPC_PREFIX (or the
 /// config file named by AIRGLYPH_CONFIG). Normally started by `airglyph run`.
-#[derive(Parser)]
-#[command(name = "airglyph-gesture", version)]
-struct Args {
-    /// The gesture model (from `airglyph train`); default: the shipped 36-symbol model.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The gesture model (from `airglyph train`); default: $AIRGLYPH_MODEL, else the
+    /// built-in 36-symbol model.
     #[arg(long)]
     model: Option<PathBuf>,
     /// Fault-injection for tests: sleep this long on every skeleton (a slow stage).
     #[arg(long, hide = true, default_value_t = 0)]
     delay_ms: u64,
-}
-
-fn main() -> std::process::ExitCode {
-    airglyph_ipc::process::main("airglyph-gesture", || run(Args::parse()))
 }
 
 /// Sends one gesture event; `chain` is the latency chain of the frame that closed it.
@@ -63,16 +58,10 @@ fn publish(
     Ok(())
 }
 
-fn run(args: Args) -> anyhow::Result<()> {
-    let path = args
-        .model
-        .clone()
-        .unwrap_or_else(airglyph_gesture::model::default_model_path);
-    let model = Model::load(&path).with_context(|| {
-        format!(
-            "cannot load the gesture model {} (train one with `airglyph train`, or pass --model)",
-            path.display()
-        )
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let source = ModelSource::choose(args.model.as_deref());
+    let model = source.load().with_context(|| {
+        format!("cannot load the gesture model {source} (train one with `airglyph train`, or pass --model)")
     })?;
     let mut spotter = Spotter::new(model, SpotterConfig::default())?;
     let pipeline = Pipeline::join("gesture")?;
@@ -80,7 +69,7 @@ fn run(args: Args) -> anyhow::Result<()> {
     let events = pipeline.gesture_publisher()?;
     let decisions = pipeline.decision_publisher()?;
     let mut telemetry = Telemetry::new(&pipeline, Stage::Gesture)?;
-    tracing::info!(model = %path.display(), "waiting for skeletons");
+    tracing::info!(model = %source, "waiting for skeletons");
     let mut session = None;
     // When the skeletons stop (the camera stopped, the person left), what the spotter
     // still weighs is decided after this long.

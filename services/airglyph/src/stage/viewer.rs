@@ -1,11 +1,10 @@
-//! `airglyph-viewer`: the viewer stage process. Subscribes to the pipeline like any stage
+//! `airglyph stage viewer`: the viewer stage process. Subscribes to the pipeline like any stage
 //! and serves a web page of what the camera sees: the depth image, the skeleton, the
 //! hand's trail with its Bezier points, the last gestures and each stage's latency.
 
 use airglyph_ipc::{shutdown, Pipeline};
 use airglyph_viewer::{Feed, ServeConfig, Server, Shared};
 use anyhow::{bail, Context};
-use clap::Parser;
 use std::net::SocketAddr;
 use std::sync::Arc;
 use std::time::Duration;
@@ -18,9 +17,8 @@ use std::time::Duration;
 /// slowing anything. The pipeline it joins is set by AIRGLYPH_IPC_ROOT /
 /// AIRGLYPH_IPC_PREFIX (or the config file named by AIRGLYPH_CONFIG). Started by
 /// `airglyph run --view`, or alone beside a running pipeline.
-#[derive(Parser)]
-#[command(name = "airglyph-viewer", version)]
-struct Args {
+#[derive(clap::Args, Debug)]
+pub struct Args {
     /// Address and port to serve the page on (port 0: any free port, logged).
     #[arg(long, default_value = "127.0.0.1:8080")]
     listen: SocketAddr,
@@ -36,11 +34,7 @@ struct Args {
     nice: i32,
 }
 
-fn main() -> std::process::ExitCode {
-    airglyph_ipc::process::main("airglyph-viewer", || run(Args::parse()))
-}
-
-fn run(args: Args) -> anyhow::Result<()> {
+pub fn run(args: Args) -> anyhow::Result<()> {
     if !(args.max_fps.is_finite() && args.max_fps > 0.0 && args.max_fps <= 120.0) {
         bail!("--max-fps {} must be in (0, 120]", args.max_fps);
     }

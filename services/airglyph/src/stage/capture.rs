@@ -1,4 +1,4 @@
-//! `airglyph-capture`: publishes depth frames from a source on `airglyph/depth`.
+//! `airglyph stage capture`: publishes depth frames from a source on `airglyph/depth`.
 
 use airglyph_capture::{Pacing, SourceError, SourceOptions, SourceSpec};
 use airglyph_ipc::clock::monotonic_ns;
@@ -6,16 +6,14 @@ use airglyph_ipc::port::PublishError;
 use airglyph_ipc::stats::Telemetry;
 use airglyph_ipc::{shutdown, LatencyChain, Pipeline, SkeletonMsg, Stage};
 use anyhow::Context;
-use clap::Parser;
 
 /// The capture stage: reads depth frames from a source and publishes each one, written
 /// once into shared memory, on the iceoryx2 service `airglyph/depth`.
 ///
 /// The pipeline it joins is set by AIRGLYPH_IPC_ROOT / AIRGLYPH_IPC_PREFIX (or the
 /// config file named by AIRGLYPH_CONFIG). Normally started by `airglyph run`.
-#[derive(Parser)]
-#[command(name = "airglyph-capture", version)]
-struct Args {
+#[derive(clap::Args, Debug)]
+pub struct Args {
     /// Where frames come from: synthetic, recording:DIR, v4l2:/dev/videoN, openni2 (the first device) or openni2:URI.
     #[arg(long, default_value = "synthetic")]
     source: SourceSpec,
@@ -35,11 +33,7 @@ struct Args {
     truth_skeletons: bool,
 }
 
-fn main() -> std::process::ExitCode {
-    airglyph_ipc::process::main("airglyph-capture", || run(Args::parse()))
-}
-
-fn run(args: Args) -> anyhow::Result<()> {
+pub fn run(args: Args) -> anyhow::Result<()> {
     let opts = SourceOptions {
         pacing: if args.fast {
             Pacing::Fast

@@ -1,0 +1,121 @@
+//! The stages' processes: `airglyph stage capture|pose|gesture|viewer`. Each wires a
+//! stage's library to the pipeline's shared memory.
+//!
+//! They are subcommands of the one `airglyph` executable, so whatever builds or installs
+//! `airglyph` can run the whole pipeline, and the supervisor starts each stage from its
+//! own executable ([`command`]). Each still runs as a process of its own: it can be
+//! restarted, replaced, profiled or killed alone, and run by hand beside a pipeline.
+
+pub mod capture;
+pub mod gesture;
+pub mod pose;
+pub mod viewer;
+
+use airglyph_ipc::Stage;
+use std::ffi::OsString;
+use std::os::unix::process::CommandExt;
+
+/// One stage's process. Started by `airglyph run` (or a systemd unit), not by hand
+/// except to run one stage alone.
+#[derive(clap::Subcommand, Debug)]
+pub enum StageCommand {
+    Capture(capture::Args),
+    Pose(pose::Args),
+    Gesture(gesture::Args),
+    Viewer(viewer::Args),
+}
+
+impl StageCommand {
+    pub fn stage(&self) -> Stage {
+        match self {
+            StageCommand::Capture(_) => Stage::Capture,
+            StageCommand::Pose(_) => Stage::Pose,
+            StageCommand::Gesture(_) => Stage::Gesture,
+            StageCommand::Viewer(_) => Stage::Viewer,
+        }
+    }
+
+    pub fn run(self) -> anyhow::Result<()> {
+        match self {
+            StageCommand::Capture(a) => capture::run(a),
+            StageCommand::Pose(a) => pose::run(a),
+            StageCommand::Gesture(a) => gesture::run(a),
+            StageCommand::Viewer(a) => viewer::run(a),
+        }
+    }
+}
+
+/// Extra arguments for one stage: `--stage-args STAGE=ARGS`, ARGS split as a shell
+/// splits them (quotes keep spaces: `gesture=--model 'my model.json'`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct StageArgs {
+    pub stage: Stage,
+    pub args: Vec<String>,
+}
+
+impl std::str::FromStr for StageArgs {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        let names = || Stage::ALL.map(Stage::name).join(", ");
+        let (name, args) = s
+            .split_once('=')
+            .ok_or_else(|| format!("expected STAGE=ARGS, one of the stages {}", names()))?;
+        let stage = Stage::from_name(name)
+            .ok_or_else(|| format!("unknown stage {name:?}: the stages are {}", names()))?;
+        let args = shlex::split(args).ok_or_else(|| format!("{args:?}: a quote is not closed"))?;
+        Ok(Self { stage, args })
+    }
+}
+
+/// Whether `stage` takes `args`, as its process would when started with them: a bad one
+/// is refused before the pipeline starts, not by a stage dying again and again.
+pub fn check_args(stage: Stage, args: &[OsString]) -> Result<(), String> {
+    #[derive(clap::Parser)]
+    #[command(name = "airglyph stage")]
+    struct Stages {
+        #[command(subcommand)]
+        stage: StageCommand,
+    }
+    let argv = ["airglyph stage", stage.name()].map(OsString::from);
+    <Stages as clap::Parser>::try_parse_from(argv.into_iter().chain(args.iter().cloned()))
+        .map(drop)
+        .map_err(|e| e.to_string().trim_end().to_owned())
+}
+
+/// How a person runs `stage` by hand, for messages that send them there.
+pub fn invocation(stage: Stage) -> String {
+    format!("airglyph stage {}", stage.name())
+}
+
+/// A command that runs this very executable again (a stage, or a pipeline to profile)
+/// as a child that ends with this process.
+///
+/// It runs `/proc/self/exe`, the image this process was started from, rather than the
+/// file at its path: a stage restarted after that file was replaced (a `cargo build` or
+/// an upgrade while the pipeline runs) is still the supervisor's own build, whose
+/// message types its peers accept, and a file that was removed is no obstacle. The
+/// path stays argv[0], for `ps`.
+pub fn own_executable() -> std::process::Command {
+    let mut cmd = std::process::Command::new("/proc/self/exe");
+    if let Ok(path) = std::env::current_exe() {
+        cmd.arg0(path);
+    }
+    // SAFETY: prctl is async-signal-safe; the closure touches nothing else.
+    unsafe {
+        // A child whose parent died (even by SIGKILL) stops too, instead of running on
+        // unsupervised.
+        cmd.pre_exec(|| {
+            libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM);
+            Ok(())
+        });
+    }
+    cmd
+}
+
+/// A command that runs one stage from this executable.
+pub fn command(stage: Stage) -> std::process::Command {
+    let mut cmd = own_executable();
+    cmd.args(["stage", stage.name()]);
+    cmd
+}

@@ -1,0 +1,112 @@
+//! Pictures of airglyph's measurements, drawn alike on every machine.
+//!
+//! plotters draws text with a system font it finds through fontconfig, which a headless
+//! device may not have (`eval-pose --plots` then failed with `NoSuchFont("sans-serif")`).
+//! Here DejaVu Sans is built in (fonts/README.md says which and under what licence) and
+//! registered as `sans-serif`, the family of plotters' own text and of airglyph's plots.
+//! And a picture is drawn in memory and written whole, under its name only once it is
+//! complete: a drawing that fails leaves no file, or the old one untouched.
+//!
+//! ```no_run
+//! use plotters::prelude::*;
+//! airglyph_plot::png(std::path::Path::new("errors.png"), (800, 400), |root| {
+//!     let mut chart = ChartBuilder::on(root)
+//!         .caption("error per frame", ("sans-serif", 22))
+//!         .build_cartesian_2d(0.0..10.0, 0.0..5.0)?;
+//!     chart.configure_mesh().draw()?;
+//!     Ok(())
+//! })?;
+//! # Ok::<(), airglyph_plot::PlotError>(())
+//! ```
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::path::{Path, PathBuf};
+
+/// What a picture is drawn on: its whole area, white.
+pub type Area<'a> = DrawingArea<BitMapBackend<'a>, Shift>;
+
+/// What drawing returns: any of plotters' errors (which differ by what they draw on).
+pub type DrawResult = Result<(), Box<dyn std::error::Error + Send + Sync>>;
+
+/// A picture that could not be drawn or written.
+#[derive(Debug, thiserror::Error)]
+#[error("cannot draw {}: {reason}", path.display())]
+pub struct PlotError {
+    pub path: PathBuf,
+    pub reason: String,
+}
+
+/// DejaVu Sans 2.37 (fonts/README.md).
+const DEJAVU_SANS: &[u8] = include_bytes!("../fonts/DejaVuSans.ttf");
+
+/// Registers the built-in font as `sans-serif`, once a process.
+fn register_font() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let registered =
+            plotters::style::register_font("sans-serif", FontStyle::Normal, DEJAVU_SANS);
+        assert!(registered.is_ok(), "the built-in font is a TrueType font");
+    });
+}
+
+/// Draws a `width`×`height` picture with `draw` and writes it to `path` as a PNG, whole.
+pub fn png(
+    path: &Path,
+    (width, height): (u32, u32),
+    draw: impl FnOnce(&Area) -> DrawResult,
+) -> Result<(), PlotError> {
+    register_font();
+    let fail = |reason: String| PlotError {
+        path: path.to_owned(),
+        reason,
+    };
+    let mut pixels = vec![0u8; width as usize * height as usize * 3];
+    {
+        let root = BitMapBackend::with_buffer(&mut pixels, (width, height)).into_drawing_area();
+        root.fill(&WHITE)
+            .map_err(|e| e.into())
+            .and_then(|()| draw(&root))
+            .and_then(|()| root.present().map_err(|e| e.into()))
+            .map_err(|e| fail(e.to_string()))?;
+    }
+    let picture = image::RgbImage::from_raw(width, height, pixels).expect("sized to the picture");
+    let mut encoded = std::io::Cursor::new(Vec::new());
+    picture
+        .write_to(&mut encoded, image::ImageFormat::Png)
+        .map_err(|e| fail(e.to_string()))?;
+    airglyph_core::file::write_whole(path, encoded.into_inner()).map_err(|e| fail(e.to_string()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn text_is_drawn_with_the_built_in_font() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("text.png");
+        png(&path, (200, 60), |root| {
+            root.draw(&Text::new("Ag 4.1 cm", (10, 10), ("sans-serif", 30)))?;
+            Ok(())
+        })
+        .unwrap();
+        let picture = image::open(&path).unwrap().to_rgb8();
+        let inked = picture.pixels().filter(|p| p.0[0] < 128).count();
+        // Nine glyphs at 30 px ink a few hundred pixels; a missing font none at all.
+        assert!(inked > 200, "{inked} dark pixels");
+    }
+
+    #[test]
+    fn a_failed_drawing_leaves_the_old_picture_and_no_part_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("plot.png");
+        std::fs::write(&path, b"the old picture").unwrap();
+        let err = png(&path, (100, 100), |_| Err("no data to draw".into())).unwrap_err();
+        assert!(err.to_string().contains("no data to draw"), "{err}");
+        assert!(err.to_string().contains("plot.png"), "{err}");
+        assert_eq!(std::fs::read(&path).unwrap(), b"the old picture");
+        let files: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+        assert_eq!(files.len(), 1, "{files:?}");
+    }
+}
