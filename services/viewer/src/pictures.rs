@@ -106,13 +106,20 @@ impl Shared {
         }
     }
 
-    /// The newest frame's picture as JPEG: the one already encoded when no frame came
-    /// since, else drawn now, paced. Blocks (a blocking thread's work).
-    pub(crate) fn newest_jpeg(&self) -> Result<Option<Encoded>, String> {
+    /// A picture newer than `after` as JPEG: the one already encoded when it is of the
+    /// newest frame, or newer than `after` while the next is not due yet; else the
+    /// newest frame's, drawn now, paced. Many browsers (or many requests of one) thus
+    /// share one encoding instead of queueing for one each. Blocks (a blocking
+    /// thread's work).
+    pub(crate) fn newest_jpeg(&self, after: u64) -> Result<Option<Encoded>, String> {
         let mut enc = relock(&self.encoder);
-        // Checked before pacing: asking again for the picture just sent costs nothing.
         let newest = self.frames_in();
-        if let Some(last) = enc.last.as_ref().filter(|l| l.id == newest) {
+        let due = Instant::now() >= enc.next_at;
+        if let Some(last) = enc
+            .last
+            .as_ref()
+            .filter(|l| l.id == newest || (l.id > after && !due))
+        {
             return Ok(Some(last.clone()));
         }
         self.pace(&enc);
@@ -195,7 +202,7 @@ pub(crate) mod tests {
     fn the_next_picture_waits_for_a_newer_frame_and_is_a_jpeg() {
         let shared = shared_with_frames(3, 1000.0);
         assert!(block_on(shared.wait_for_frame_after(0)));
-        let e = shared.newest_jpeg().unwrap().unwrap();
+        let e = shared.newest_jpeg(0).unwrap().unwrap();
         assert_eq!(e.id, 3);
         assert_eq!(
             &e.jpeg[..2],
@@ -206,7 +213,7 @@ pub(crate) mod tests {
         assert!(!block_on(shared.wait_for_frame_after(3)), "nothing newer");
         assert!(t.elapsed() >= LONG_POLL);
         // The same frame again is the same picture, not a second encoding.
-        assert_eq!(shared.newest_jpeg().unwrap().unwrap().id, 3);
+        assert_eq!(shared.newest_jpeg(0).unwrap().unwrap().id, 3);
         assert_eq!(shared.pictures(), 1);
     }
 
@@ -228,12 +235,30 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn requests_between_two_pictures_share_the_last_one() {
+        let shared = shared_with_frames(1, 1.0);
+        assert_eq!(shared.newest_jpeg(0).unwrap().unwrap().id, 1);
+        push_frame(&shared, 1);
+        let t = Instant::now();
+        // A newer frame came, but the next picture is not due for a second: a browser
+        // without a picture gets the last one at once.
+        assert_eq!(shared.newest_jpeg(0).unwrap().unwrap().id, 1);
+        assert!(
+            t.elapsed() < Duration::from_millis(500),
+            "{:?}",
+            t.elapsed()
+        );
+        assert_eq!(shared.pictures(), 1);
+    }
+
+    #[test]
     fn pictures_are_paced_to_max_fps() {
         let shared = shared_with_frames(1, 10.0);
         let t = Instant::now();
         for i in 0..4u64 {
             push_frame(&shared, 10 + i);
-            assert!(shared.newest_jpeg().unwrap().is_some());
+            // What the browser has: the frame before this one.
+            assert_eq!(shared.newest_jpeg(i + 1).unwrap().unwrap().id, i + 2);
         }
         // Four pictures at 10 a second: the last three each waited 100 ms.
         assert!(

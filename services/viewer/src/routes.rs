@@ -84,7 +84,7 @@ pub(crate) async fn route(shared: &Arc<Shared>, method: &Method, target: &str) -
             if !shared.wait_for_frame_after(after).await {
                 return text(StatusCode::NO_CONTENT, "");
             }
-            match blocking(shared, Shared::newest_jpeg).await {
+            match blocking(shared, move |s| s.newest_jpeg(after)).await {
                 Ok(Some(e)) => {
                     let mut r = reply(StatusCode::OK, "image/jpeg", e.jpeg.to_vec());
                     r.headers_mut()
