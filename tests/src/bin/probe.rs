@@ -19,7 +19,7 @@ struct Args {
     #[arg(long)]
     publish_bad: Option<u64>,
     /// Instead of receiving: publish this many valid 64x48 depth frames, each followed
-    /// by 30 ms of rewriting its width in shared memory (64, 640, 64, …) after sending
+    /// by 30 ms of rewriting its width in shared memory (640, 64, … each for 20 µs) after sending
     /// it, as a hostile publisher of the pipeline's own user can; then exit.
     #[arg(long)]
     tamper: Option<u64>,
@@ -107,9 +107,16 @@ fn tamper(pipeline: &Pipeline, n: u64) -> anyhow::Result<()> {
         h.set_intrinsics(&k);
         let sent = publisher.publish_tamperable(h, &vec![1500u16; 64 * 48])?;
         let until = Instant::now() + Duration::from_millis(30);
+        // Each width held for 20 µs: a reader checking the header and reading it
+        // again microseconds later sees both.
+        let hold = |w: u32| {
+            sent.set_width(w);
+            let t = Instant::now();
+            while t.elapsed() < Duration::from_micros(20) {}
+        };
         while Instant::now() < until {
-            sent.set_width(640);
-            sent.set_width(64);
+            hold(640);
+            hold(64);
         }
     }
     Ok(())
