@@ -361,7 +361,7 @@ fn the_viewer_serves_a_new_client_under_held_connections_and_an_endless_header()
 fn a_dropped_pipeline_leaves_nothing_in_dev_shm() {
     let p = Isolated::new();
     let prefix = p.prefix.clone();
-    let _supervisor = p
+    let mut supervisor = p
         .command("airglyph")
         .args(["run", "--source", "synthetic:poses"])
         .stdout(Stdio::null())
@@ -373,7 +373,9 @@ fn a_dropped_pipeline_leaves_nothing_in_dev_shm() {
         "{stats}"
     );
     assert!(!p.all_shm_files().is_empty(), "the pipeline has files");
+    // Killed with the rest of the pipeline's processes, reaped here.
     drop(p);
+    supervisor.wait().unwrap();
     let left: Vec<_> = std::fs::read_dir("/dev/shm")
         .unwrap()
         .filter_map(|e| e.ok())
