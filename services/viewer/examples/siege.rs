@@ -120,6 +120,13 @@ fn main() {
         .collect();
     let results: Vec<_> = threads.into_iter().map(|t| t.join().unwrap()).collect();
     let failed = results.iter().filter(|r| r.is_err()).count();
+    let mut why = std::collections::BTreeMap::new();
+    for e in results.iter().filter_map(|r| r.as_ref().err()) {
+        *why.entry(e.clone()).or_insert(0) += 1;
+    }
+    if !why.is_empty() {
+        println!("failures: {why:?}");
+    }
     let mut ok: Vec<Duration> = results.into_iter().filter_map(Result::ok).collect();
     ok.sort();
     if ok.is_empty() {

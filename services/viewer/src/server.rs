@@ -41,7 +41,9 @@ pub const MAX_HEAD: usize = 16 * 1024;
 pub const MAX_HEADERS: usize = 64;
 /// A request's line and headers must have arrived this long after their first byte.
 pub const HEAD_TIMEOUT: Duration = Duration::from_secs(5);
-/// A connection through which no byte moves for this long, either way, is closed.
+/// A connection through which no byte moves for this long, either way, is closed. It
+/// also bounds how long an answer may take to prepare (hyper keeps reading meanwhile):
+/// the longest, a long poll for the next picture, takes a second.
 pub const IDLE_TIMEOUT: Duration = Duration::from_secs(10);
 /// Threads drawing and encoding pictures (one draws at a time; the other answers a
 /// request for a picture already made meanwhile).
