@@ -86,6 +86,30 @@ fn a_node_counter_planted_by_another_user_is_refused_by_name() {
     );
 }
 
+/// Item 1: any file of the pipeline's prefix another user made (here under the name of
+/// a service's data segment) is refused by name before iceoryx2 opens it.
+#[test]
+fn a_shared_memory_file_planted_by_another_user_is_refused_by_name() {
+    let p = Isolated::new();
+    let planted = Path::new("/dev/shm").join(format!(
+        "{}0354a209029e7d094a819e2d4030ea331e6caaf0.dynamic",
+        p.prefix
+    ));
+    let plant = format!("echo x > {0} && chmod 666 {0}", planted.display());
+    let Some(mut planting) = as_nobody(&p, "/bin/sh", &["-c", &plant]) else {
+        return;
+    };
+    assert!(
+        planting.status().unwrap().success(),
+        "nobody plants the file"
+    );
+    let err = fail(&mut capture(&p, &["--frames", "1", "--fast"]));
+    assert!(
+        err.contains(&planted.display().to_string()) && err.contains("nobody"),
+        "{err}"
+    );
+}
+
 /// Item 1: the counter a run leaves is the pipeline user's alone and stays, so nobody
 /// can write into it or plant one before the next start (which the old build's
 /// removal after every run allowed).
