@@ -191,16 +191,24 @@ pub fn add_missing_cropping(b: &[u8]) -> Result<Option<Vec<u8>>, OniFileError> {
         return Ok(None);
     }
     // Insert before each such node's state-ready record (after its other properties),
-    // or before its first frame when the recorder wrote no state-ready record.
+    // or before its first frame when the recorder wrote no state-ready record; both
+    // after the node's last node-added record, which starts its properties afresh (a
+    // file adding a node twice was repaired before the second and needed it again).
     let mut inserts: Vec<(usize, u32)> = Vec::new();
     for node in missing {
-        let at = recs
+        let added = recs
             .iter()
-            .find(|r| r.node == node && r.kind == RECORD_NODE_STATE_READY)
-            .or_else(|| {
-                recs.iter()
-                    .find(|r| r.node == node && r.kind == RECORD_NEW_DATA)
-            });
+            .filter(|r| {
+                r.node == node && matches!(r.kind, RECORD_NODE_ADDED | RECORD_NODE_ADDED_1_0_0_5)
+            })
+            .map(|r| r.pos)
+            .next_back()
+            .unwrap_or(0);
+        let after = |kind: u32| {
+            recs.iter()
+                .find(|r| r.node == node && r.kind == kind && r.pos > added)
+        };
+        let at = after(RECORD_NODE_STATE_READY).or_else(|| after(RECORD_NEW_DATA));
         if let Some(r) = at {
             inserts.push((r.pos, node));
         }
@@ -425,6 +433,33 @@ mod tests {
         }
         // Fixing a fixed file changes nothing.
         assert_eq!(add_missing_cropping(&fixed).unwrap(), None);
+    }
+
+    /// Found by the oni fuzz target: a node added again after its frames. The cropping
+    /// went before its first addition, which the second one undoes, so every repair
+    /// added it once more; now it goes after the last addition (in the fuzzer's file
+    /// nothing follows it: nothing to repair), and a repaired file needs no second one.
+    #[test]
+    fn a_node_added_twice_is_repaired_after_its_last_addition_once() {
+        let b = include_bytes!("../../../fuzz/corpus/oni/node-added-twice.oni");
+        assert_eq!(add_missing_cropping(b), Ok(None));
+        let (mut twice, _) = dummy_like(2, false);
+        let end = twice.len() - RECORD_HEADER;
+        let (again, _) = dummy_like(2, false);
+        twice.splice(
+            end..end,
+            again[FILE_HEADER..again.len() - RECORD_HEADER]
+                .iter()
+                .copied(),
+        );
+        let repaired = add_missing_cropping(&twice)
+            .unwrap()
+            .expect("needs cropping");
+        assert!(depth_nodes(&repaired)
+            .unwrap()
+            .iter()
+            .all(|n| n.has_cropping));
+        assert_eq!(add_missing_cropping(&repaired), Ok(None));
     }
 
     #[test]
