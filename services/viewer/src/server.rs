@@ -48,6 +48,9 @@ pub const IDLE_TIMEOUT: Duration = Duration::from_secs(10);
 /// Threads drawing and encoding pictures (one draws at a time; the other answers a
 /// request for a picture already made meanwhile).
 pub const PICTURE_THREADS: usize = 2;
+/// Connections the kernel queues before they are accepted (capped by
+/// net.core.somaxconn, 4096 by default).
+const BACKLOG: u32 = 4096;
 /// File descriptors kept for everything but connections (shared memory, logs, the
 /// runtime).
 const SPARE_FDS: u64 = 64;
@@ -101,17 +104,17 @@ impl Server {
         let fail = |reason: String| ServeError { addr, reason };
         let fds = raise_fd_limit();
         let limit = (fds.saturating_sub(SPARE_FDS) as usize).clamp(1, MAX_CONNECTIONS);
-        let listener = std::net::TcpListener::bind(addr).map_err(|e| fail(e.to_string()))?;
-        listener
-            .set_nonblocking(true)
-            .map_err(|e| fail(e.to_string()))?;
-        let bound = listener.local_addr().map_err(|e| fail(e.to_string()))?;
         let runtime = tokio::runtime::Builder::new_current_thread()
             .enable_all()
             .max_blocking_threads(PICTURE_THREADS)
             .thread_name("web-picture")
             .build()
             .map_err(|e| fail(format!("cannot start the web runtime: {e}")))?;
+        let listener = {
+            let _in_runtime = runtime.enter();
+            listen(addr).map_err(|e| fail(e.to_string()))?
+        };
+        let bound = listener.local_addr().map_err(|e| fail(e.to_string()))?;
         let connections = Connections::new(limit);
         let (stop, stopped) = oneshot::channel();
         let thread = {
@@ -182,21 +185,28 @@ impl Server {
     }
 }
 
+/// Listens on `addr` with a backlog of [`BACKLOG`] (std's is 128: a client opening
+/// a thousand connections at once overflowed it, and every connection after, a
+/// browser's too, waited for its SYN to be sent again, a second or more).
+fn listen(addr: SocketAddr) -> std::io::Result<tokio::net::TcpListener> {
+    let socket = if addr.is_ipv4() {
+        tokio::net::TcpSocket::new_v4()?
+    } else {
+        tokio::net::TcpSocket::new_v6()?
+    };
+    socket.set_reuseaddr(true)?;
+    socket.bind(addr)?;
+    socket.listen(BACKLOG)
+}
+
 /// Accepts connections until told to stop. A failed accept (most often: no file
 /// descriptor left) closes the longest idle connection and goes on.
 async fn accept(
-    listener: std::net::TcpListener,
+    listener: tokio::net::TcpListener,
     shared: Arc<Shared>,
     connections: Arc<Connections>,
     mut stop: oneshot::Receiver<()>,
 ) {
-    let listener = match tokio::net::TcpListener::from_std(listener) {
-        Ok(l) => l,
-        Err(e) => {
-            tracing::error!(error = %e, "cannot listen");
-            return;
-        }
-    };
     loop {
         tokio::select! {
             _ = &mut stop => return,
