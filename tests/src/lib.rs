@@ -16,18 +16,30 @@ pub struct Isolated {
     pub prefix: String,
 }
 
-/// The pipeline's iceoryx2 root folder goes with it (its /dev/shm files are the
-/// processes' to remove, and tests check that they did). So do its processes: a test
-/// that fails half-way leaves its supervisor and stages running otherwise, and they
-/// would take the CPU from every test after it.
+/// The pipeline goes with it: its processes (a test that fails half-way leaves its
+/// supervisor and stages running otherwise, and they would take the CPU from every test
+/// after it), its iceoryx2 root folder and its files in /dev/shm. Tests check before
+/// that the processes removed their own ([`Isolated::shm_files`]); what is left here
+/// is the node counter, which a pipeline keeps on purpose, and whatever processes
+/// killed at the end of a test had open.
 impl Drop for Isolated {
     fn drop(&mut self) {
-        for pid in self.processes() {
+        let mut pids = self.processes();
+        for &pid in &pids {
             // SAFETY: kill(2) on a process of this test's own pipeline, found by the
             // environment it was started with.
             unsafe { libc::kill(pid as i32, libc::SIGKILL) };
         }
+        // Gone before their files are: a process still alive could make more.
+        let deadline = Instant::now() + Duration::from_secs(5);
+        while !pids.is_empty() && Instant::now() < deadline {
+            std::thread::sleep(Duration::from_millis(10));
+            pids = self.processes();
+        }
         let _ = std::fs::remove_dir_all(&self.root);
+        for name in self.all_shm_files() {
+            let _ = std::fs::remove_file(Path::new("/dev/shm").join(name));
+        }
     }
 }
 
@@ -75,8 +87,25 @@ impl Isolated {
             .collect()
     }
 
-    /// The files of this pipeline under /dev/shm.
+    /// The files of this pipeline under /dev/shm, but for iceoryx2's node counter,
+    /// which the pipeline keeps for ever (closed to other users, it cannot be planted
+    /// again between two runs; see `airglyph_ipc::ownership`).
     pub fn shm_files(&self) -> Vec<String> {
+        let counter = self.node_counter();
+        let counter = counter.file_name().and_then(|n| n.to_str());
+        self.all_shm_files()
+            .into_iter()
+            .filter(|n| Some(n.as_str()) != counter)
+            .collect()
+    }
+
+    /// iceoryx2's node counter of this pipeline.
+    pub fn node_counter(&self) -> PathBuf {
+        airglyph_ipc::ownership::node_counter(&self.prefix)
+    }
+
+    /// Every file of this pipeline under /dev/shm.
+    pub fn all_shm_files(&self) -> Vec<String> {
         let mut files: Vec<String> = std::fs::read_dir("/dev/shm")
             .map(|d| {
                 d.filter_map(|e| e.ok())

@@ -48,6 +48,16 @@ struct Record {
     payload: usize,
 }
 
+impl Record {
+    /// The file up to the end of this record's fields: a field read past them (a
+    /// string whose length runs over) fails instead of reading the next record's bytes
+    /// (found by the oni fuzz target: such a node's type came from the frame after it,
+    /// and inserting the cropping before that frame made the node vanish).
+    fn fields_of<'a>(&self, b: &'a [u8]) -> &'a [u8] {
+        &b[..(self.pos + self.fields).min(b.len())]
+    }
+}
+
 fn u32_at(b: &[u8], at: usize) -> Option<u32> {
     b.get(at..at + 4)
         .map(|s| u32::from_le_bytes([s[0], s[1], s[2], s[3]]))
@@ -120,6 +130,7 @@ pub fn depth_nodes(b: &[u8]) -> Result<Vec<DepthNode>, OniFileError> {
     let mut nodes: Vec<DepthNode> = Vec::new();
     for r in &recs {
         let f = r.pos + RECORD_HEADER;
+        let b = r.fields_of(b);
         match r.kind {
             RECORD_NODE_ADDED | RECORD_NODE_ADDED_1_0_0_5 => {
                 let (_, used) = string_at(b, f).ok_or(OniFileError::Damaged(r.pos))?;
@@ -191,16 +202,24 @@ pub fn add_missing_cropping(b: &[u8]) -> Result<Option<Vec<u8>>, OniFileError> {
         return Ok(None);
     }
     // Insert before each such node's state-ready record (after its other properties),
-    // or before its first frame when the recorder wrote no state-ready record.
+    // or before its first frame when the recorder wrote no state-ready record; both
+    // after the node's last node-added record, which starts its properties afresh (a
+    // file adding a node twice was repaired before the second and needed it again).
     let mut inserts: Vec<(usize, u32)> = Vec::new();
     for node in missing {
-        let at = recs
+        let added = recs
             .iter()
-            .find(|r| r.node == node && r.kind == RECORD_NODE_STATE_READY)
-            .or_else(|| {
-                recs.iter()
-                    .find(|r| r.node == node && r.kind == RECORD_NEW_DATA)
-            });
+            .filter(|r| {
+                r.node == node && matches!(r.kind, RECORD_NODE_ADDED | RECORD_NODE_ADDED_1_0_0_5)
+            })
+            .map(|r| r.pos)
+            .next_back()
+            .unwrap_or(0);
+        let after = |kind: u32| {
+            recs.iter()
+                .find(|r| r.node == node && r.kind == kind && r.pos > added)
+        };
+        let at = after(RECORD_NODE_STATE_READY).or_else(|| after(RECORD_NEW_DATA));
         if let Some(r) = at {
             inserts.push((r.pos, node));
         }
@@ -253,7 +272,7 @@ pub fn add_missing_cropping(b: &[u8]) -> Result<Option<Vec<u8>>, OniFileError> {
         let f = r.pos + RECORD_HEADER;
         match r.kind {
             RECORD_NODE_ADDED => {
-                let (_, used) = string_at(b, f).ok_or(OniFileError::Damaged(r.pos))?;
+                let (_, used) = string_at(r.fields_of(b), f).ok_or(OniFileError::Damaged(r.pos))?;
                 // node type, codec, frames (u32), min, max timestamps (u64), seek table.
                 let at = f + used + 12 + 16;
                 if at + 8 <= r.pos + r.fields {
@@ -425,6 +444,43 @@ mod tests {
         }
         // Fixing a fixed file changes nothing.
         assert_eq!(add_missing_cropping(&fixed).unwrap(), None);
+    }
+
+    /// Found by the oni fuzz target: a node added again after its frames. The cropping
+    /// went before its first addition, which the second one undoes, so every repair
+    /// added it once more; now it goes after the last addition (in the fuzzer's file
+    /// nothing follows it: nothing to repair), and a repaired file needs no second one.
+    #[test]
+    fn a_node_added_twice_is_repaired_after_its_last_addition_once() {
+        let b = include_bytes!("../../../fuzz/corpus/oni/node-added-twice.oni");
+        assert_eq!(add_missing_cropping(b), Ok(None));
+        let (mut twice, _) = dummy_like(2, false);
+        let end = twice.len() - RECORD_HEADER;
+        let (again, _) = dummy_like(2, false);
+        twice.splice(
+            end..end,
+            again[FILE_HEADER..again.len() - RECORD_HEADER]
+                .iter()
+                .copied(),
+        );
+        let repaired = add_missing_cropping(&twice)
+            .unwrap()
+            .expect("needs cropping");
+        assert!(depth_nodes(&repaired)
+            .unwrap()
+            .iter()
+            .all(|n| n.has_cropping));
+        assert_eq!(add_missing_cropping(&repaired), Ok(None));
+    }
+
+    /// Found by the oni fuzz target: a node-added record whose name's length runs past
+    /// the record. Its fields are read within it, so the file is damaged, not a node
+    /// whose type is read from the next record.
+    #[test]
+    fn a_field_running_past_its_record_is_damage() {
+        let b = include_bytes!("../../../fuzz/corpus/oni/string-past-its-record.oni");
+        assert_eq!(depth_nodes(b), Err(OniFileError::Damaged(24)));
+        assert_eq!(add_missing_cropping(b), Err(OniFileError::Damaged(24)));
     }
 
     #[test]

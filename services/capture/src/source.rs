@@ -1,9 +1,13 @@
 //! The `DepthSource` trait and the `--source` syntax.
 
+use airglyph_core::camera::MAX_SIDE;
 use airglyph_core::Intrinsics;
 use airglyph_ipc::wire::SourceKind;
 use std::path::PathBuf;
 use std::str::FromStr;
+
+/// The highest frame rate a camera option may ask for.
+pub const MAX_FPS: u32 = 1000;
 
 /// One frame's metadata; its pixels went into the caller's buffer.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -133,14 +137,27 @@ impl CameraOptions {
                         Some((s, f)) => (s, Some(f)),
                         None => (value, None),
                     };
-                    let bad = || format!("mode={value}: expected WIDTHxHEIGHT@FPS, e.g. 640x480@30");
+                    let bad = || {
+                        format!(
+                            "mode={value}: expected WIDTHxHEIGHT@FPS, e.g. 640x480@30, with sides of \
+                             1-{MAX_SIDE} pixels and 1-{MAX_FPS} frames a second"
+                        )
+                    };
+                    // Bounded here: the frame size is what capture allocates in shared
+                    // memory, before any camera is asked.
+                    let side = |s: &str| s.parse().ok().filter(|n| (1..=MAX_SIDE).contains(n));
                     if !size.is_empty() {
                         let (w, h) = size.split_once('x').ok_or_else(bad)?;
-                        o.width = Some(w.parse().ok().filter(|&w| w > 0).ok_or_else(bad)?);
-                        o.height = Some(h.parse().ok().filter(|&h| h > 0).ok_or_else(bad)?);
+                        o.width = Some(side(w).ok_or_else(bad)?);
+                        o.height = Some(side(h).ok_or_else(bad)?);
                     }
                     if let Some(f) = fps {
-                        o.fps = Some(f.parse().ok().filter(|&f| f > 0).ok_or_else(bad)?);
+                        o.fps = Some(
+                            f.parse()
+                                .ok()
+                                .filter(|f| (1..=MAX_FPS).contains(f))
+                                .ok_or_else(bad)?,
+                        );
                     }
                 }
                 "format" => {
@@ -419,6 +436,8 @@ mod tests {
         for (spec, want) in [
             ("v4l2:/dev/video0?mode=640-480", "WIDTHxHEIGHT@FPS"),
             ("v4l2:/dev/video0?mode=0x480", "WIDTHxHEIGHT@FPS"),
+            ("v4l2:/dev/video0?mode=100000x480", "1-8192 pixels"),
+            ("v4l2:/dev/video0?mode=640x480@100000", "1-1000 frames"),
             ("v4l2:/dev/video0?format=MJPG", "Z16, Y16, Y10B"),
             ("v4l2:/dev/video0?intrinsics=1,2", "realsense-d435"),
             ("v4l2:/dev/video0?scale=-1", "positive"),

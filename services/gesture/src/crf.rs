@@ -38,8 +38,11 @@ impl Default for CrfTrainConfig {
 }
 
 impl Crf {
+    /// Saturates instead of wrapping: an overflowing size never matches the weights.
     pub fn n_features(symbols: usize, time_bins: usize) -> usize {
-        symbols + 2 * (symbols + 1) + time_bins * symbols
+        symbols
+            .saturating_add(symbols.saturating_add(1).saturating_mul(2))
+            .saturating_add(time_bins.saturating_mul(symbols))
     }
 
     fn n_params(&self) -> usize {
@@ -47,11 +50,15 @@ impl Crf {
     }
 
     pub fn validate(&self) -> Result<(), String> {
-        let f = Self::n_features(self.symbols, self.time_bins);
+        use crate::limits::{product, within, MAX_LABELS, MAX_SYMBOLS, MAX_TIME_BINS};
         if self.labels == 0 || self.symbols == 0 {
             return Err("CRF has no labels or no symbols".into());
         }
-        if self.w_obs.len() != f * self.labels
+        within("CRF labels", self.labels, 1, MAX_LABELS)?;
+        within("CRF symbols", self.symbols, 1, MAX_SYMBOLS)?;
+        within("CRF time bins", self.time_bins, 1, MAX_TIME_BINS)?;
+        let f = Self::n_features(self.symbols, self.time_bins);
+        if self.w_obs.len() != product("CRF observation weights", f, self.labels)?
             || self.w_trans.len() != self.labels * self.labels
             || self.w_start.len() != self.labels
         {

@@ -123,8 +123,26 @@ impl Default for FeatureConfig {
 }
 
 impl FeatureConfig {
+    /// The feature vector's length. Saturates instead of wrapping: a size that
+    /// overflows never matches a network's input count (see [`FeatureConfig::validate`]).
     pub fn dim(&self) -> usize {
-        self.points * 5 + 8 * self.grid * self.grid + 2
+        self.points
+            .saturating_mul(5)
+            .saturating_add(8usize.saturating_mul(self.grid).saturating_mul(self.grid))
+            .saturating_add(2)
+    }
+
+    /// Points and grid within [`crate::limits`]; `what` names the settings in errors.
+    pub fn validate(&self, what: &str) -> Result<(), String> {
+        use crate::limits::{within, MAX_FEATURE_POINTS, MAX_GRID};
+        within(
+            &format!("{what}.points"),
+            self.points,
+            2,
+            MAX_FEATURE_POINTS,
+        )?;
+        within(&format!("{what}.grid"), self.grid, 0, MAX_GRID)?;
+        Ok(())
     }
 }
 

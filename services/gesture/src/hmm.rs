@@ -70,6 +70,7 @@ impl DiscreteHmm {
         if n == 0 {
             return Err("HMM has no states".into());
         }
+        crate::limits::within("HMM states", n, 1, crate::limits::MAX_STATES)?;
         if self.a.len() != n || self.b.len() != n {
             return Err(format!(
                 "HMM has {n} states but {} transition rows and {} emission rows",
@@ -81,6 +82,7 @@ impl DiscreteHmm {
         if m == 0 {
             return Err("HMM has no symbols".into());
         }
+        crate::limits::within("HMM symbols", m, 1, crate::limits::MAX_SYMBOLS)?;
         let check = |row: &[f64], what: &str| -> Result<(), String> {
             if row.iter().any(|p| !p.is_finite() || *p < 0.0) {
                 return Err(format!("{what} holds a negative or non-finite probability"));

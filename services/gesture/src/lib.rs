@@ -29,6 +29,7 @@ pub mod dtw;
 pub mod eval;
 pub mod features;
 pub mod hmm;
+pub mod limits;
 pub mod mlp;
 pub mod model;
 pub mod spot;

@@ -52,15 +52,30 @@ impl Default for MlpTrainConfig {
 
 impl Mlp {
     pub fn validate(&self) -> Result<(), String> {
+        use crate::limits::{product, within, MAX_LAYERS, MAX_UNITS};
         let Some(first) = self.layers.first() else {
             return Err("network has no layers".into());
         };
+        within("network layers", self.layers.len(), 1, MAX_LAYERS)?;
         if self.mean.len() != first.inputs || self.std.len() != first.inputs {
             return Err("network input normalization does not match its first layer".into());
         }
         let mut prev = first.inputs;
         for (i, l) in self.layers.iter().enumerate() {
-            if l.inputs != prev || l.w.len() != l.inputs * l.outputs || l.b.len() != l.outputs {
+            within(
+                &format!("network layer {i}'s inputs"),
+                l.inputs,
+                1,
+                MAX_UNITS,
+            )?;
+            within(
+                &format!("network layer {i}'s outputs"),
+                l.outputs,
+                1,
+                MAX_UNITS,
+            )?;
+            let weights = product(&format!("network layer {i}'s weights"), l.inputs, l.outputs)?;
+            if l.inputs != prev || l.w.len() != weights || l.b.len() != l.outputs {
                 return Err(format!("network layer {i} has inconsistent dimensions"));
             }
             prev = l.outputs;

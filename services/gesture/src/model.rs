@@ -7,6 +7,7 @@ use crate::crf::Crf;
 use crate::data::Trajectory;
 use crate::features::{feature_vector, FeatureConfig};
 use crate::hmm::{DiscreteHmm, LogHmm};
+use crate::limits;
 use crate::mlp::Mlp;
 use crate::spot::SpottingModel;
 use serde::{Deserialize, Serialize};
@@ -189,6 +190,12 @@ impl Model {
         if self.labels.is_empty() {
             return Err("the model has no labels".into());
         }
+        limits::within(
+            "the number of labels",
+            self.labels.len(),
+            1,
+            limits::MAX_LABELS,
+        )?;
         let mut seen = BTreeSet::new();
         for l in &self.labels {
             if l.is_empty() {
@@ -225,35 +232,35 @@ impl Model {
         match &self.classifier {
             Classifier::Hmm {
                 bezier_points,
+                zero_frac,
                 models,
                 ..
             } => {
-                if *bezier_points < 2 {
-                    return Err(format!("bezier_points {bezier_points} < 2"));
-                }
+                check_codes(*bezier_points, *zero_frac)?;
                 let names: Vec<&str> = models.iter().map(|m| m.label.as_str()).collect();
                 check_classes(&names, "the HMM classifier")?;
+                // With a resting code the descriptor emits code 8 too.
+                let symbols = if *zero_frac > 0.0 { 9 } else { 8 };
                 for m in models {
                     m.hmm
                         .validate()
                         .map_err(|e| format!("HMM of label {:?}: {e}", m.label))?;
-                    if m.hmm.n_symbols() < 8 {
+                    if m.hmm.n_symbols() < symbols {
                         return Err(format!(
-                            "HMM of label {:?} has fewer than 8 symbols",
-                            m.label
+                            "HMM of label {:?} has {} symbols; its codes need {symbols}",
+                            m.label,
+                            m.hmm.n_symbols()
                         ));
                     }
                 }
             }
             Classifier::Crf {
                 bezier_points,
+                zero_frac,
                 classes,
                 crf,
-                ..
             } => {
-                if *bezier_points < 2 {
-                    return Err(format!("bezier_points {bezier_points} < 2"));
-                }
+                check_codes(*bezier_points, *zero_frac)?;
                 let names: Vec<&str> = classes.iter().map(String::as_str).collect();
                 check_classes(&names, "the CRF classifier")?;
                 crf.validate()?;
@@ -271,9 +278,8 @@ impl Model {
                 if nets.is_empty() {
                     return Err("the network classifier has no networks".into());
                 }
-                if features.points < 2 {
-                    return Err("feature points < 2".into());
-                }
+                limits::within("the number of networks", nets.len(), 1, limits::MAX_NETS)?;
+                features.validate("features")?;
                 for (i, n) in nets.iter().enumerate() {
                     n.validate().map_err(|e| format!("network {i}: {e}"))?;
                     if n.inputs() != features.dim() || n.outputs() != classes.len() {
@@ -377,6 +383,14 @@ impl Model {
         }
         out
     }
+}
+
+/// The seed's descriptor settings: a Bezier point count within bounds and a resting
+/// code fraction that is a fraction.
+fn check_codes(bezier_points: usize, zero_frac: f64) -> Result<(), String> {
+    limits::within("bezier_points", bezier_points, 2, limits::MAX_BEZIER_POINTS)?;
+    limits::finite_within("zero_frac", zero_frac, 0.0, 1.0)?;
+    Ok(())
 }
 
 fn softmax(ll: &[f64]) -> Vec<f64> {

@@ -110,9 +110,57 @@ impl Default for TrainConfig {
     }
 }
 
+impl TrainConfig {
+    /// Every size and count within [`crate::limits`], every rate a finite number in
+    /// range: checked before anything is allocated (`--hidden 4611686018427387904`
+    /// once overflowed a capacity and panicked, `--hidden 1000000000` asked for
+    /// 1.8 TB). The message names the setting as `airglyph train` spells it.
+    pub fn validate(&self) -> Result<(), String> {
+        use crate::limits::*;
+        within("--bezier-points", self.bezier_points, 2, MAX_BEZIER_POINTS)?;
+        finite_within("the resting code fraction", self.zero_frac, 0.0, 1.0)?;
+        within("--states", self.hmm.states, 1, MAX_STATES)?;
+        within(
+            "the HMM's training iterations",
+            self.hmm.iterations,
+            0,
+            MAX_EPOCHS,
+        )?;
+        within("the HMM's band", self.hmm.band, 0, MAX_STATES)?;
+        within("the CRF's time bins", self.crf.time_bins, 1, MAX_TIME_BINS)?;
+        within("the CRF's iterations", self.crf.iterations, 0, MAX_EPOCHS)?;
+        within("--hidden", self.mlp.hidden, 2, MAX_HIDDEN)?;
+        within("--epochs", self.mlp.epochs, 1, MAX_EPOCHS)?;
+        within("the batch size", self.mlp.batch, 1, MAX_BATCH)?;
+        finite_within(
+            "the learning rate",
+            self.mlp.learning_rate as f64,
+            0.0,
+            10.0,
+        )?;
+        finite_within("the momentum", self.mlp.momentum as f64, 0.0, 1.0)?;
+        finite_within("the weight decay", self.mlp.weight_decay as f64, 0.0, 1.0)?;
+        self.features.validate("features")?;
+        within("--ensemble", self.ensemble, 1, MAX_NETS)?;
+        finite_within("the augmentation", self.augment as f64, 0.0, 10.0)?;
+        finite_within("--stream-augment", self.stream_augment as f64, 0.0, 1.0)?;
+        if !(self.spotting_step > 0.0 && self.spotting_step < 1.0) {
+            return Err(format!(
+                "the spotting step is {}; it must be in (0, 1)",
+                self.spotting_step
+            ));
+        }
+        within("the spotting states", self.spotting_states, 1, MAX_STATES)?;
+        within("--verifiers", self.verifiers, 1, MAX_NETS)?;
+        Ok(())
+    }
+}
+
 /// Why training failed.
 #[derive(Debug, thiserror::Error)]
 pub enum TrainError {
+    #[error("{0}")]
+    Config(String),
     #[error("no training samples")]
     NoSamples,
     #[error("only one label ({0:?}); a classifier needs at least two")]
@@ -130,6 +178,7 @@ pub fn train(
     cfg: &TrainConfig,
     progress: Progress,
 ) -> Result<Model, TrainError> {
+    cfg.validate().map_err(TrainError::Config)?;
     if samples.is_empty() {
         return Err(TrainError::NoSamples);
     }

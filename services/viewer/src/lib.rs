@@ -9,16 +9,22 @@
 //! picks the frame to show with the skeleton estimated from it, follows the drawing hand
 //! (airglyph-gesture's [`airglyph_gesture::HandTracker`]) and keeps the last gestures and
 //! a minute of telemetry; [`render()`] draws the picture, the same for the web page
-//! ([`server`]) and for `airglyph snapshot`.
+//! ([`server`], answering through [`routes`] from [`pictures`]) and for `airglyph
+//! snapshot`. [`health`] tells a supervisor whether the page is still served.
 
 pub mod colormap;
+mod connections;
 pub mod draw;
 pub mod feed;
+pub mod health;
+pub mod pictures;
 pub mod render;
+pub mod routes;
 pub mod scene;
 pub mod server;
 
 pub use feed::Feed;
+pub use pictures::{ServeConfig, Shared};
 pub use render::{render, Overlay};
 pub use scene::{Picture, Scene};
-pub use server::{ServeConfig, Server, Shared};
+pub use server::{ServeError, Server};

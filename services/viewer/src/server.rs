@@ -1,163 +1,61 @@
-//! The web side: one self-contained page, the picture as JPEG (long-polled, so a slow
-//! browser simply gets fewer frames), a PNG snapshot, and the panels' state as JSON.
-//! A small pool of threads of tiny_http serves them; pictures are drawn and encoded on
-//! those threads, one at a time and at most `max_fps` a second for all browsers together,
-//! so watching costs the pipeline a bounded share of the machine.
+//! The web server: hyper's HTTP/1 on a single-threaded tokio runtime, with limits on
+//! everything a client controls. tiny_http, before it, had none: an endless header line
+//! grew the viewer by a megabyte a megabyte sent, held connections took a thread each
+//! and, once they had taken every file descriptor, its accept thread ended for good
+//! while the process lived on.
+//!
+//! - A request's line and headers: [`MAX_HEAD`] bytes and [`MAX_HEADERS`] headers
+//!   (hyper answers 431 beyond), all of it within [`HEAD_TIMEOUT`] once begun.
+//! - A connection that neither sends nor takes a byte for [`IDLE_TIMEOUT`] is closed,
+//!   whether it is silent, mid-request or not reading its answer.
+//! - At most [`MAX_CONNECTIONS`] connections (fewer if the file descriptor limit is
+//!   lower); a new one pushes out the connection idle longest ([`Connections`]), and an
+//!   accept that fails (no descriptor left) frees one and goes on: the server never
+//!   stops accepting.
+//! - Threads: one for the runtime, [`PICTURE_THREADS`] for drawing and encoding, one
+//!   for the [`Watchdog`]. A request waiting for the next frame costs no thread.
 
-use crate::render::{encode_jpeg, encode_png, render};
-use crate::scene::Scene;
-use airglyph_ipc::clock::monotonic_ns;
-use std::io::Cursor;
+use crate::connections::{Connections, Ticket};
+use crate::health::{HealthError, Watchdog};
+use crate::pictures::Shared;
+use crate::routes::route;
+use hyper::body::Incoming;
+use hyper::server::conn::http1;
+use hyper::service::service_fn;
+use hyper::Request;
+use hyper_util::rt::{TokioIo, TokioTimer};
+use std::convert::Infallible;
 use std::net::SocketAddr;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Condvar, Mutex, MutexGuard};
+use std::sync::Arc;
 use std::thread::JoinHandle;
-use std::time::{Duration, Instant};
-use tiny_http::{Header, Method, Request, Response};
+use std::time::Duration;
+use tokio::sync::oneshot;
+use tokio_io_timeout::TimeoutStream;
 
-const PAGE: &str = include_str!("page.html");
-/// How long a request for the next picture waits for a new frame before answering 204.
-const LONG_POLL: Duration = Duration::from_secs(1);
-/// Worker threads: each browser holds at most two requests (picture and state) at once.
-const THREADS: usize = 6;
+/// Most connections open at once.
+pub const MAX_CONNECTIONS: usize = 2048;
+/// Longest request line and headers together (a browser's are under 1 KiB; cookies of
+/// other sites on the same host can add a few).
+pub const MAX_HEAD: usize = 16 * 1024;
+/// Most headers in a request.
+pub const MAX_HEADERS: usize = 64;
+/// A request's line and headers must have arrived this long after their first byte.
+pub const HEAD_TIMEOUT: Duration = Duration::from_secs(5);
+/// A connection through which no byte moves for this long, either way, is closed. It
+/// also bounds how long an answer may take to prepare (hyper keeps reading meanwhile):
+/// the longest, a long poll for the next picture, takes a second.
+pub const IDLE_TIMEOUT: Duration = Duration::from_secs(10);
+/// Threads drawing and encoding pictures (one draws at a time; the other answers a
+/// request for a picture already made meanwhile).
+pub const PICTURE_THREADS: usize = 2;
+/// Connections the kernel queues before they are accepted (capped by
+/// net.core.somaxconn, 4096 by default).
+const BACKLOG: u32 = 4096;
+/// File descriptors kept for everything but connections (shared memory, logs, the
+/// runtime).
+const SPARE_FDS: u64 = 64;
 
-/// How pictures are sent.
-#[derive(Debug, Clone, Copy)]
-pub struct ServeConfig {
-    /// Most pictures encoded per second, for all browsers together.
-    pub max_fps: f64,
-    /// JPEG quality, 1–100.
-    pub quality: u8,
-}
-
-#[derive(Clone)]
-struct Encoded {
-    /// [`Scene::frames_in`] when it was drawn.
-    id: u64,
-    jpeg: Arc<Vec<u8>>,
-}
-
-struct Encoder {
-    next_at: Instant,
-    last: Option<Encoded>,
-    pictures: u64,
-}
-
-/// What the IPC loop and the web threads share.
-pub struct Shared {
-    scene: Mutex<Scene>,
-    fresh: Condvar,
-    config: ServeConfig,
-    encoder: Mutex<Encoder>,
-}
-
-fn relock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
-    // A web thread that panicked must not take the viewer down with it.
-    m.lock().unwrap_or_else(|e| e.into_inner())
-}
-
-impl Shared {
-    pub fn new(config: ServeConfig) -> Self {
-        Self {
-            scene: Mutex::new(Scene::new()),
-            fresh: Condvar::new(),
-            config,
-            encoder: Mutex::new(Encoder {
-                next_at: Instant::now(),
-                last: None,
-                pictures: 0,
-            }),
-        }
-    }
-
-    pub fn scene(&self) -> &Mutex<Scene> {
-        &self.scene
-    }
-
-    /// Wakes the requests waiting for a new frame.
-    pub fn notify(&self) {
-        self.fresh.notify_all();
-    }
-
-    /// Pictures encoded for browsers so far.
-    pub fn pictures(&self) -> u64 {
-        relock(&self.encoder).pictures
-    }
-
-    /// The next picture newer than `after` (a [`Scene::frames_in`] value), waiting up to
-    /// [`LONG_POLL`] for one; `None` when none came.
-    fn next_jpeg(&self, after: u64) -> Result<Option<Encoded>, String> {
-        let deadline = Instant::now() + LONG_POLL;
-        let mut scene = relock(&self.scene);
-        while scene.frames_in() <= after {
-            let left = deadline.saturating_duration_since(Instant::now());
-            if left.is_zero() {
-                return Ok(None);
-            }
-            scene = self
-                .fresh
-                .wait_timeout(scene, left)
-                .unwrap_or_else(|e| e.into_inner())
-                .0;
-        }
-        drop(scene);
-        // One encode at a time, paced: other browsers wait here and then share it.
-        let mut enc = relock(&self.encoder);
-        let now = Instant::now();
-        if enc.next_at > now {
-            std::thread::sleep(enc.next_at - now);
-        }
-        let started = Instant::now();
-        let (id, picture) = {
-            let scene = relock(&self.scene);
-            (scene.frames_in(), scene.picture(monotonic_ns()))
-        };
-        if let Some(last) = enc.last.as_ref().filter(|l| l.id == id) {
-            return Ok(Some(last.clone()));
-        }
-        let Some(p) = picture else { return Ok(None) };
-        let img = render(p.frame.view(), &p.intrinsics, &p.overlay);
-        let jpeg = Arc::new(encode_jpeg(&img, self.config.quality).map_err(|e| e.to_string())?);
-        enc.next_at = started + Duration::from_secs_f64(1.0 / self.config.max_fps);
-        enc.pictures += 1;
-        let encoded = Encoded { id, jpeg };
-        enc.last = Some(encoded.clone());
-        Ok(Some(encoded))
-    }
-
-    /// A lossless picture, paced with the JPEGs: asking for PNGs in a loop must not
-    /// take more of the machine than watching does.
-    fn snapshot_png(&self) -> Result<Option<Vec<u8>>, String> {
-        let mut enc = relock(&self.encoder);
-        let now = Instant::now();
-        if enc.next_at > now {
-            std::thread::sleep(enc.next_at - now);
-        }
-        let started = Instant::now();
-        let picture = relock(&self.scene).picture(monotonic_ns());
-        let Some(p) = picture else { return Ok(None) };
-        let img = render(p.frame.view(), &p.intrinsics, &p.overlay);
-        let png = encode_png(&img).map_err(|e| e.to_string())?;
-        enc.next_at = started + Duration::from_secs_f64(1.0 / self.config.max_fps);
-        Ok(Some(png))
-    }
-
-    fn state(&self) -> serde_json::Value {
-        let mut state = relock(&self.scene).state(monotonic_ns());
-        state["viewer"]["pictures"] = self.pictures().into();
-        state["viewer"]["max_fps"] = self.config.max_fps.into();
-        state
-    }
-}
-
-/// The HTTP server and its threads.
-pub struct Server {
-    http: Arc<tiny_http::Server>,
-    threads: Vec<JoinHandle<()>>,
-    stop: Arc<AtomicBool>,
-    addr: SocketAddr,
-}
-
+/// Why the viewer cannot serve, or stopped serving.
 #[derive(Debug, thiserror::Error)]
 #[error("cannot serve the viewer on {addr}: {reason}")]
 pub struct ServeError {
@@ -165,44 +63,80 @@ pub struct ServeError {
     reason: String,
 }
 
+/// The HTTP server and its threads.
+pub struct Server {
+    addr: SocketAddr,
+    stop: Option<oneshot::Sender<()>>,
+    thread: Option<JoinHandle<()>>,
+    watchdog: Option<Watchdog>,
+    connections: Arc<Connections>,
+}
+
+/// Raises the soft limit of open files to the hard one (up to what the connections
+/// need) and returns it: held connections once exhausted the default 1024.
+fn raise_fd_limit() -> u64 {
+    let want = MAX_CONNECTIONS as u64 + SPARE_FDS;
+    let mut lim = libc::rlimit {
+        rlim_cur: 0,
+        rlim_max: 0,
+    };
+    // SAFETY: getrlimit/setrlimit(2) read and write only `lim`.
+    unsafe {
+        if libc::getrlimit(libc::RLIMIT_NOFILE, &mut lim) != 0 {
+            return 1024;
+        }
+        if lim.rlim_cur < want && lim.rlim_max > lim.rlim_cur {
+            let raised = libc::rlimit {
+                rlim_cur: want.min(lim.rlim_max),
+                rlim_max: lim.rlim_max,
+            };
+            if libc::setrlimit(libc::RLIMIT_NOFILE, &raised) == 0 {
+                return raised.rlim_cur;
+            }
+        }
+    }
+    lim.rlim_cur
+}
+
 impl Server {
     /// Listens on `addr` (port 0 picks a free one) and serves from `shared`.
     pub fn start(addr: SocketAddr, shared: Arc<Shared>) -> Result<Self, ServeError> {
-        let http = tiny_http::Server::http(addr).map_err(|e| ServeError {
-            addr,
-            reason: e.to_string(),
-        })?;
-        let bound = http.server_addr().to_ip().unwrap_or(addr);
-        let http = Arc::new(http);
-        let stop = Arc::new(AtomicBool::new(false));
-        let threads = (0..THREADS)
-            .map(|i| {
-                let (http, shared, stop) = (http.clone(), shared.clone(), stop.clone());
-                std::thread::Builder::new()
-                    .name(format!("web-{i}"))
-                    .spawn(move || {
-                        while !stop.load(Ordering::Relaxed) {
-                            match http.recv_timeout(Duration::from_millis(200)) {
-                                Ok(Some(req)) => handle(&shared, req),
-                                Ok(None) => {}
-                                Err(e) => {
-                                    tracing::warn!(error = %e, "web server");
-                                    std::thread::sleep(Duration::from_millis(100));
-                                }
-                            }
-                        }
-                    })
-                    .map_err(|e| ServeError {
-                        addr,
-                        reason: format!("cannot start a web thread: {e}"),
-                    })
-            })
-            .collect::<Result<_, _>>()?;
+        let fail = |reason: String| ServeError { addr, reason };
+        let fds = raise_fd_limit();
+        let limit = (fds.saturating_sub(SPARE_FDS) as usize).clamp(1, MAX_CONNECTIONS);
+        let runtime = tokio::runtime::Builder::new_current_thread()
+            .enable_all()
+            .max_blocking_threads(PICTURE_THREADS)
+            .thread_name("web-picture")
+            .build()
+            .map_err(|e| fail(format!("cannot start the web runtime: {e}")))?;
+        let listener = {
+            let _in_runtime = runtime.enter();
+            listen(addr).map_err(|e| fail(e.to_string()))?
+        };
+        let bound = listener.local_addr().map_err(|e| fail(e.to_string()))?;
+        let connections = Connections::new(limit);
+        let (stop, stopped) = oneshot::channel();
+        let thread = {
+            let connections = connections.clone();
+            std::thread::Builder::new()
+                .name("web".into())
+                .spawn(move || {
+                    runtime.block_on(accept(listener, shared, connections, stopped));
+                    // Requests still drawing a picture get a moment, not a hang.
+                    runtime.shutdown_timeout(Duration::from_secs(1));
+                })
+                .map_err(|e| fail(format!("cannot start the web thread: {e}")))?
+        };
+        let watchdog =
+            Watchdog::start(bound).map_err(|e| fail(format!("cannot start the watchdog: {e}")))?;
+        tracing::debug!(%bound, connections = limit, "web server");
         Ok(Self {
-            http,
-            threads,
-            stop,
             addr: bound,
+            stop: Some(stop),
+            thread: Some(thread),
+            watchdog: Some(watchdog),
+            connections,
         })
     }
 
@@ -211,178 +145,142 @@ impl Server {
         self.addr
     }
 
-    pub fn stop(self) {
-        self.stop.store(true, Ordering::Relaxed);
-        self.http.unblock();
-        for t in self.threads {
+    /// Connections open now.
+    pub fn connections(&self) -> usize {
+        self.connections.open()
+    }
+
+    /// Connections closed to make room for newer ones since the start.
+    pub fn evicted(&self) -> u64 {
+        self.connections.evicted()
+    }
+
+    /// Whether the server still serves: an error once its thread has ended or its own
+    /// health check failed three times in a row. The viewer's loop returns it, so the
+    /// process ends and is restarted instead of living on without a server.
+    pub fn health(&self) -> Result<(), ServeError> {
+        if self.thread.as_ref().is_none_or(|t| t.is_finished()) {
+            return Err(ServeError {
+                addr: self.addr,
+                reason: "the web server's thread has ended".into(),
+            });
+        }
+        match self.watchdog.as_ref().and_then(Watchdog::verdict) {
+            Some(HealthError { reason, .. }) => Err(ServeError {
+                addr: self.addr,
+                reason: format!("stopped answering its health check: {reason}"),
+            }),
+            None => Ok(()),
+        }
+    }
+
+    pub fn stop(mut self) {
+        drop(self.watchdog.take());
+        if let Some(stop) = self.stop.take() {
+            let _ = stop.send(());
+        }
+        if let Some(t) = self.thread.take() {
             let _ = t.join();
         }
     }
 }
 
-type Reply = Response<Cursor<Vec<u8>>>;
-
-fn header(name: &str, value: &str) -> Header {
-    Header::from_bytes(name.as_bytes(), value.as_bytes()).expect("ASCII header")
+/// Listens on `addr` with a backlog of [`BACKLOG`] (std's is 128: a client opening
+/// a thousand connections at once overflowed it, and every connection after, a
+/// browser's too, waited for its SYN to be sent again, a second or more).
+fn listen(addr: SocketAddr) -> std::io::Result<tokio::net::TcpListener> {
+    let socket = if addr.is_ipv4() {
+        tokio::net::TcpSocket::new_v4()?
+    } else {
+        tokio::net::TcpSocket::new_v6()?
+    };
+    socket.set_reuseaddr(true)?;
+    socket.bind(addr)?;
+    socket.listen(BACKLOG)
 }
 
-fn reply(status: u16, content_type: &str, body: Vec<u8>) -> Reply {
-    Response::from_data(body)
-        .with_status_code(status)
-        .with_header(header("Content-Type", content_type))
-        // Every answer is live: nothing may be served from a cache.
-        .with_header(header("Cache-Control", "no-store"))
-}
-
-fn text(status: u16, body: &str) -> Reply {
-    reply(
-        status,
-        "text/plain; charset=utf-8",
-        body.as_bytes().to_vec(),
-    )
-}
-
-/// The value of `key` in a query string `a=1&b=2`.
-fn query_value<'a>(query: &'a str, key: &str) -> Option<&'a str> {
-    query
-        .split('&')
-        .filter_map(|kv| kv.split_once('='))
-        .find(|(k, _)| *k == key)
-        .map(|(_, v)| v)
-}
-
-/// Answers one request (a browser that went away meanwhile is no error of ours).
-fn handle(shared: &Shared, req: Request) {
-    let resp = route(shared, req.method(), req.url());
-    if let Err(e) = req.respond(resp) {
-        tracing::debug!(error = %e, "browser went away");
-    }
-}
-
-fn route(shared: &Shared, method: &Method, url: &str) -> Reply {
-    if *method != Method::Get && *method != Method::Head {
-        return text(405, "only GET");
-    }
-    let (path, query) = url.split_once('?').unwrap_or((url, ""));
-    match path {
-        "/" | "/index.html" => reply(200, "text/html; charset=utf-8", PAGE.as_bytes().to_vec()),
-        "/state.json" => reply(
-            200,
-            "application/json",
-            shared.state().to_string().into_bytes(),
-        ),
-        "/frame.jpg" => {
-            let after = match query_value(query, "after").map(str::parse::<u64>) {
-                None => 0,
-                Some(Ok(n)) => n,
-                Some(Err(_)) => return text(400, "after must be a picture number"),
-            };
-            match shared.next_jpeg(after) {
-                Ok(Some(e)) => reply(200, "image/jpeg", e.jpeg.to_vec())
-                    .with_header(header("X-Picture", &e.id.to_string())),
-                Ok(None) => text(204, ""),
-                Err(e) => text(500, &format!("cannot encode the picture: {e}")),
+/// Accepts connections until told to stop. A failed accept (most often: no file
+/// descriptor left) closes the longest idle connection and goes on.
+async fn accept(
+    listener: tokio::net::TcpListener,
+    shared: Arc<Shared>,
+    connections: Arc<Connections>,
+    mut stop: oneshot::Receiver<()>,
+) {
+    loop {
+        tokio::select! {
+            _ = &mut stop => return,
+            accepted = listener.accept() => match accepted {
+                Ok((stream, _)) => serve(stream, &shared, &connections),
+                Err(e) => {
+                    let shed = connections.shed();
+                    tracing::warn!(error = %e, shed, "accept failed; the server goes on");
+                    tokio::time::sleep(Duration::from_millis(10)).await;
+                }
             }
         }
-        "/snapshot.png" => match shared.snapshot_png() {
-            Ok(Some(png)) => reply(200, "image/png", png),
-            Ok(None) => text(503, "no depth frame yet: is capture running?"),
-            Err(e) => text(500, &format!("cannot encode the picture: {e}")),
-        },
-        _ => text(404, "not found"),
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use airglyph_core::Intrinsics;
-    use airglyph_ipc::DepthHeader;
+/// Serves one connection on a task of its own, within the limits.
+fn serve(stream: tokio::net::TcpStream, shared: &Arc<Shared>, connections: &Arc<Connections>) {
+    let ticket = Arc::new(connections.admit());
+    let _ = stream.set_nodelay(true);
+    let mut io = TimeoutStream::new(stream);
+    io.set_read_timeout(Some(IDLE_TIMEOUT));
+    io.set_write_timeout(Some(IDLE_TIMEOUT));
+    let task = tokio::spawn(converse(
+        TokioIo::new(Box::pin(io)),
+        shared.clone(),
+        ticket.clone(),
+    ));
+    ticket.attach(task.abort_handle());
+}
 
-    fn shared_with_frames(n: u64) -> Shared {
-        let shared = Shared::new(ServeConfig {
-            max_fps: 1000.0,
-            quality: 80,
-        });
-        let k = Intrinsics::default().scaled_to(64, 48);
-        for seq in 0..n {
-            let mut h = DepthHeader {
-                sequence: seq,
-                session: 1,
-                capture_ns: 1 + seq,
-                publish_ns: 2 + seq,
-                ..Default::default()
-            };
-            h.set_intrinsics(&k);
-            relock(&shared.scene).push_depth(h, &vec![1500; 64 * 48], 0);
-        }
-        shared
+/// One connection's requests and answers, through hyper with the head's limits.
+async fn converse<I>(io: I, shared: Arc<Shared>, ticket: Arc<Ticket>)
+where
+    I: hyper::rt::Read + hyper::rt::Write + Unpin + Send + 'static,
+{
+    let service = {
+        let ticket = ticket.clone();
+        service_fn(move |req: Request<Incoming>| {
+            let (shared, ticket) = (shared.clone(), ticket.clone());
+            async move {
+                ticket.busy(true);
+                let target = req.uri().path_and_query().map_or("/", |p| p.as_str());
+                let reply = route(&shared, req.method(), target).await;
+                ticket.busy(false);
+                Ok::<_, Infallible>(reply)
+            }
+        })
+    };
+    let connection = http1::Builder::new()
+        .timer(TokioTimer::new())
+        .header_read_timeout(HEAD_TIMEOUT)
+        .max_buf_size(MAX_HEAD)
+        .max_headers(MAX_HEADERS)
+        .serve_connection(io, service);
+    if let Err(e) = connection.await {
+        tracing::debug!(error = %e, "connection ended");
     }
+}
 
-    fn status(r: &Reply) -> u16 {
-        r.status_code().0
-    }
-
-    #[test]
-    fn routes_answer_and_bad_input_is_refused_not_a_panic() {
-        let shared = shared_with_frames(3);
-        let get = |url: &str| route(&shared, &Method::Get, url);
-        assert_eq!(status(&get("/")), 200);
-        assert_eq!(status(&get("/state.json")), 200);
-        assert_eq!(status(&get("/nope")), 404);
-        assert_eq!(status(&get("/frame.jpg?after=x")), 400);
-        assert_eq!(status(&route(&shared, &Method::Post, "/")), 405);
-        let r = get("/frame.jpg?after=0");
-        assert_eq!(status(&r), 200);
-        assert_eq!(status(&get("/snapshot.png")), 200);
-        let empty = shared_with_frames(0);
-        assert_eq!(status(&route(&empty, &Method::Get, "/snapshot.png")), 503);
-    }
-
-    #[test]
-    fn the_next_picture_waits_for_a_newer_frame_and_is_a_jpeg() {
-        let shared = shared_with_frames(3);
-        let e = shared.next_jpeg(0).unwrap().unwrap();
-        assert_eq!(e.id, 3);
-        assert_eq!(
-            &e.jpeg[..2],
-            &[0xFF, 0xD8],
-            "a JPEG's start-of-image marker"
-        );
-        let t = Instant::now();
-        assert!(shared.next_jpeg(3).unwrap().is_none(), "nothing newer");
-        assert!(t.elapsed() >= LONG_POLL);
-        assert_eq!(shared.pictures(), 1);
-    }
-
-    #[test]
-    fn pictures_are_paced_to_max_fps() {
-        let shared = Shared {
-            config: ServeConfig {
-                max_fps: 10.0,
-                quality: 50,
-            },
-            ..shared_with_frames(1)
-        };
-        let t = Instant::now();
-        for i in 0..4u64 {
-            let mut h = DepthHeader {
-                sequence: 10 + i,
-                session: 1,
-                capture_ns: 100 + i,
-                publish_ns: 200 + i,
-                ..Default::default()
-            };
-            h.set_intrinsics(&Intrinsics::default().scaled_to(64, 48));
-            relock(&shared.scene).push_depth(h, &vec![1500; 64 * 48], 0);
-            let after = relock(&shared.scene).frames_in() - 1;
-            assert!(shared.next_jpeg(after).unwrap().is_some());
-        }
-        // Four pictures at 10 a second: the last three each waited 100 ms.
-        assert!(
-            t.elapsed() >= Duration::from_millis(300),
-            "{:?}",
-            t.elapsed()
-        );
-    }
+/// What the server sends back to a client that sends `request` and then closes its
+/// side: the same limits and routes as a connection over TCP, through memory. For the
+/// fuzz target of the viewer's HTTP handling.
+#[doc(hidden)]
+pub async fn answer(shared: Arc<Shared>, request: &[u8]) -> Vec<u8> {
+    use tokio::io::{AsyncReadExt, AsyncWriteExt};
+    let (mut client, server) = tokio::io::duplex(64 * 1024);
+    let ticket = Arc::new(Connections::new(1).admit());
+    let serving = converse(TokioIo::new(server), shared, ticket);
+    let talking = async move {
+        let _ = client.write_all(request).await;
+        let _ = client.shutdown().await;
+        let mut out = Vec::new();
+        let _ = client.read_to_end(&mut out).await;
+        out
+    };
+    tokio::join!(serving, talking).1
 }

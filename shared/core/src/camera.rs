@@ -3,6 +3,10 @@
 use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 
+/// The largest width or height of a depth image anywhere in airglyph: 8192 pixels, a
+/// 128 MiB frame; every camera made today is below 1920.
+pub const MAX_SIDE: u32 = 8192;
+
 /// Pinhole intrinsics of a depth camera, in pixels, for one resolution.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Intrinsics {
@@ -121,7 +125,7 @@ impl Intrinsics {
             cx,
             cy,
         } = *self;
-        if width == 0 || height == 0 || width > 8192 || height > 8192 {
+        if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE {
             return Err(IntrinsicsError::Size { width, height });
         }
         let focal_ok = |f: f32| f.is_finite() && (1.0..=100_000.0).contains(&f);

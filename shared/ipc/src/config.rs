@@ -6,9 +6,13 @@
 //!
 //! ```toml
 //! [ipc]
-//! root = "/tmp/iceoryx2/"   # iceoryx2's node and service directory
+//! root = "/tmp/airglyph/"   # iceoryx2's node and service directory
 //! prefix = "airglyph_"      # prefix of every file under /dev/shm and root
 //! ```
+//!
+//! The root is the pipeline's own folder (iceoryx2's default, /tmp/iceoryx2/, is shared
+//! with every other iceoryx2 program on the machine), made closed to other users: see
+//! [`crate::ownership`].
 
 use crate::IpcError;
 use iceoryx2::prelude::*;
@@ -18,7 +22,7 @@ use std::path::PathBuf;
 pub const ENV_ROOT: &str = "AIRGLYPH_IPC_ROOT";
 pub const ENV_PREFIX: &str = "AIRGLYPH_IPC_PREFIX";
 pub const ENV_CONFIG: &str = "AIRGLYPH_CONFIG";
-pub const DEFAULT_ROOT: &str = "/tmp/iceoryx2/";
+pub const DEFAULT_ROOT: &str = "/tmp/airglyph/";
 pub const DEFAULT_PREFIX: &str = "airglyph_";
 
 /// The iceoryx2 root path and file prefix of one pipeline.

@@ -15,6 +15,8 @@
 pub mod clock;
 pub mod config;
 mod error;
+pub mod options;
+pub mod ownership;
 pub mod port;
 pub mod process;
 pub mod shutdown;

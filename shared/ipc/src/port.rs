@@ -6,10 +6,11 @@ use crate::wire::{
     DecisionMsg, DepthHeader, GestureEventMsg, HeaderError, MessageError, SkeletonMsg,
     StageStatsMsg,
 };
-use crate::{IpcConfig, IpcError};
+use crate::{ownership, IpcConfig, IpcError};
+use iceoryx2::node::NodeView;
 use iceoryx2::port::listener::Listener;
 use iceoryx2::port::notifier::Notifier;
-use iceoryx2::port::publisher::Publisher as IoxPublisher;
+use iceoryx2::port::publisher::{Publisher as IoxPublisher, PublisherCreateError};
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use iceoryx2::sample::Sample;
@@ -59,6 +60,8 @@ struct Settings {
     /// Samples a subscriber holds before the oldest is overwritten (safe overflow):
     /// a slow stage drops frames instead of slowing the one before it.
     buffer: usize,
+    /// One: a second capture, pose or gesture stage on the same pipeline is refused
+    /// ([`IpcError::Taken`]) instead of interleaving its stream with the first's.
     max_publishers: usize,
     max_subscribers: usize,
 }
@@ -66,36 +69,45 @@ struct Settings {
 const DEPTH: Settings = Settings {
     name: "airglyph/depth",
     buffer: 2,
-    max_publishers: 2,
+    max_publishers: 1,
     max_subscribers: 8,
 };
 const SKELETON: Settings = Settings {
     name: "airglyph/skeleton",
     buffer: 4,
-    max_publishers: 2,
+    max_publishers: 1,
     max_subscribers: 8,
 };
 const GESTURE: Settings = Settings {
     name: "airglyph/gesture",
     buffer: 16,
-    max_publishers: 2,
+    max_publishers: 1,
     max_subscribers: 8,
 };
 const DECISION: Settings = Settings {
     name: "airglyph/decision",
     buffer: 8,
-    max_publishers: 2,
+    max_publishers: 1,
     max_subscribers: 8,
 };
 const STATS: Settings = Settings {
     name: "airglyph/stats",
     buffer: 4,
-    max_publishers: 2,
+    max_publishers: 1,
     max_subscribers: 8,
 };
 
 /// How many frames one depth publisher may hold loaned at once.
 const DEPTH_MAX_LOANED: usize = 2;
+
+/// An iceoryx2 failure, or the file behind it when one of the pipeline's files is not
+/// the user's own (planted since the start, say): iceoryx2's errors name no file.
+fn explain(config: &IpcConfig, error: IpcError) -> IpcError {
+    match ownership::check_shm(&config.prefix) {
+        Err(unsafe_file) => unsafe_file,
+        Ok(()) => error,
+    }
+}
 
 fn service_name(name: &str) -> Result<ServiceName, IpcError> {
     ServiceName::new(name).map_err(|e| IpcError::service(name, e))
@@ -114,24 +126,15 @@ impl Drop for Pipeline {
         let Ok(iox) = self.config.iceoryx2() else {
             return;
         };
-        let mut alive = 0;
-        let listed = Node::<Ipc>::list(&iox, |state| {
-            match state {
-                NodeState::Alive(_) => alive += 1,
-                NodeState::Dead(dead) => {
-                    let _ = dead.try_remove_stale_resources();
-                }
-                NodeState::Inaccessible(_) | NodeState::Undefined(_) => alive += 1,
+        // What dead processes left goes with the last ones to leave. iceoryx2's node
+        // counter stays: it is ours alone (see `crate::ownership`), and a counter that
+        // is never removed cannot be planted before the next start.
+        let _ = Node::<Ipc>::list(&iox, |state| {
+            if let NodeState::Dead(dead) = state {
+                let _ = dead.try_remove_stale_resources();
             }
             CallbackProgression::Continue
         });
-        // iceoryx2 keeps a 4-byte node counter per domain in /dev/shm for ever; the last
-        // process of a pipeline removes it so a stopped pipeline leaves nothing behind.
-        if listed.is_ok() && alive == 0 {
-            // SAFETY: no node of this domain is alive (just listed); a process that starts
-            // right now recreates the counter, which only seeds its node id.
-            let _ = unsafe { iceoryx2::testing::remove_global_mgmt_segment::<Ipc>(&iox) };
-        }
     }
 }
 
@@ -143,21 +146,29 @@ impl Pipeline {
 
     /// Joins a pipeline and removes what dead processes left in it, so a stage that was
     /// killed can be started again at once.
+    /// Refuses a pipeline whose files another user made or could change
+    /// ([`crate::ownership`]), naming the file.
     pub fn join_with(config: IpcConfig, node_name: &str) -> Result<Self, IpcError> {
         let iox = config.iceoryx2()?;
         let name = NodeName::new(node_name).map_err(|e| IpcError::Node {
             node: node_name.into(),
             reason: format!("{e:?}"),
         })?;
+        ownership::prepare(&config)?;
         let node = NodeBuilder::new()
             .name(&name)
             .config(&iox)
             // Stages handle SIGINT/SIGTERM themselves (see `crate::shutdown`).
             .signal_handling_mode(SignalHandlingMode::Disabled)
             .create::<Ipc>()
-            .map_err(|e| IpcError::Node {
-                node: node_name.into(),
-                reason: format!("{e:?}"),
+            .map_err(|e| {
+                explain(
+                    &config,
+                    IpcError::Node {
+                        node: node_name.into(),
+                        reason: format!("{e:?}"),
+                    },
+                )
             })?;
         let pipeline = Self {
             node: Some(node),
@@ -187,6 +198,12 @@ impl Pipeline {
         state.cleanups as usize
     }
 
+    /// An iceoryx2 failure on `service`, or the file behind it (see [`explain`]).
+    fn fail(&self, service: &str, reason: impl Debug) -> IpcError {
+        explain(&self.config, IpcError::service(service, reason))
+    }
+
+    /// The settings of a publish-subscribe service of the pipeline.
     fn pubsub<P: Debug + IceoryxSend + ?Sized, H: Debug + ZeroCopySend>(
         &self,
         s: &Settings,
@@ -204,33 +221,98 @@ impl Pipeline {
             .max_subscribers(s.max_subscribers))
     }
 
+    /// `airglyph/depth`, opened or created.
+    fn depth_service(
+        &self,
+    ) -> Result<publish_subscribe::PortFactory<Ipc, [u16], DepthHeader>, IpcError> {
+        self.pubsub::<[u16], DepthHeader>(&DEPTH, DEPTH.name)?
+            .open_or_create()
+            .map_err(|e| self.fail(DEPTH.name, e))
+    }
+
+    /// A fixed-size message service, opened or created.
+    fn fixed_service<T: Message>(
+        &self,
+        s: &Settings,
+        name: &str,
+    ) -> Result<publish_subscribe::PortFactory<Ipc, T, ()>, IpcError> {
+        self.pubsub::<T, ()>(s, name)?
+            .open_or_create()
+            .map_err(|e| self.fail(name, e))
+    }
+
     fn event(&self, name: &str) -> Result<event::PortFactory<Ipc>, IpcError> {
         self.node()
             .service_builder(&service_name(name)?)
             .event()
             .open_or_create()
-            .map_err(|e| IpcError::service(name, e))
+            .map_err(|e| self.fail(name, e))
+    }
+
+    /// The one publisher of a service. When its place is taken, a dead process's
+    /// publisher (killed, not yet cleaned up by anyone) is removed and the place taken
+    /// again; a live one's is refused, naming that process.
+    fn sole_publisher<P: Debug + IceoryxSend + ?Sized, H: Debug + ZeroCopySend, T>(
+        &self,
+        name: &str,
+        service: &publish_subscribe::PortFactory<Ipc, P, H>,
+        create: impl Fn() -> Result<T, PublisherCreateError>,
+    ) -> Result<T, IpcError> {
+        let iox = self.config.iceoryx2()?;
+        // A dead publisher's node is removed at the first try; the rest covers another
+        // process removing it at the same moment.
+        for _ in 0..20 {
+            match create() {
+                Ok(publisher) => return Ok(publisher),
+                Err(PublisherCreateError::ExceedsMaxSupportedPublishers) => {}
+                Err(e) => return Err(self.fail(name, e)),
+            }
+            let mut holders = Vec::new();
+            service.dynamic_config().list_publishers(|p| {
+                holders.push(p.node_id);
+                CallbackProgression::Continue
+            });
+            for id in holders {
+                match Node::<Ipc>::state_of(&iox, id) {
+                    Ok(Some(NodeState::Alive(alive))) => {
+                        return Err(IpcError::Taken {
+                            service: name.to_owned(),
+                            pid: id.pid::<Ipc>().map_or(-1, |p| p.value() as i64),
+                            node: alive
+                                .details()
+                                .as_ref()
+                                .map_or_else(String::new, |d| d.name().as_str().to_owned()),
+                            prefix: self.config.prefix.clone(),
+                        });
+                    }
+                    Ok(Some(NodeState::Dead(dead))) => {
+                        let _ = dead.try_remove_stale_resources();
+                    }
+                    _ => {}
+                }
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        Err(self.fail(name, PublisherCreateError::ExceedsMaxSupportedPublishers))
     }
 
     /// The capture side of `airglyph/depth`, for frames of up to `max_pixels` pixels
     /// (larger ones reallocate).
     pub fn depth_publisher(&self, max_pixels: usize) -> Result<DepthPublisher, IpcError> {
-        let service = self
-            .pubsub::<[u16], DepthHeader>(&DEPTH, DEPTH.name)?
-            .open_or_create()
-            .map_err(|e| IpcError::service(DEPTH.name, e))?;
-        let publisher = service
-            .publisher_builder()
-            .initial_max_slice_len(max_pixels.max(1))
-            .allocation_strategy(AllocationStrategy::PowerOfTwo)
-            .max_loaned_samples(DEPTH_MAX_LOANED)
-            .create()
-            .map_err(|e| IpcError::service(DEPTH.name, e))?;
+        let service = self.depth_service()?;
+        let publisher = self.sole_publisher(DEPTH.name, &service, || {
+            service
+                .publisher_builder()
+                .initial_max_slice_len(max_pixels.max(1))
+                .allocation_strategy(AllocationStrategy::PowerOfTwo)
+                .max_loaned_samples(DEPTH_MAX_LOANED)
+                .create()
+        })?;
         let events = self.event(DEPTH.name)?;
         let notifier = events
             .notifier_builder()
             .create()
-            .map_err(|e| IpcError::service(DEPTH.name, e))?;
+            .map_err(|e| self.fail(DEPTH.name, e))?;
         Ok(DepthPublisher {
             publisher,
             notifier,
@@ -243,19 +325,16 @@ impl Pipeline {
 
     /// A subscriber of `airglyph/depth`.
     pub fn depth_receiver(&self) -> Result<DepthReceiver, IpcError> {
-        let service = self
-            .pubsub::<[u16], DepthHeader>(&DEPTH, DEPTH.name)?
-            .open_or_create()
-            .map_err(|e| IpcError::service(DEPTH.name, e))?;
+        let service = self.depth_service()?;
         let subscriber = service
             .subscriber_builder()
             .create()
-            .map_err(|e| IpcError::service(DEPTH.name, e))?;
+            .map_err(|e| self.fail(DEPTH.name, e))?;
         let events = self.event(DEPTH.name)?;
         let listener = events
             .listener_builder()
             .create()
-            .map_err(|e| IpcError::service(DEPTH.name, e))?;
+            .map_err(|e| self.fail(DEPTH.name, e))?;
         Ok(DepthReceiver {
             subscriber,
             listener,
@@ -266,61 +345,34 @@ impl Pipeline {
         })
     }
 
-    /// A fixed-size message service and the event service its publisher wakes.
-    #[allow(clippy::type_complexity)]
-    fn fixed<T: Message>(
-        &self,
-        s: &Settings,
-        name: &str,
-    ) -> Result<
-        (
-            publish_subscribe::PortFactory<Ipc, T, ()>,
-            event::PortFactory<Ipc>,
-        ),
-        IpcError,
-    > {
-        let service = self
-            .pubsub::<T, ()>(s, name)?
-            .open_or_create()
-            .map_err(|e| IpcError::service(name, e))?;
-        Ok((service, self.event(name)?))
-    }
-
     fn publisher<T: Message>(&self, s: &Settings, name: &str) -> Result<Publisher<T>, IpcError> {
-        let (service, events) = self.fixed::<T>(s, name)?;
-        let err = |reason: String| IpcError::Service {
-            service: name.to_owned(),
-            reason,
-        };
+        let service = self.fixed_service::<T>(s, name)?;
+        let publisher =
+            self.sole_publisher(name, &service, || service.publisher_builder().create())?;
+        let events = self.event(name)?;
         Ok(Publisher {
-            publisher: service
-                .publisher_builder()
-                .create()
-                .map_err(|e| err(format!("{e:?}")))?,
+            publisher,
             notifier: events
                 .notifier_builder()
                 .create()
-                .map_err(|e| err(format!("{e:?}")))?,
+                .map_err(|e| self.fail(name, e))?,
             _service: service,
             _events: events,
         })
     }
 
     fn receiver<T: Message>(&self, s: &Settings, name: &str) -> Result<Receiver<T>, IpcError> {
-        let (service, events) = self.fixed::<T>(s, name)?;
-        let err = |reason: String| IpcError::Service {
-            service: name.to_owned(),
-            reason,
-        };
+        let service = self.fixed_service::<T>(s, name)?;
+        let events = self.event(name)?;
         Ok(Receiver {
             subscriber: service
                 .subscriber_builder()
                 .create()
-                .map_err(|e| err(format!("{e:?}")))?,
+                .map_err(|e| self.fail(name, e))?,
             listener: events
                 .listener_builder()
                 .create()
-                .map_err(|e| err(format!("{e:?}")))?,
+                .map_err(|e| self.fail(name, e))?,
             tracker: SequenceTracker::default(),
             rejected: 0,
             _service: service,
@@ -331,19 +383,13 @@ impl Pipeline {
     /// Subscribers of `airglyph/depth` now: lets a supervisor start capture only once
     /// the stages after it listen.
     pub fn depth_subscribers(&self) -> Result<usize, IpcError> {
-        let service = self
-            .pubsub::<[u16], DepthHeader>(&DEPTH, DEPTH.name)?
-            .open_or_create()
-            .map_err(|e| IpcError::service(DEPTH.name, e))?;
+        let service = self.depth_service()?;
         Ok(service.dynamic_config().number_of_subscribers())
     }
 
     /// Subscribers of `airglyph/skeleton` now.
     pub fn skeleton_subscribers(&self) -> Result<usize, IpcError> {
-        let service = self
-            .pubsub::<SkeletonMsg, ()>(&SKELETON, SKELETON.name)?
-            .open_or_create()
-            .map_err(|e| IpcError::service(SKELETON.name, e))?;
+        let service = self.fixed_service::<SkeletonMsg>(&SKELETON, SKELETON.name)?;
         Ok(service.dynamic_config().number_of_subscribers())
     }
 
@@ -510,6 +556,52 @@ impl DepthPublisher {
     }
 }
 
+/// The header of a frame already sent, still writable by its publisher: what a hostile
+/// publisher of the pipeline's own user can change under its subscribers. Only for
+/// tests of what subscribers do with that; it borrows the publisher, whose data
+/// segment holds the header, so it cannot outlive it.
+#[doc(hidden)]
+pub struct SentHeader<'a> {
+    header: *mut DepthHeader,
+    _publisher: std::marker::PhantomData<&'a mut DepthPublisher>,
+}
+
+impl SentHeader<'_> {
+    pub fn set_width(&self, width: u32) {
+        // SAFETY: the header lies in the publisher's data segment, mapped while the
+        // publisher lives, which the borrow guarantees; volatile because other
+        // processes read it.
+        unsafe { std::ptr::addr_of_mut!((*self.header).width).write_volatile(width) };
+    }
+}
+
+impl DepthPublisher {
+    /// Sends a frame whose header is taken as given and hands out its header in shared
+    /// memory. Only for tests (see [`SentHeader`]).
+    #[doc(hidden)]
+    pub fn publish_tamperable(
+        &mut self,
+        header: DepthHeader,
+        pixels: &[u16],
+    ) -> Result<SentHeader<'_>, IpcError> {
+        let mut sample = self
+            .publisher
+            .loan_slice(pixels.len())
+            .map_err(|e| IpcError::service(DEPTH.name, e))?;
+        sample.payload_mut().copy_from_slice(pixels);
+        *sample.user_header_mut() = header;
+        let sent: *mut DepthHeader = sample.user_header_mut();
+        sample
+            .send()
+            .map_err(|e| IpcError::service(DEPTH.name, e))?;
+        let _ = self.notifier.notify();
+        Ok(SentHeader {
+            header: sent,
+            _publisher: std::marker::PhantomData,
+        })
+    }
+}
+
 /// Publishes fixed-size messages and wakes the subscribers.
 pub struct Publisher<T: Message> {
     publisher: IoxPublisher<Ipc, T, ()>,
@@ -652,27 +744,41 @@ impl<T: Message> Inbox for Receiver<T> {
     }
 }
 
-/// A received depth frame, still in shared memory.
+/// A received depth frame: its pixels still in shared memory, its header the copy that
+/// was checked. The publisher can still write to the sample after sending it, so
+/// nothing that was validated is read from shared memory again: a width changed after
+/// the check once sized a view of pixels the check never saw (and panicked). That
+/// includes the payload's length, which iceoryx2 0.10 reads from the sample's header in
+/// shared memory at every `payload()`: it is read once, on receipt.
 pub struct DepthFrame {
-    sample: Sample<Ipc, [u16], DepthHeader>,
+    /// Keeps the chunk `pixels` points into reserved for this subscriber.
+    _sample: Sample<Ipc, [u16], DepthHeader>,
+    header: DepthHeader,
+    pixels: *const u16,
+    len: usize,
     /// Frames lost since the previous one of this capture session.
     pub dropped: u64,
     pub receive_ns: u64,
 }
 
 impl DepthFrame {
+    /// The header as it was validated on receipt.
     pub fn header(&self) -> &DepthHeader {
-        self.sample.user_header()
+        &self.header
     }
 
+    /// The pixels, width × height of the validated header. Their values may still
+    /// change under a hostile publisher; their number cannot.
     pub fn pixels(&self) -> &[u16] {
-        self.sample.payload()
+        // SAFETY: `pixels` and `len` are the payload slice iceoryx2 handed out on
+        // receipt; the chunk stays mapped and reserved for us while `_sample` lives,
+        // which is as long as `self`.
+        unsafe { std::slice::from_raw_parts(self.pixels, self.len) }
     }
 
     pub fn view(&self) -> airglyph_core::DepthView<'_> {
-        let h = self.header();
-        airglyph_core::DepthView::new(h.width, h.height, self.pixels())
-            .expect("validated on receipt")
+        airglyph_core::DepthView::new(self.header.width, self.header.height, self.pixels())
+            .expect("the copied header's width x height was checked against this length")
     }
 }
 
@@ -707,15 +813,23 @@ impl DepthReceiver {
             .map_err(|e| IpcError::service(DEPTH.name, e))?
         {
             let now = monotonic_ns();
+            // Each read once: the copies are what is checked and what is used.
             let header = *sample.user_header();
-            if let Err(error) = header.validate(sample.payload().len(), now) {
+            let (pixels, len) = {
+                let payload = sample.payload();
+                (payload.as_ptr(), payload.len())
+            };
+            if let Err(error) = header.validate(len, now) {
                 self.rejected += 1;
                 tracing::warn!(sequence = header.sequence, %error, "dropped a depth frame with a bad header");
                 continue;
             }
             let dropped = self.tracker.observe(header.session, header.sequence);
             return Ok(Some(DepthFrame {
-                sample,
+                _sample: sample,
+                header,
+                pixels,
+                len,
                 dropped,
                 receive_ns: now,
             }));
@@ -764,6 +878,7 @@ mod tests {
                 prefix: format!("agt{}wait_", std::process::id()),
             };
             let root = cfg.root.clone();
+            let counter = ownership::node_counter(&cfg.prefix);
             let pipeline = Pipeline::join_with(cfg, "waiter").unwrap();
             let receiver = pipeline.skeleton_receiver().unwrap();
             for ns in [1, 500, 999, 1_000, 1_001] {
@@ -773,6 +888,7 @@ mod tests {
             drop(receiver);
             drop(pipeline);
             let _ = std::fs::remove_dir_all(root);
+            let _ = std::fs::remove_file(counter);
             done.send(()).unwrap();
         });
         assert!(

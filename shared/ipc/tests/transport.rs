@@ -5,13 +5,15 @@ use airglyph_core::Intrinsics;
 use airglyph_ipc::{DepthHeader, IpcConfig, Pipeline, SkeletonMsg};
 use std::time::Duration;
 
-/// A test's own IPC root and prefix; the root's folder is removed when this is dropped,
-/// so bind it before the pipelines, which then go first.
+/// A test's own IPC root and prefix; the root's folder and the files in /dev/shm (the
+/// node counter, which a pipeline keeps) are removed when this is dropped, so bind it
+/// before the pipelines, which then go first.
 struct Isolated(IpcConfig);
 
 impl Drop for Isolated {
     fn drop(&mut self) {
         let _ = std::fs::remove_dir_all(&self.0.root);
+        let _ = std::fs::remove_file(airglyph_ipc::ownership::node_counter(&self.0.prefix));
     }
 }
 
@@ -125,4 +127,53 @@ fn skeletons_with_nan_are_refused() {
     assert_eq!(got.msg.sequence, 3);
     assert!(receiver.recv(Duration::from_millis(50)).unwrap().is_none());
     assert_eq!(receiver.rejected(), 1);
+}
+
+/// A publisher of the pipeline's own user can write to a frame after sending it: what
+/// the receiver checked must be what it hands out, not re-read from shared memory (a
+/// width changed after the check once panicked the pose stage).
+#[test]
+fn a_header_changed_after_its_check_is_not_seen() {
+    let ipc = isolated("t");
+    let side = Pipeline::join_with(ipc.config(), "both").unwrap();
+    let mut receiver = side.depth_receiver().unwrap();
+    let mut publisher = side.depth_publisher(12).unwrap();
+    let mut h = DepthHeader {
+        capture_ns: 1,
+        publish_ns: 2,
+        ..Default::default()
+    };
+    h.set_intrinsics(&Intrinsics::new(4, 3, 10.0, 10.0, 1.5, 1.0));
+    let sent = publisher.publish_tamperable(h, &[7u16; 12]).unwrap();
+    let frame = receiver.recv(Duration::from_secs(1)).unwrap().unwrap();
+    sent.set_width(640);
+    assert_eq!(frame.header().width, 4);
+    let view = frame.view();
+    assert_eq!(
+        (view.width(), view.height(), view.pixels().len()),
+        (4, 3, 12)
+    );
+}
+
+/// One publisher per stream: a second is refused, naming the first's process, instead
+/// of interleaving two streams.
+#[test]
+fn a_second_publisher_of_a_stream_is_refused_by_name() {
+    let ipc = isolated("p");
+    let side = Pipeline::join_with(ipc.config(), "first").unwrap();
+    let other = Pipeline::join_with(ipc.config(), "second").unwrap();
+    let _first = side.skeleton_publisher().unwrap();
+    let err = other
+        .skeleton_publisher()
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(
+        err.contains("airglyph/skeleton already has a publisher")
+            && err.contains(&format!("process {}", std::process::id()))
+            && err.contains("\"first\""),
+        "{err}"
+    );
+    let _depth = side.depth_publisher(1).unwrap();
+    assert!(other.depth_publisher(1).is_err());
 }

@@ -18,6 +18,11 @@ struct Args {
     /// their payload (a broken or hostile publisher), then exit.
     #[arg(long)]
     publish_bad: Option<u64>,
+    /// Instead of receiving: publish this many valid 64x48 depth frames, each followed
+    /// by 30 ms of rewriting its width in shared memory (640, 64, … each for 20 µs) after sending
+    /// it, as a hostile publisher of the pipeline's own user can; then exit.
+    #[arg(long)]
+    tamper: Option<u64>,
     /// What to receive: depth, skeleton or gesture.
     #[arg(long, default_value = "depth")]
     stream: String,
@@ -38,6 +43,9 @@ fn main() -> anyhow::Result<()> {
     let pipeline = Pipeline::join("probe")?;
     if let Some(n) = args.publish_bad {
         return publish_bad(&pipeline, n);
+    }
+    if let Some(n) = args.tamper {
+        return tamper(&pipeline, n);
     }
     match args.stream.as_str() {
         "depth" => depth(&pipeline, &args),
@@ -79,6 +87,37 @@ fn publish_bad(pipeline: &Pipeline, n: u64) -> anyhow::Result<()> {
         h.set_intrinsics(&Intrinsics::default());
         publisher.publish_raw(h, &vec![1000u16; 64 * 48])?;
         std::thread::sleep(Duration::from_millis(50));
+    }
+    Ok(())
+}
+
+fn tamper(pipeline: &Pipeline, n: u64) -> anyhow::Result<()> {
+    let mut publisher = pipeline.depth_publisher(64 * 48)?;
+    let k = Intrinsics::default().scaled_to(64, 48);
+    let session = monotonic_ns();
+    for i in 0..n {
+        let now = monotonic_ns();
+        let mut h = DepthHeader {
+            sequence: i,
+            session,
+            capture_ns: now,
+            publish_ns: now,
+            ..Default::default()
+        };
+        h.set_intrinsics(&k);
+        let sent = publisher.publish_tamperable(h, &vec![1500u16; 64 * 48])?;
+        let until = Instant::now() + Duration::from_millis(30);
+        // Each width held for 20 µs: a reader checking the header and reading it
+        // again microseconds later sees both.
+        let hold = |w: u32| {
+            sent.set_width(w);
+            let t = Instant::now();
+            while t.elapsed() < Duration::from_micros(20) {}
+        };
+        while Instant::now() < until {
+            hold(640);
+            hold(64);
+        }
     }
     Ok(())
 }

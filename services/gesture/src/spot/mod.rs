@@ -67,6 +67,10 @@ impl SpottingModel {
             if v.nets.is_empty() {
                 return Err("spotting verifier has no network".into());
             }
+            use crate::limits::{within, MAX_NETS, MAX_TIMING};
+            v.features.validate("spotting verifier's features")?;
+            within("spotting verifier's timing points", v.timing, 0, MAX_TIMING)?;
+            within("spotting verifier's networks", v.nets.len(), 1, MAX_NETS)?;
             for net in &v.nets {
                 net.validate()
                     .map_err(|e| format!("spotting verifier: {e}"))?;

@@ -175,7 +175,12 @@ impl Verifier {
     /// Input size: segment features, log size, context, posterior, ratio, place,
     /// timing profile.
     pub fn dim(&self) -> usize {
-        self.features.dim() + 1 + 4 * CONTEXT_POINTS + self.classes.len() + 1 + 2 + self.timing
+        // Saturating: a verifier whose sizes overflow never matches its networks.
+        self.features
+            .dim()
+            .saturating_add(1 + 4 * CONTEXT_POINTS + 1 + 2)
+            .saturating_add(self.classes.len())
+            .saturating_add(self.timing)
     }
 
     /// The smallest probability of a whole gesture the spotter accepts by default. The
