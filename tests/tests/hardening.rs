@@ -57,7 +57,7 @@ fn ends_within(mut child: Child, within: Duration, what: &str) -> (bool, String)
 }
 
 fn capture(p: &Isolated, extra: &[&str]) -> Command {
-    let mut cmd = p.command("airglyph-capture");
+    let mut cmd = p.stage("capture");
     cmd.args(["--source", "synthetic:poses"]).args(extra);
     cmd
 }
@@ -161,13 +161,13 @@ fn another_user_is_told_whose_pipeline_it_is() {
 fn a_second_stage_of_a_kind_is_refused_naming_the_first() {
     let p = Isolated::new();
     let stages: [(&str, &[&str]); 3] = [
-        ("airglyph-capture", &["--source", "synthetic:poses"]),
-        ("airglyph-pose", &[]),
-        ("airglyph-gesture", &[]),
+        ("capture", &["--source", "synthetic:poses"]),
+        ("pose", &[]),
+        ("gesture", &[]),
     ];
     let mut first = Vec::new();
-    for (binary, args) in stages {
-        first.push(p.command(binary).args(args).spawn().unwrap());
+    for (stage, args) in stages {
+        first.push(p.stage(stage).args(args).spawn().unwrap());
     }
     // Each has its publisher once it reports (the stats service comes after it).
     let deadline = Instant::now() + Duration::from_secs(30);
@@ -186,7 +186,7 @@ fn a_second_stage_of_a_kind_is_refused_naming_the_first() {
     }
     for ((binary, args), first) in stages.iter().zip(&first) {
         let second = p
-            .command(binary)
+            .stage(binary)
             .args(*args)
             .stderr(Stdio::piped())
             .spawn()
@@ -214,7 +214,7 @@ fn a_second_stage_of_a_kind_is_refused_naming_the_first() {
 #[test]
 fn a_publisher_rewriting_sent_headers_cannot_crash_pose() {
     let p = Isolated::new();
-    let mut pose = p.command("airglyph-pose").spawn().unwrap();
+    let mut pose = p.stage("pose").spawn().unwrap();
     std::thread::sleep(Duration::from_secs(1));
     succeed(p.command("airglyph-probe").args(["--tamper", "90"]));
     let stats = top(&p);
@@ -244,13 +244,13 @@ fn a_model_whose_sizes_overflow_is_refused_when_loaded() {
     let bad = dir.path().join("grid.json");
     std::fs::write(&bad, model.to_string()).unwrap();
     let gesture = p
-        .command("airglyph-gesture")
+        .stage("gesture")
         .arg("--model")
         .arg(&bad)
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    let (ok, err) = ends_within(gesture, Duration::from_secs(60), "airglyph-gesture");
+    let (ok, err) = ends_within(gesture, Duration::from_secs(60), "airglyph stage gesture");
     assert!(!ok);
     assert!(
         err.contains("grid.json") && err.contains("features.grid") && !err.contains("panicked"),
@@ -329,7 +329,7 @@ fn the_viewer_serves_a_new_client_under_held_connections_and_an_endless_header()
         .local_addr()
         .unwrap();
     let mut viewer = p
-        .command("airglyph-viewer")
+        .stage("viewer")
         .args(["--listen", &addr.to_string()])
         .spawn()
         .unwrap();

@@ -1,9 +1,26 @@
 //! capture (synthetic person) → pose → a subscriber process, all real processes.
 
-use airglyph_system_tests::{signal, top, Isolated};
+use airglyph_core::recording::Recording;
+use airglyph_core::Joint;
+use airglyph_system_tests::{signal, succeed, top, Isolated};
 use std::io::{BufRead, BufReader};
-use std::process::Stdio;
+use std::process::{Child, Stdio};
+use std::thread::JoinHandle;
 use std::time::Duration;
+
+/// The probe's lines, read on a thread of their own once it is subscribed: read only
+/// after the pipeline ran, a full pipe would stall the probe and the skeletons it could
+/// not take in time would be lost to it.
+fn read_lines(probe: &mut Child) -> JoinHandle<Vec<serde_json::Value>> {
+    let mut lines = BufReader::new(probe.stdout.take().unwrap()).lines();
+    assert!(lines.next().unwrap().unwrap().contains("ready"));
+    std::thread::spawn(move || {
+        lines
+            .map_while(Result::ok)
+            .map(|l| serde_json::from_str(&l).unwrap())
+            .collect()
+    })
+}
 
 #[test]
 fn skeletons_carry_their_frames_sequence_and_timestamps() {
@@ -14,8 +31,7 @@ fn skeletons_carry_their_frames_sequence_and_timestamps() {
         .stdout(Stdio::piped())
         .spawn()
         .unwrap();
-    let mut lines = BufReader::new(probe.stdout.take().unwrap()).lines();
-    assert!(lines.next().unwrap().unwrap().contains("ready"));
+    let reader = read_lines(&mut probe);
     let mut pose = p.stage("pose").spawn().unwrap();
     std::thread::sleep(Duration::from_millis(300));
     let frames = 45u64;
@@ -31,10 +47,7 @@ fn skeletons_carry_their_frames_sequence_and_timestamps() {
         .unwrap();
     assert!(capture.success());
     // The probe leaves when no skeleton came for its idle time.
-    let got: Vec<serde_json::Value> = lines
-        .map_while(Result::ok)
-        .map(|l| serde_json::from_str(&l).unwrap())
-        .collect();
+    let got = reader.join().unwrap();
     // What the pose stage took and published, from its own stats (totals so far).
     let stats = top(&p);
     let count = |k: &str| {
@@ -82,4 +95,76 @@ fn skeletons_carry_their_frames_sequence_and_timestamps() {
     // The pose stage always finishes on the newest frame.
     assert_eq!(last_seq, Some(frames - 1));
     assert!(p.shm_files().is_empty(), "left behind: {:?}", p.shm_files());
+}
+
+/// A person seen from the waist up, 1.2 m from the camera, arms at rest, through the
+/// sensor model (a recording played by the capture stage): the pose stage reports the
+/// legs out of view and nothing it calls visible lies outside the image.
+#[test]
+fn seen_from_the_waist_up_the_legs_are_reported_out_of_view() {
+    let p = Isolated::new();
+    let tmp = tempfile::tempdir().unwrap();
+    let rec = tmp.path().join("upper");
+    let frames = 30u64;
+    succeed(
+        p.command("airglyph")
+            .args(["synth", "--motion", "rest", "--resolution", "320x240"])
+            .args(["--distance", "1.2", "--framing", "upper-body"])
+            .args(["--background", "room", "--noise", "--frames"])
+            .arg(frames.to_string())
+            .arg("--out")
+            .arg(&rec),
+    );
+    let k = Recording::open(&rec).unwrap().intrinsics();
+    let mut probe = p
+        .command("airglyph-probe")
+        .args(["--stream", "skeleton", "--idle", "5"])
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let reader = read_lines(&mut probe);
+    let mut pose = p.stage("pose").spawn().unwrap();
+    std::thread::sleep(Duration::from_millis(300));
+    let source = format!("recording:{}", rec.display());
+    let capture = p
+        .stage("capture")
+        .args(["--source", &source])
+        .status()
+        .unwrap();
+    assert!(capture.success());
+    let got = reader.join().unwrap();
+    signal(&pose, libc::SIGTERM);
+    assert!(pose.wait().unwrap().success());
+    let _ = probe.wait();
+
+    assert!(got.len() >= 5, "{} skeletons", got.len());
+    for s in &got {
+        assert_eq!(s["person_found"], true, "{s}");
+        let visible: Vec<&str> = s["visible"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_str().unwrap())
+            .collect();
+        for j in ["head", "neck", "left_shoulder", "right_shoulder"] {
+            assert!(visible.contains(&j), "{j} not visible: {s}");
+        }
+        for j in ["left_knee", "right_knee", "left_foot", "right_foot"] {
+            assert!(!visible.contains(&j), "{j} visible: {s}");
+        }
+        for j in Joint::ALL.iter().filter(|j| visible.contains(&j.name())) {
+            let p: Vec<f32> = s["joints"][j.index()]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_f64().unwrap() as f32)
+                .collect();
+            let (u, v) = k.project(&nalgebra::Point3::new(p[0], p[1], p[2])).unwrap();
+            assert!(
+                (0.0..k.width as f32).contains(&u) && (0.0..k.height as f32).contains(&v),
+                "{} reported visible at ({u}, {v}), outside the image: {s}",
+                j.name()
+            );
+        }
+    }
 }

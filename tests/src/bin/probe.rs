@@ -55,6 +55,9 @@ fn main() -> anyhow::Result<()> {
                 "capture_ns": m.chain.capture_ns, "capture_publish_ns": m.chain.capture_publish_ns,
                 "pose_receive_ns": m.chain.pose_receive_ns, "pose_publish_ns": m.chain.pose_publish_ns,
                 "right_hand": m.joints[Joint::RightHand.index()], "head": m.joints[Joint::Head.index()],
+                "joints": m.joints,
+                "visible": Joint::ALL.iter().filter(|j| m.visible & (1 << j.index()) != 0)
+                    .map(|j| j.name()).collect::<Vec<_>>(),
             })
         }),
         "gesture" => messages(

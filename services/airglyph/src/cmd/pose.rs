@@ -13,7 +13,9 @@ use std::path::PathBuf;
 pub struct Args {
     /// Recording directory (recording.toml, depth/*.png).
     pub dir: PathBuf,
-    /// One JSON object a frame: {"frame":i,"person_found":…,"joints":{…},"confidence":{…}}.
+    /// One JSON object a frame: {"frame":i,"person_found":…,"joints":{…},"confidence":{…},
+    /// "visible":{…}} (joints in metres, camera frame; a joint not visible is out of the
+    /// camera's view, its confidence 0 and its place a guess).
     #[arg(long)]
     pub json: bool,
 }
@@ -41,6 +43,13 @@ pub fn frame_json(frame: usize, person_found: bool, s: &Skeleton) -> String {
             out.push(',');
         }
         out += &format!("\"{}\":{}", j.name(), num(s.confidence[j.index()]));
+    }
+    out += "},\"visible\":{";
+    for (i, j) in Joint::ALL.iter().enumerate() {
+        if i > 0 {
+            out.push(',');
+        }
+        out += &format!("\"{}\":{}", j.name(), s.visible[j.index()]);
     }
     out += "}}";
     out
