@@ -3,7 +3,9 @@
 //! same kind, a publisher that rewrites what it sent, a model whose sizes overflow, and
 //! a client holding a thousand connections and sending an endless header.
 
-use airglyph_system_tests::{binary_path, fail, succeed, top, Isolated};
+use airglyph_system_tests::{
+    binary_path, fail, one_at_a_time, shut_down, stage_children, succeed, top, Isolated,
+};
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
 use std::os::unix::fs::MetadataExt;
@@ -377,6 +379,91 @@ fn the_viewer_serves_a_new_client_under_held_connections_and_an_endless_header()
     drop(held);
     airglyph_system_tests::signal(&viewer, libc::SIGTERM);
     assert!(viewer.wait().unwrap().success());
+}
+
+/// Item 2: a viewer whose process lives on but no longer serves (tiny_http's accept
+/// thread had ended; here the whole process is stopped, so its own watchdog cannot act
+/// either) was never restarted: the supervisor only watched processes. It now asks
+/// `/healthz` and starts a viewer that answers after three failures in a row.
+#[test]
+fn a_viewer_that_stops_serving_is_restarted_by_the_supervisor() {
+    let _one = one_at_a_time();
+    let p = Isolated::new();
+    let addr = TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap();
+    let mut supervisor = p
+        .command("airglyph")
+        .args(["run", "--view", "--listen", &addr.to_string()])
+        .args(["--source", "synthetic:poses"])
+        .stdout(Stdio::null())
+        .spawn()
+        .unwrap();
+    let serves = |within: Duration| {
+        let deadline = Instant::now() + within;
+        while !get(addr, "/healthz", Duration::from_secs(1)).is_ok_and(|s| s.contains(" 200")) {
+            if Instant::now() > deadline {
+                return false;
+            }
+            std::thread::sleep(Duration::from_millis(100));
+        }
+        true
+    };
+    assert!(serves(Duration::from_secs(30)), "the viewer serves");
+    // The supervisor probes every 2 s and judges a viewer once it has seen it serve
+    // (or 30 s after its start): let it see this one.
+    std::thread::sleep(Duration::from_secs(3));
+    let viewer = stage_children(supervisor.id(), "viewer");
+    assert_eq!(viewer.len(), 1, "one viewer: {viewer:?}");
+    // SAFETY: kill(2) on the viewer child just found.
+    unsafe { libc::kill(viewer[0] as i32, libc::SIGSTOP) };
+    // kill(2) returns before the process has stopped.
+    while !std::fs::read_to_string(format!("/proc/{}/stat", viewer[0])).is_ok_and(|s| {
+        s.rsplit_once(") ")
+            .is_some_and(|(_, rest)| rest.starts_with('T'))
+    }) {
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let stopped = Instant::now();
+    assert!(
+        get(addr, "/healthz", Duration::from_secs(1)).is_err(),
+        "a stopped viewer does not answer"
+    );
+    // Three probes two seconds apart, each waiting two seconds: about 8 s, and the
+    // restart's backoff; a minute leaves room for a loaded machine.
+    let deadline = Instant::now() + Duration::from_secs(60);
+    let replaced = loop {
+        let now = stage_children(supervisor.id(), "viewer");
+        if now.len() == 1 && now[0] != viewer[0] {
+            break now[0];
+        }
+        assert!(
+            Instant::now() < deadline,
+            "the stopped viewer was not replaced: {now:?}"
+        );
+        assert!(
+            supervisor.try_wait().unwrap().is_none(),
+            "the supervisor runs on"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    assert!(serves(Duration::from_secs(30)), "the new viewer serves");
+    eprintln!(
+        "viewer {} stopped, replaced by {replaced} and serving after {:?}",
+        viewer[0],
+        stopped.elapsed()
+    );
+    assert!(
+        !Path::new(&format!("/proc/{}", viewer[0])).exists(),
+        "the stopped viewer was killed and reaped"
+    );
+    let stats = top(&p);
+    assert!(
+        stats["stages"]["capture"]["fps"].as_f64().unwrap_or(0.0) > 20.0,
+        "the pipeline ran on meanwhile: {stats}"
+    );
+    shut_down(&p, supervisor);
 }
 
 /// Item 7: a fresh-clone run of the suite left 29 files in /dev/shm: a test's pipeline

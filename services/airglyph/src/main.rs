@@ -5,6 +5,7 @@
 mod cmd;
 mod interrupt;
 mod stage;
+mod supervisor;
 
 use clap::{CommandFactory, Parser, Subcommand};
 

@@ -1,6 +1,7 @@
 //! `airglyph run`: starts the stages as child processes, supervises them, prints gestures.
 
 use crate::stage::StageArgs;
+use crate::supervisor::HealthWatch;
 use airglyph_capture::SourceSpec;
 use airglyph_ipc::{shutdown, GestureEventMsg, Pipeline, Stage};
 use anyhow::{bail, Context};
@@ -112,6 +113,9 @@ struct Supervised {
     finished: bool,
     /// Whether the pipeline stops when this stage is in a crash loop (the viewer is not).
     essential: bool,
+    /// The viewer's: whether its web server still answers (a stopped or hung viewer
+    /// lives on as a process).
+    health: Option<HealthWatch>,
 }
 
 impl Supervised {
@@ -124,6 +128,9 @@ impl Supervised {
         self.child = Some(child);
         self.started = Instant::now();
         self.restart_at = None;
+        if let Some(h) = &self.health {
+            h.restarted();
+        }
         Ok(())
     }
 
@@ -162,6 +169,23 @@ fn describe(status: ExitStatus) -> String {
         (None, Some(sig)) => format!("signal {sig}"),
         _ => "unknown status".into(),
     }
+}
+
+/// The health check of a viewer started with `args`, unless it listens on port 0 (any
+/// free port, which only the viewer knows; its own watchdog still ends it when its
+/// server stops).
+fn watch_viewer(args: &[OsString]) -> anyhow::Result<Option<HealthWatch>> {
+    let addr = crate::stage::viewer_address(args)
+        .map_err(|e| anyhow::anyhow!("the arguments of the viewer stage: {e}"))?;
+    if addr.port() == 0 {
+        tracing::info!(
+            "the viewer listens on any free port: the supervisor cannot check its health"
+        );
+        return Ok(None);
+    }
+    Ok(Some(
+        HealthWatch::start(addr).context("cannot start the viewer's health check")?,
+    ))
 }
 
 /// Runs the stages until SIGINT/SIGTERM, a finished source, or a crash loop.
@@ -381,9 +405,14 @@ pub fn run_listening<L: Listener>(
         let args = stage_args(stage, &args);
         crate::stage::check_args(stage, &args)
             .map_err(|e| anyhow::anyhow!("the arguments of the {} stage: {e}", stage.name()))?;
+        let health = match stage {
+            Stage::Viewer => watch_viewer(&args)?,
+            _ => None,
+        };
         stages.push(Supervised {
             stage,
             args,
+            health,
             child: None,
             started: Instant::now(),
             backoff: MIN_BACKOFF,
@@ -425,6 +454,17 @@ fn supervise(
         for s in stages.iter_mut() {
             if let Some(child) = s.child.as_mut() {
                 let Some(status) = child.try_wait()? else {
+                    if let Some(reason) = s.health.as_ref().and_then(HealthWatch::stopped_serving) {
+                        // SIGKILL: a stopped process would not act on SIGTERM. Its death
+                        // is then handled as any other, at the next round.
+                        tracing::warn!(
+                            stage = s.stage.name(),
+                            pid = child.id(),
+                            %reason,
+                            "the viewer lives but stopped serving; killing it to start it again"
+                        );
+                        let _ = child.kill();
+                    }
                     continue;
                 };
                 s.child = None;

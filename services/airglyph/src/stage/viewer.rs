@@ -21,7 +21,7 @@ use std::time::Duration;
 pub struct Args {
     /// Address and port to serve the page on (port 0: any free port, logged).
     #[arg(long, default_value = "127.0.0.1:8080")]
-    listen: SocketAddr,
+    pub listen: SocketAddr,
     /// Most pictures a second sent to browsers, all together; frames between are skipped.
     #[arg(long, default_value_t = 15.0)]
     max_fps: f64,
@@ -61,6 +61,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     tracing::info!("viewer on http://{}/", server.addr());
     let result = (|| {
         while !shutdown::requested() {
+            // A server that stopped serving (its thread ended, or its own health check
+            // failed three times in a row) ends the process with the reason, so that
+            // `airglyph run` or systemd starts a viewer that serves.
+            server.health()?;
             if feed
                 .poll(shared.scene(), Duration::from_millis(100))?
                 .frames
