@@ -498,7 +498,6 @@ fn a_dropped_pipeline_leaves_nothing_in_dev_shm() {
 
 /// Item 7: `top --json --wait 1e300` waited for ever when a stage did not report.
 #[test]
-#[ignore = "needs top's --wait checked with airglyph_ipc::options::seconds (see the hardening report)"]
 fn top_refuses_a_wait_it_cannot_mean() {
     let p = Isolated::new();
     for wait in ["1e300", "NaN", "-1"] {
@@ -508,4 +507,132 @@ fn top_refuses_a_wait_it_cannot_mean() {
         );
         assert!(err.contains("--wait"), "{err}");
     }
+}
+
+/// Item 3: every numeric option that sizes memory or time is range-checked as it is
+/// parsed: one line naming the option and the value, before anything is read or
+/// started (`collect --count 10^18` made a script of that many symbols first; a
+/// stage's option out of range given through `--stage-args` started a crash loop).
+#[test]
+fn numeric_options_out_of_range_are_refused_naming_the_option() {
+    let p = Isolated::new();
+    let cases: &[(&str, &[&str])] = &[
+        (
+            "--timeout",
+            &["snapshot", "--out", "x.png", "--timeout", "inf"],
+        ),
+        ("--watch", &["snapshot", "--out", "x.png", "--watch", "1e9"]),
+        ("--seconds", &["profile", "--out", "d", "--seconds", "0"]),
+        ("--warmup", &["profile", "--out", "d", "--warmup", "NaN"]),
+        (
+            "--count",
+            &[
+                "collect",
+                "--label",
+                "a",
+                "--out",
+                "x",
+                "--count",
+                "1000000000000000000",
+            ],
+        ),
+        (
+            "--hidden",
+            &[
+                "train",
+                "--data",
+                "x",
+                "--out",
+                "y",
+                "--hidden",
+                "1000000000",
+            ],
+        ),
+        (
+            "--epochs",
+            &["train", "--data", "x", "--out", "y", "--epochs", "0"],
+        ),
+        (
+            "--ensemble",
+            &["train", "--data", "x", "--out", "y", "--ensemble", "100000"],
+        ),
+        (
+            "--folds",
+            &[
+                "eval-gestures",
+                "--model",
+                "m",
+                "--data",
+                "d",
+                "--folds",
+                "1",
+            ],
+        ),
+        (
+            "--seed-points",
+            &[
+                "eval-gestures",
+                "--model",
+                "m",
+                "--data",
+                "d",
+                "--seed-points",
+                "15,100000",
+            ],
+        ),
+        (
+            "--gestures",
+            &[
+                "eval-spotting",
+                "--model",
+                "m",
+                "--data",
+                "d",
+                "--gestures",
+                "1000000000000",
+            ],
+        ),
+        (
+            "--random-seconds",
+            &[
+                "eval-spotting",
+                "--model",
+                "m",
+                "--data",
+                "d",
+                "--random-seconds",
+                "1e30",
+            ],
+        ),
+        (
+            "--plot-seconds",
+            &[
+                "eval-spotting",
+                "--model",
+                "m",
+                "--data",
+                "d",
+                "--plot-seconds",
+                "-1",
+            ],
+        ),
+        ("--fps", &["synth", "--out", "x", "--fps", "0"]),
+        (
+            "--max-fps",
+            &["run", "--view", "--stage-args", "viewer=--max-fps NaN"],
+        ),
+        (
+            "--delay-ms",
+            &["run", "--stage-args", "gesture=--delay-ms 100000000"],
+        ),
+    ];
+    for (option, args) in cases {
+        let err = fail(p.command("airglyph").args(*args));
+        let first = err.lines().next().unwrap_or_default();
+        assert!(
+            first.contains(option) && !err.contains("panicked"),
+            "{args:?}: one line naming {option}: {err}"
+        );
+    }
+    assert!(p.processes().is_empty(), "nothing was started");
 }

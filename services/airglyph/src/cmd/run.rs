@@ -56,7 +56,7 @@ pub struct Args {
     pub stage_args: Vec<StageArgs>,
     /// Crash-loop restarts of one stage (deaths within 2 s of starting) within a minute
     /// after which the pipeline gives up.
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = 5, value_parser = airglyph_ipc::options::within(0usize, 1000), allow_negative_numbers = true)]
     pub max_restarts: usize,
     /// Also start the viewer: the live depth image, skeleton, hand trail, gestures and
     /// latencies as a web page.

@@ -22,7 +22,7 @@ pub struct Args {
     #[arg(long)]
     model: Option<PathBuf>,
     /// Fault-injection for tests: sleep this long on every skeleton (a slow stage).
-    #[arg(long, hide = true, default_value_t = 0)]
+    #[arg(long, hide = true, default_value_t = 0, value_parser = airglyph_ipc::options::within(0u64, 10_000))]
     delay_ms: u64,
 }
 
