@@ -66,7 +66,7 @@ fn kill_repeatedly(stage: &str, seed: u64) {
     let mut worst = Duration::ZERO;
     for round in 0..10 {
         // A random moment, but later than 2 s after the last start: a stage that dies
-        // younger than that counts as a crash loop and is restarted with backoff.
+        // younger than that waits longer for its restart each time (backoff).
         std::thread::sleep(moments.next_in(2.1, 3.0));
         let others: Vec<(&str, u32)> = stages
             .iter()

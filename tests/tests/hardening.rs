@@ -466,6 +466,38 @@ fn a_viewer_that_stops_serving_is_restarted_by_the_supervisor() {
     shut_down(&p, supervisor);
 }
 
+/// Item 7: only deaths within 2 s of a start counted towards a crash loop, so a stage
+/// that died a little later each time was restarted for ever. Here capture fails 3 s
+/// after each start (90 frames at 30 fps).
+#[test]
+fn a_stage_dying_seconds_after_each_start_is_given_up() {
+    let p = Isolated::new();
+    let started = Instant::now();
+    let supervisor = p
+        .command("airglyph")
+        .args(["run", "--stages", "capture", "--source", "synthetic:poses"])
+        .args(["--stage-args", "capture=--fail-after 90"])
+        .args(["--max-restarts", "2", "--crash-window", "60"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Three runs of 3 s and two restarts are well within the window; the supervisor of
+    // e857d26 restarted it for ever.
+    let (ok, err) = ends_within(supervisor, Duration::from_secs(60), "airglyph run");
+    eprintln!("given up after {:?}", started.elapsed());
+    assert!(!ok, "the pipeline gives up: {err}");
+    assert!(
+        err.contains("stage capture died 3 times within 60 s") && err.contains("giving up"),
+        "{err}"
+    );
+    assert!(
+        err.contains("failing after 90 frames"),
+        "the stage's own error is shown: {err}"
+    );
+    assert!(p.shm_files().is_empty(), "left behind: {:?}", p.shm_files());
+}
+
 /// Item 7: a fresh-clone run of the suite left 29 files in /dev/shm: a test's pipeline
 /// killed at its end kept what its processes had open.
 #[test]

@@ -155,7 +155,7 @@ mod tests {
     fn every_command_parses_its_defaults_and_values_in_range() {
         Cli::command().debug_assert();
         let lines: &[&[&str]] = &[
-            &["run", "--max-restarts", "3"],
+            &["run", "--max-restarts", "3", "--crash-window", "30"],
             &["demo"],
             &["top", "--json", "--wait", "1"],
             &[

@@ -1,11 +1,10 @@
 //! `airglyph run`: starts the stages as child processes, supervises them, prints gestures.
 
 use crate::stage::StageArgs;
-use crate::supervisor::HealthWatch;
+use crate::supervisor::{CrashRule, Deaths, HealthWatch};
 use airglyph_capture::SourceSpec;
 use airglyph_ipc::{shutdown, GestureEventMsg, Pipeline, Stage};
 use anyhow::{bail, Context};
-use std::collections::VecDeque;
 use std::ffi::OsString;
 use std::path::PathBuf;
 use std::process::{Child, ExitStatus};
@@ -14,10 +13,10 @@ use std::time::{Duration, Instant};
 /// Start the pipeline and print each gesture it recognizes.
 ///
 /// The stages (capture → pose → gesture) run as child processes; one that dies is
-/// restarted after 100 ms. One that dies
-/// again within 2 s of its start is in a crash loop: each such restart waits twice as long
-/// (up to 5 s), and after --max-restarts of them within a minute the pipeline stops and
-/// says which stage and why.
+/// restarted after 100 ms, and one that dies again within 2 s of its start waits twice
+/// as long each time (up to 5 s). A stage that dies more than --max-restarts times
+/// within --crash-window seconds, however long each run lasted, is in a crash loop: the
+/// pipeline stops and says which stage and why.
 /// With --view the viewer stage runs too (a web page of what the camera sees, on
 /// http://127.0.0.1:8080/ unless --listen says otherwise); it is supervised the same
 /// way, except that a viewer in a crash loop is given up alone and the pipeline runs on.
@@ -54,10 +53,14 @@ pub struct Args {
     /// each one's arguments, which are checked before the pipeline starts.
     #[arg(long = "stage-args", value_name = "STAGE=ARGS")]
     pub stage_args: Vec<StageArgs>,
-    /// Crash-loop restarts of one stage (deaths within 2 s of starting) within a minute
-    /// after which the pipeline gives up.
-    #[arg(long, default_value_t = 5, value_parser = airglyph_ipc::options::within(0usize, 1000), allow_negative_numbers = true)]
+    /// Restarts of one stage within --crash-window after which it is in a crash loop and
+    /// the pipeline gives up (its deaths count whenever they come, not only soon after
+    /// a start).
+    #[arg(long, default_value_t = CrashRule::default().max_restarts, value_parser = airglyph_ipc::options::within(0usize, 1000), allow_negative_numbers = true)]
     pub max_restarts: usize,
+    /// The sliding window of --max-restarts, in seconds.
+    #[arg(long, value_name = "SECONDS", default_value_t = CrashRule::default().window.as_secs_f64(), value_parser = airglyph_ipc::options::seconds(airglyph_ipc::options::MAX_SECONDS), allow_negative_numbers = true)]
+    pub crash_window: f64,
     /// Also start the viewer: the live depth image, skeleton, hand trail, gestures and
     /// latencies as a web page.
     #[arg(long)]
@@ -74,6 +77,14 @@ pub struct Args {
 }
 
 impl Args {
+    /// When a stage that keeps dying is given up.
+    pub fn crash_rule(&self) -> CrashRule {
+        CrashRule {
+            max_restarts: self.max_restarts,
+            window: Duration::from_secs_f64(self.crash_window),
+        }
+    }
+
     /// `airglyph run --source SOURCE` with every other option at its command-line
     /// default, for the commands that run the pipeline themselves (demo, collect).
     pub fn with_source(source: SourceSpec) -> Self {
@@ -91,9 +102,9 @@ impl Args {
 /// The first restart waits this long; each further one twice as long, up to `MAX_BACKOFF`.
 const MIN_BACKOFF: Duration = Duration::from_millis(100);
 const MAX_BACKOFF: Duration = Duration::from_secs(5);
-/// A stage that dies sooner than this after its start counts towards a crash loop.
+/// A stage that dies sooner than this after its start waits longer for its restart each
+/// time; one that ran longer is restarted after `MIN_BACKOFF` again.
 const HEALTHY_AFTER: Duration = Duration::from_secs(2);
-const CRASH_WINDOW: Duration = Duration::from_secs(60);
 /// How long a stage gets to stop after SIGTERM before SIGKILL.
 const STOP_GRACE: Duration = Duration::from_secs(3);
 /// How long capture waits for the viewer to subscribe, so the page shows the stream from
@@ -108,7 +119,7 @@ struct Supervised {
     started: Instant,
     backoff: Duration,
     restart_at: Option<Instant>,
-    crashes: VecDeque<Instant>,
+    deaths: Deaths,
     /// Exited by itself with success (a finite source ran out), or given up: not restarted.
     finished: bool,
     /// Whether the pipeline stops when this stage is in a crash loop (the viewer is not).
@@ -400,6 +411,7 @@ pub fn run_listening<L: Listener>(
     if args.model.is_some() && !names.contains(&Stage::Gesture) {
         bail!("--model: the gesture stage does not run here (see --stages)");
     }
+    let rule = args.crash_rule();
     let mut stages = Vec::new();
     for stage in names {
         let args = stage_args(stage, &args);
@@ -417,7 +429,7 @@ pub fn run_listening<L: Listener>(
             started: Instant::now(),
             backoff: MIN_BACKOFF,
             restart_at: None,
-            crashes: VecDeque::new(),
+            deaths: Deaths::new(rule),
             finished: false,
             essential: stage != Stage::Viewer,
         });
@@ -429,7 +441,7 @@ pub fn run_listening<L: Listener>(
     let pipeline = Pipeline::join("supervisor")?;
     let mut listener = listener(&pipeline)?;
     start_in_order(&mut stages, &pipeline)?;
-    let outcome = supervise(&mut stages, &pipeline, &mut listener, &args);
+    let outcome = supervise(&mut stages, &pipeline, &mut listener);
     for s in stages.iter_mut() {
         s.stop();
     }
@@ -444,7 +456,6 @@ fn supervise(
     stages: &mut [Supervised],
     pipeline: &Pipeline,
     listener: &mut impl Listener,
-    args: &Args,
 ) -> anyhow::Result<()> {
     while !shutdown::requested() {
         if listener.poll(Duration::from_millis(50))? == Poll::Done {
@@ -475,23 +486,18 @@ fn supervise(
                 }
                 // Free the dead stage's shared memory now, not only when it restarts.
                 pipeline.cleanup_dead_nodes();
-                if s.started.elapsed() > HEALTHY_AFTER {
-                    // It was working: a one-off death (OOM, a kill), not a crash loop.
+                let young = s.started.elapsed() <= HEALTHY_AFTER;
+                if !young {
+                    // It was working: restart it at once, whatever came before.
                     s.backoff = MIN_BACKOFF;
-                } else {
-                    s.crashes.push_back(now);
                 }
-                while s
-                    .crashes
-                    .front()
-                    .is_some_and(|t| now.duration_since(*t) > CRASH_WINDOW)
-                {
-                    s.crashes.pop_front();
-                }
-                if s.crashes.len() > args.max_restarts && !s.essential {
+                let looping = s.deaths.record(now);
+                let window = s.deaths.rule().window.as_secs_f64();
+                if looping && !s.essential {
                     tracing::error!(
                         stage = s.stage.name(),
-                        crashes = s.crashes.len(),
+                        deaths = s.deaths.count(),
+                        window_s = window,
                         last = %describe(status),
                         "stage keeps dying; giving it up (the pipeline runs on) — run `{}` alone to see why",
                         crate::stage::invocation(s.stage)
@@ -499,12 +505,13 @@ fn supervise(
                     s.finished = true;
                     continue;
                 }
-                if s.crashes.len() > args.max_restarts {
+                if looping {
                     bail!(
-                        "stage {} died {} times within 2 s of starting, in a minute (last: {}); giving up — run `{}` alone to see why",
+                        "stage {} died {} times within {window} s (last: {}, {:.1} s after its start); giving up — run `{}` alone to see why",
                         s.stage.name(),
-                        s.crashes.len(),
+                        s.deaths.count(),
                         describe(status),
+                        s.started.elapsed().as_secs_f64(),
                         crate::stage::invocation(s.stage)
                     );
                 }
@@ -515,14 +522,14 @@ fn supervise(
                     "stage died; restarting"
                 );
                 s.restart_at = Some(now + s.backoff);
-                if !s.crashes.is_empty() {
+                if young {
                     s.backoff = (s.backoff * 2).min(MAX_BACKOFF);
                 }
             } else if s.restart_at.is_some_and(|t| now >= t) {
                 s.spawn()?;
                 tracing::info!(
                     stage = s.stage.name(),
-                    restarts = s.crashes.len(),
+                    deaths = s.deaths.count(),
                     "stage restarted"
                 );
             }
