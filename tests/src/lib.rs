@@ -1,5 +1,7 @@
 //! Helpers for system tests: isolated pipelines, the workspace's binaries, recordings.
 
+pub mod kills;
+
 use airglyph_core::recording::{RecordingInfo, RecordingWriter};
 use airglyph_core::{DepthImage, Intrinsics};
 use std::io::{BufRead, BufReader};

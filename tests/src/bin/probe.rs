@@ -6,7 +6,9 @@ use airglyph_core::recording::{RecordingInfo, RecordingWriter};
 use airglyph_core::{DepthImage, Intrinsics, Joint};
 use airglyph_ipc::clock::monotonic_ns;
 use airglyph_ipc::port::Message;
-use airglyph_ipc::{shutdown, DepthHeader, GestureEventMsg, Pipeline, Receiver, SkeletonMsg};
+use airglyph_ipc::{
+    shutdown, DecisionMsg, DepthHeader, GestureEventMsg, Pipeline, Receiver, SkeletonMsg,
+};
 use clap::Parser;
 use std::io::Write;
 use std::path::PathBuf;
@@ -23,7 +25,7 @@ struct Args {
     /// it, as a hostile publisher of the pipeline's own user can; then exit.
     #[arg(long)]
     tamper: Option<u64>,
-    /// What to receive: depth, skeleton or gesture.
+    /// What to receive: depth, skeleton, gesture or decision.
     #[arg(long, default_value = "depth")]
     stream: String,
     /// Write received frames here as a recording (frames.csv carries the source times).
@@ -71,7 +73,15 @@ fn main() -> anyhow::Result<()> {
                 })
             },
         ),
-        other => anyhow::bail!("unknown stream {other:?}: expected depth, skeleton or gesture"),
+        "decision" => messages(pipeline.decision_receiver()?, &args, |m: &DecisionMsg| {
+            serde_json::json!({
+                "sequence": m.sequence, "session": m.session,
+                "gesture_publish_ns": m.chain.gesture_publish_ns,
+            })
+        }),
+        other => {
+            anyhow::bail!("unknown stream {other:?}: expected depth, skeleton, gesture or decision")
+        }
     }
 }
 

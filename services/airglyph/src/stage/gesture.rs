@@ -224,7 +224,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let decisions = pipeline.decision_publisher()?;
     let mut telemetry = Telemetry::new(&pipeline, Stage::Gesture)?;
     tracing::info!(model = %source, "waiting for skeletons");
-    // The capture session and frame of the last skeleton taken, and when.
+    // The capture session and frame of the last skeleton taken.
     let mut last: Option<(u64, u64)> = None;
     // When the skeletons stop (the camera stopped, the person left), what the spotter
     // still weighs is decided after this long.
