@@ -328,6 +328,7 @@ impl PoseEstimator {
             width: size.0,
             height: size.1,
             k: &k,
+            floor: seg.floor,
         };
         let cut: Vec<bool> = maxima
             .iter()
@@ -375,6 +376,7 @@ impl PoseEstimator {
                 width: size.0,
                 height: size.1,
                 k: &k,
+                floor: seg.floor,
             };
             let side_on = torso.side_on.then_some(seg.centroid);
             let offered = self.offered.take();
@@ -398,6 +400,7 @@ impl PoseEstimator {
             width: size.0,
             height: size.1,
             k: &k,
+            floor: seg.floor,
         };
         for j in 0..Joint::COUNT {
             skeleton.visible[j] = frame.sees(&skeleton.joints[j]);
@@ -645,6 +648,7 @@ fn assign_limbs(
         &s.graph,
         &s.geodesic,
         maxima,
+        cut,
         &Limb::ALL.map(|l| *torso.keypoints.root_of(l)),
         &inv,
         &t.limbs.map(|l| l.and_then(|l| l.extremity)),
