@@ -353,7 +353,10 @@ impl PoseEstimator {
         // 5. The maxima given to the limbs (the head's holding the torso's height), and
         // the limbs' tips checked against the tracked body.
         let tpl = BodyTemplate::new(cfg);
-        let assigned = assign_limbs(s, t, &maxima, &cut, &mut torso, size, &tpl, cfg, d);
+        // A limb whose root the camera cannot see (hips below the image's border or
+        // behind a table) shows no end in view either.
+        let rooted = Limb::ALL.map(|l| frame.sees(torso.keypoints.root_of(l)));
+        let assigned = assign_limbs(s, t, &maxima, &cut, rooted, &mut torso, size, &tpl, cfg, d);
         // Without registration, the limbs' geodesic lengths measure the person.
         if !cfg.register.enabled {
             for l in Limb::ALL {
@@ -631,6 +634,7 @@ fn assign_limbs(
     t: &mut Tracking,
     maxima: &[u32],
     cut: &[bool],
+    rooted: [bool; 5],
     torso: &mut Torso,
     (w, h): (usize, usize),
     tpl: &BodyTemplate,
@@ -655,6 +659,12 @@ fn assign_limbs(
         cfg,
         &mut s.path,
     );
+    let mut cost = cost;
+    for row in &mut cost {
+        for (c, _) in row.iter_mut().zip(rooted).filter(|(_, seen)| !seen) {
+            *c = f32::INFINITY;
+        }
+    }
     let limb = assign(&cost, cfg.assign.unassigned_cost);
     d.cost = cost;
     d.maxima_dist = maxima
