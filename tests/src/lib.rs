@@ -335,3 +335,48 @@ pub fn stop(mut child: Child) -> std::process::ExitStatus {
     child.kill().unwrap();
     panic!("process {} ignored SIGTERM for 5 s", child.id());
 }
+
+/// What the synthetic person draws for `script` (`draw:SYMBOLS`, as capture's
+/// `--source synthetic:draw:SYMBOLS` plays it): each symbol with its first and last
+/// frame, which are capture's frame numbers counted from each start of capture.
+pub fn drawn_symbols(script: &str) -> Vec<airglyph_synth::GestureTruth> {
+    let scene = airglyph_capture::synthetic::scene(Some(script), false).expect("a script");
+    airglyph_synth::Synthesizer::new(scene)
+        .expect("a synthetic scene")
+        .gestures()
+}
+
+/// The drawn symbol a reported gesture's frames overlap most, if any (as `airglyph
+/// demo` matches them).
+pub fn drawn_for(truth: &[airglyph_synth::GestureTruth], start: u64, end: u64) -> Option<usize> {
+    truth
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            let lo = start.max(t.start_frame as u64);
+            let hi = end.min(t.end_frame as u64);
+            (i, hi.saturating_sub(lo))
+        })
+        .filter(|&(_, overlap)| overlap > 0)
+        .max_by_key(|&(_, overlap)| overlap)
+        .map(|(i, _)| i)
+}
+
+/// Waits for a line of a probe's skeleton stream at frame `sequence` or later; its
+/// session. Panics after `within`.
+pub fn wait_for_frame(
+    skeletons: &mpsc::Receiver<serde_json::Value>,
+    sequence: u64,
+    within: Duration,
+) -> u64 {
+    let deadline = Instant::now() + within;
+    loop {
+        let left = deadline.saturating_duration_since(Instant::now());
+        let s = skeletons
+            .recv_timeout(left)
+            .unwrap_or_else(|_| panic!("no skeleton of frame {sequence} within {within:?}"));
+        if s["sequence"].as_u64().is_some_and(|q| q >= sequence) {
+            return s["session"].as_u64().unwrap_or(0);
+        }
+    }
+}

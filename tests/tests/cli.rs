@@ -110,7 +110,7 @@ fn a_gesture_has_the_same_keys_from_run_demo_and_spot() {
     };
 
     let run = first_gesture(&p, &[]);
-    assert_eq!(keys(&run), with(&["latency_ms"]), "{run}");
+    assert_eq!(keys(&run), with(&["latency_ms", "session"]), "{run}");
 
     let out = succeed(
         p.command("airglyph")
@@ -124,7 +124,10 @@ fn a_gesture_has_the_same_keys_from_run_demo_and_spot() {
     assert_eq!(summary["event"], "summary", "{summary}");
     assert_eq!(gestures[0]["label"], "3", "{}", gestures[0]);
     assert_eq!(gestures[0]["drawn"], "3", "{}", gestures[0]);
-    assert_eq!(keys(&gestures[0]), with(&["drawn", "latency_ms"]));
+    assert_eq!(
+        keys(&gestures[0]),
+        with(&["drawn", "latency_ms", "session"])
+    );
 
     let tmp = tempfile::tempdir().unwrap();
     let rec = tmp.path().join("rec");

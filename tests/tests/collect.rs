@@ -224,7 +224,10 @@ fn bad_labels_and_models_fail_with_a_clear_message() {
             .arg("--out")
             .arg(tmp.path().join("m.json")),
     );
-    assert!(err.contains("--verifiers must be at least 1"), "{err}");
+    assert!(
+        err.contains("'0' for '--verifiers") && err.contains("from 1 to"),
+        "{err}"
+    );
 
     // A model of another version: the stage says which file and what to do.
     let model = tmp.path().join("old.json");

@@ -5,6 +5,7 @@
 mod cmd;
 mod interrupt;
 mod stage;
+mod supervisor;
 
 use clap::{CommandFactory, Parser, Subcommand};
 
@@ -140,5 +141,97 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Command::Completions(a) => cmd::completions::run(a, Cli::command()),
         Command::Man(a) => cmd::man::run(a, Cli::command()),
         Command::Stage(s) => s.run(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every command with its numeric options at their defaults and at a value in
+    /// range: a range-checked option's parser must hand clap the field's own type
+    /// (a `u64` parser for a `usize` field parses, then panics on access).
+    #[test]
+    fn every_command_parses_its_defaults_and_values_in_range() {
+        Cli::command().debug_assert();
+        let lines: &[&[&str]] = &[
+            &["run", "--max-restarts", "3", "--crash-window", "30"],
+            &["demo"],
+            &["top", "--json", "--wait", "1"],
+            &[
+                "snapshot",
+                "--out",
+                "x.png",
+                "--timeout",
+                "1",
+                "--watch",
+                "0",
+            ],
+            &["profile", "--out", "d", "--seconds", "1", "--warmup", "0"],
+            &["collect", "--label", "a", "--count", "3", "--out", "x"],
+            &[
+                "train",
+                "--data",
+                "x",
+                "--out",
+                "y",
+                "--hidden",
+                "8",
+                "--stream-augment",
+                "0.5",
+            ],
+            &[
+                "eval-gestures",
+                "--model",
+                "m",
+                "--data",
+                "d",
+                "--folds",
+                "3",
+                "--seed-points",
+                "9,15",
+            ],
+            &[
+                "eval-spotting",
+                "--model",
+                "m",
+                "--data",
+                "d",
+                "--gestures",
+                "5",
+                "--flow",
+                "0.2",
+            ],
+            &["eval-pose", "dir", "--overlay-every", "10"],
+            &["synth", "--out", "x", "--frames", "3", "--fps", "15"],
+            &[
+                "record",
+                "--source",
+                "synthetic",
+                "--out",
+                "x",
+                "--frames",
+                "3",
+            ],
+            &["stage", "capture", "--frames", "3"],
+            &["stage", "pose"],
+            &["stage", "gesture", "--delay-ms", "5"],
+            &[
+                "stage",
+                "viewer",
+                "--max-fps",
+                "2",
+                "--quality",
+                "50",
+                "--nice",
+                "5",
+            ],
+        ];
+        for line in lines {
+            let argv = std::iter::once("airglyph").chain(line.iter().copied());
+            if let Err(e) = Cli::try_parse_from(argv) {
+                panic!("{line:?}: {e}");
+            }
+        }
     }
 }

@@ -73,11 +73,12 @@ pub fn probe(addr: SocketAddr, timeout: Duration) -> Result<(), HealthError> {
     }
 }
 
-/// How often the watchdog asks, how long it waits, and how many failures in a row
-/// mean the server stopped (one slow answer on a loaded machine is not that).
-const EVERY: Duration = Duration::from_secs(2);
-const TIMEOUT: Duration = Duration::from_secs(2);
-const FAILURES: u32 = 3;
+/// How often the watchdog (and `airglyph run`, from outside) asks, how long it waits,
+/// and how many failures in a row mean the server stopped (one slow answer on a loaded
+/// machine is not that).
+pub const EVERY: Duration = Duration::from_secs(2);
+pub const TIMEOUT: Duration = Duration::from_secs(2);
+pub const FAILURES: u32 = 3;
 
 /// Probes the viewer's own server from a thread of its own.
 pub(crate) struct Watchdog {

@@ -64,6 +64,9 @@ struct Settings {
     /// ([`IpcError::Taken`]) instead of interleaving its stream with the first's.
     max_publishers: usize,
     max_subscribers: usize,
+    /// Messages the publisher keeps for a subscriber that asks for them when it
+    /// connects ([`Pipeline::skeleton_receiver_with_history`]); the others ask for none.
+    history: usize,
 }
 
 const DEPTH: Settings = Settings {
@@ -71,30 +74,42 @@ const DEPTH: Settings = Settings {
     buffer: 2,
     max_publishers: 1,
     max_subscribers: 8,
+    history: 0,
 };
 const SKELETON: Settings = Settings {
     name: "airglyph/skeleton",
     buffer: 4,
     max_publishers: 1,
     max_subscribers: 8,
+    history: SKELETON_HISTORY,
 };
+
+/// Skeletons the skeleton publisher keeps for a gesture stage that starts (again):
+/// 256 frames, 8.5 s at 30 fps, the spotter's whole reach back: its longest gesture
+/// (4 s), the hold before a pending one is decided (2.5 s) and the context around it
+/// (1 s), so a gesture stage killed while a symbol was pending finds it again. It costs
+/// the publisher's data segment about 1 MB (every subscriber may buffer as many).
+pub const SKELETON_HISTORY: usize = 256;
 const GESTURE: Settings = Settings {
     name: "airglyph/gesture",
     buffer: 16,
     max_publishers: 1,
     max_subscribers: 8,
+    history: 0,
 };
 const DECISION: Settings = Settings {
     name: "airglyph/decision",
     buffer: 8,
     max_publishers: 1,
     max_subscribers: 8,
+    history: 0,
 };
 const STATS: Settings = Settings {
     name: "airglyph/stats",
     buffer: 4,
     max_publishers: 1,
     max_subscribers: 8,
+    history: 0,
 };
 
 /// How many frames one depth publisher may hold loaned at once.
@@ -215,8 +230,8 @@ impl Pipeline {
             .publish_subscribe::<P>()
             .user_header::<H>()
             .enable_safe_overflow(true)
-            .subscriber_max_buffer_size(s.buffer)
-            .history_size(0)
+            .subscriber_max_buffer_size(s.buffer.max(s.history))
+            .history_size(s.history)
             .max_publishers(s.max_publishers)
             .max_subscribers(s.max_subscribers))
     }
@@ -361,12 +376,22 @@ impl Pipeline {
         })
     }
 
-    fn receiver<T: Message>(&self, s: &Settings, name: &str) -> Result<Receiver<T>, IpcError> {
+    /// A receiver with a buffer of `buffer` messages that asks for `history` of the
+    /// publisher's last ones when it connects.
+    fn receiver<T: Message>(
+        &self,
+        s: &Settings,
+        name: &str,
+        buffer: usize,
+        history: usize,
+    ) -> Result<Receiver<T>, IpcError> {
         let service = self.fixed_service::<T>(s, name)?;
         let events = self.event(name)?;
         Ok(Receiver {
             subscriber: service
                 .subscriber_builder()
+                .buffer_size(buffer)
+                .history_request(history)
                 .create()
                 .map_err(|e| self.fail(name, e))?,
             listener: events
@@ -398,7 +423,17 @@ impl Pipeline {
     }
 
     pub fn skeleton_receiver(&self) -> Result<Receiver<SkeletonMsg>, IpcError> {
-        self.receiver(&SKELETON, SKELETON.name)
+        self.receiver(&SKELETON, SKELETON.name, SKELETON.buffer, 0)
+    }
+
+    /// A subscriber of `airglyph/skeleton` that is first handed the publisher's last
+    /// [`SKELETON_HISTORY`] skeletons (at its next send: iceoryx2 delivers history when
+    /// the publisher next looks at its connections), oldest first, and keeps as many:
+    /// for a gesture stage catching up after a restart. Its buffer is that large, so a
+    /// stage that stays on it lags behind instead of dropping old skeletons: catch up,
+    /// then go on with [`Pipeline::skeleton_receiver`].
+    pub fn skeleton_receiver_with_history(&self) -> Result<Receiver<SkeletonMsg>, IpcError> {
+        self.receiver(&SKELETON, SKELETON.name, SKELETON_HISTORY, SKELETON_HISTORY)
     }
 
     pub fn gesture_publisher(&self) -> Result<Publisher<GestureEventMsg>, IpcError> {
@@ -406,7 +441,7 @@ impl Pipeline {
     }
 
     pub fn gesture_receiver(&self) -> Result<Receiver<GestureEventMsg>, IpcError> {
-        self.receiver(&GESTURE, GESTURE.name)
+        self.receiver(&GESTURE, GESTURE.name, GESTURE.buffer, 0)
     }
 
     pub fn decision_publisher(&self) -> Result<Publisher<DecisionMsg>, IpcError> {
@@ -414,7 +449,7 @@ impl Pipeline {
     }
 
     pub fn decision_receiver(&self) -> Result<Receiver<DecisionMsg>, IpcError> {
-        self.receiver(&DECISION, DECISION.name)
+        self.receiver(&DECISION, DECISION.name, DECISION.buffer, 0)
     }
 
     pub fn stats_publisher(&self, stage: Stage) -> Result<Publisher<StageStatsMsg>, IpcError> {
@@ -422,7 +457,12 @@ impl Pipeline {
     }
 
     pub fn stats_receiver(&self, stage: Stage) -> Result<Receiver<StageStatsMsg>, IpcError> {
-        self.receiver(&STATS, &format!("{}/{}", STATS.name, stage.name()))
+        self.receiver(
+            &STATS,
+            &format!("{}/{}", STATS.name, stage.name()),
+            STATS.buffer,
+            0,
+        )
     }
 }
 

@@ -6,12 +6,16 @@ use crate::interrupt::Interrupted;
 use airglyph_capture::SourceSpec;
 use airglyph_gesture::collect::{RepetitionConfig, RepetitionSegmenter};
 use airglyph_gesture::model::MAX_LABEL_BYTES;
-use airglyph_ipc::{Receiver, SkeletonMsg};
+use airglyph_ipc::{options, Receiver, SkeletonMsg};
 use anyhow::{bail, Context};
 use std::fs::File;
 use std::io::Write;
 use std::path::PathBuf;
 use std::time::Duration;
+
+/// Most repetitions one session records (a synthetic source draws them all in one
+/// script, made before the first frame).
+const MAX_COUNT: usize = 10_000;
 
 /// Record a gesture of your own, drawn again and again, as trajectory JSONL.
 ///
@@ -31,8 +35,8 @@ pub struct Args {
     /// The gesture's name: any text up to 32 bytes (UTF-8).
     #[arg(long)]
     label: String,
-    /// How many repetitions to record.
-    #[arg(long)]
+    /// How many repetitions to record (1–10000).
+    #[arg(long, value_parser = options::within(1usize, MAX_COUNT), allow_negative_numbers = true)]
     count: usize,
     /// The trajectory JSONL file to append to (created if missing).
     #[arg(long)]
@@ -130,9 +134,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.label,
             args.label.len()
         );
-    }
-    if args.count == 0 {
-        bail!("--count must be at least 1");
     }
     let source = match args.source.clone() {
         Some(s) => s,

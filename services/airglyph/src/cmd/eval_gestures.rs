@@ -9,6 +9,7 @@ use airglyph_gesture::data::{folds_by_subject, labels_of, load_many, Sample};
 use airglyph_gesture::dtw::DtwClassifier;
 use airglyph_gesture::eval::Confusion;
 use airglyph_gesture::{train, ClassifierKind, Model, TrainConfig};
+use airglyph_ipc::options;
 use anyhow::{bail, Context};
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
@@ -34,13 +35,13 @@ pub struct Args {
     #[arg(long)]
     pub baselines: bool,
     /// Cross-validation by subject with K folds, retraining on the other folds.
-    #[arg(long)]
+    #[arg(long, value_parser = options::within(2usize, 1000), allow_negative_numbers = true)]
     pub folds: Option<usize>,
     /// Bezier points of the seed's pipeline among the baselines.
-    #[arg(long, value_delimiter = ',', default_value = "15")]
+    #[arg(long, value_delimiter = ',', default_value = "15", value_parser = options::within(2, airglyph_gesture::limits::MAX_BEZIER_POINTS), allow_negative_numbers = true)]
     pub seed_points: Vec<usize>,
     /// Evaluate DTW on every S-th test sample only (it is slow).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = options::within(1usize, 1_000_000), allow_negative_numbers = true)]
     pub dtw_stride: usize,
     /// Skip the CRF among the baselines.
     #[arg(long)]
@@ -198,9 +199,6 @@ fn evaluate(args: &Args) -> anyhow::Result<Vec<Scored>> {
         }
         methods.push(Method::Dtw);
         for &n in &args.seed_points {
-            if !(2..=200).contains(&n) {
-                bail!("--seed-points {n} is not in 2..=200");
-            }
             methods.push(Method::Seed(n));
         }
         if !args.no_crf {
@@ -209,9 +207,6 @@ fn evaluate(args: &Args) -> anyhow::Result<Vec<Scored>> {
     }
     let mut results: Vec<Scored> = Vec::new();
     if let Some(k) = args.folds {
-        if k < 2 {
-            bail!("--folds {k}: need at least 2");
-        }
         eprintln!(
             "cross-validating {} over {k} folds by subject on {} samples",
             methods

@@ -33,7 +33,7 @@ pub struct Args {
     pub plots: Option<PathBuf>,
     /// Also write overlays (ground truth green, estimate red) of every Nth frame into
     /// the plots directory.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = airglyph_ipc::options::within(1usize, 1_000_000), allow_negative_numbers = true)]
     pub overlay_every: Option<usize>,
 }
 

@@ -11,6 +11,7 @@ use airglyph_gesture::stream::{
     build_stream, matched, random_movement, SpottingScore, StreamConfig, SyntheticStream,
 };
 use airglyph_gesture::{Model, SpottedGesture, Spotter, SpotterConfig};
+use airglyph_ipc::options;
 use anyhow::bail;
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
@@ -52,24 +53,24 @@ pub struct Args {
     pub json: bool,
     /// Gestures in all streams together: the samples in a random order, each again (in
     /// another order) when there are fewer samples than this.
-    #[arg(long, default_value_t = 500)]
+    #[arg(long, default_value_t = 500, value_parser = options::within(1usize, 1_000_000), allow_negative_numbers = true)]
     pub gestures: usize,
     /// Gestures per stream.
-    #[arg(long, default_value_t = 20)]
+    #[arg(long, default_value_t = 20, value_parser = options::within(1usize, 10_000), allow_negative_numbers = true)]
     pub per_stream: usize,
     /// Seconds of ordinary movement alone, to count insertions in (and which symbols
     /// it passes for).
-    #[arg(long, default_value_t = 300.0)]
+    #[arg(long, default_value_t = 300.0, value_parser = options::within(0.0f32, 36_000.0), allow_negative_numbers = true)]
     pub random_seconds: f32,
     /// Probability that the hand rests (0.1–0.5 s) before and after each gesture.
-    #[arg(long, default_value_t = 0.3)]
+    #[arg(long, default_value_t = 0.3, value_parser = options::within(0.0f64, 1.0), allow_negative_numbers = true)]
     pub pause_prob: f64,
     /// Largest speed at which the hand enters or leaves a gesture, as a fraction of the
     /// drawing's mean speed (each boundary draws one from 0 to this).
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, value_parser = options::within(0.0f32, 1.0), allow_negative_numbers = true)]
     pub flow: f32,
     /// Mean hand speed while drawing, shoulder widths a second (each symbol ×0.75–1.3).
-    #[arg(long, default_value_t = 1.5)]
+    #[arg(long, default_value_t = 1.5, value_parser = options::within(0.2f32, 10.0), allow_negative_numbers = true)]
     pub speed: f32,
     /// Print every drawn and spotted gesture (to stderr).
     #[arg(long)]
@@ -88,9 +89,9 @@ pub struct Args {
     pub plot: Option<PathBuf>,
     #[arg(long, default_value_t = 0)]
     pub plot_stream: usize,
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = options::within(0.0f32, 86_400.0), allow_negative_numbers = true)]
     pub plot_from: f32,
-    #[arg(long, default_value_t = 30.0)]
+    #[arg(long, default_value_t = 30.0, value_parser = options::within(0.1f32, 600.0), allow_negative_numbers = true)]
     pub plot_seconds: f32,
 }
 
@@ -326,19 +327,7 @@ fn evaluate(args: &Args) -> anyhow::Result<Evaluation> {
         );
     }
     let mut rng = ChaCha8Rng::seed_from_u64(args.seed);
-    let known = draw(&pool, args.gestures.max(1), &mut rng);
-    if !(0.0..=1.0).contains(&args.pause_prob) {
-        bail!("--pause-prob {} is not in [0, 1]", args.pause_prob);
-    }
-    if !(0.0..=1.0).contains(&args.flow) {
-        bail!("--flow {} is not in [0, 1]", args.flow);
-    }
-    if !(0.2..=10.0).contains(&args.speed) {
-        bail!(
-            "--speed {} is not in [0.2, 10] shoulder widths a second",
-            args.speed
-        );
-    }
+    let known = draw(&pool, args.gestures, &mut rng);
     let cfg = StreamConfig {
         pause_prob: args.pause_prob,
         flow: args.flow,
@@ -346,7 +335,7 @@ fn evaluate(args: &Args) -> anyhow::Result<Evaluation> {
         ..StreamConfig::default()
     };
     let scfg = spotter_config(args.spotter.as_deref())?;
-    let per = args.per_stream.max(1);
+    let per = args.per_stream;
     let chunks: Vec<(usize, u64, Vec<&Sample>)> = known
         .chunks(per)
         .enumerate()

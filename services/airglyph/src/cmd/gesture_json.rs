@@ -8,8 +8,9 @@ use serde::Serialize;
 
 /// One gesture, one JSON object a line: `{"event":"gesture","label":…,"score":…,
 /// "start_frame":…,"end_frame":…,"hand":…,"start_ns":…,"end_ns":…}`, with
-/// `latency_ms` (capture to event) when it comes live from the pipeline and `drawn` (the
-/// symbol drawn over its frames, or null) when the drawn symbols are known.
+/// `session` (the capture session its frames belong to) and `latency_ms` (capture to
+/// event) when it comes live from the pipeline, and `drawn` (the symbol drawn over its
+/// frames, or null) when the drawn symbols are known.
 #[derive(Debug, Serialize)]
 pub struct GestureJson<'a> {
     event: &'static str,
@@ -24,6 +25,12 @@ pub struct GestureJson<'a> {
     /// Capture times of its first and last frame, CLOCK_MONOTONIC nanoseconds.
     pub start_ns: u64,
     pub end_ns: u64,
+    /// Live only: the capture session of its frames (capture's start time). Frame
+    /// numbers start again with each session, so a symbol seen again after capture was
+    /// restarted has other frames' numbers in another session; the same session and
+    /// frames twice would be the same gesture.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub session: Option<u64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub latency_ms: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -46,6 +53,7 @@ impl<'a> GestureJson<'a> {
             },
             start_ns: e.start_ns,
             end_ns: e.end_ns,
+            session: Some(e.session),
             latency_ms: Some(latency_ms(e)),
             drawn: None,
         }
@@ -65,6 +73,7 @@ impl<'a> GestureJson<'a> {
             },
             start_ns: g.start_ns,
             end_ns: g.end_ns,
+            session: None,
             latency_ms: None,
             drawn: None,
         }

@@ -2,7 +2,7 @@
 
 use crate::interrupt::Interrupted;
 use airglyph_capture::SourceSpec;
-use airglyph_ipc::{shutdown, LatencyChain, Pipeline, Stage, StageStatsMsg};
+use airglyph_ipc::{options, shutdown, LatencyChain, Pipeline, Stage, StageStatsMsg};
 use airglyph_plot::PlotError;
 use anyhow::Context;
 use plotters::prelude::*;
@@ -19,8 +19,8 @@ use std::time::{Duration, Instant};
 /// Attaches to the running pipeline, or with --source starts one first.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// How long to measure.
-    #[arg(long, default_value_t = 10.0)]
+    /// How long to measure (seconds, up to a day: the report keeps every frame).
+    #[arg(long, default_value_t = 10.0, value_parser = options::seconds(options::MAX_SECONDS), allow_negative_numbers = true)]
     seconds: f64,
     /// Directory for the report (created).
     #[arg(long)]
@@ -28,8 +28,8 @@ pub struct Args {
     /// Start the pipeline on this source (synthetic, recording:DIR, …) and stop it after.
     #[arg(long)]
     source: Option<SourceSpec>,
-    /// With --source: seconds to let the pipeline settle before measuring.
-    #[arg(long, default_value_t = 3.0)]
+    /// With --source: seconds to let the pipeline settle before measuring (up to an hour).
+    #[arg(long, default_value_t = 3.0, value_parser = options::seconds_or_zero(3600.0), allow_negative_numbers = true)]
     warmup: f64,
     /// Print the summary as one JSON object.
     #[arg(long)]

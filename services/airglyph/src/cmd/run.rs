@@ -1,10 +1,10 @@
 //! `airglyph run`: starts the stages as child processes, supervises them, prints gestures.
 
 use crate::stage::StageArgs;
+use crate::supervisor::{CrashRule, Deaths, HealthWatch};
 use airglyph_capture::SourceSpec;
 use airglyph_ipc::{shutdown, GestureEventMsg, Pipeline, Stage};
 use anyhow::{bail, Context};
-use std::collections::VecDeque;
 use std::ffi::OsString;
 use std::path::PathBuf;
 use std::process::{Child, ExitStatus};
@@ -13,10 +13,10 @@ use std::time::{Duration, Instant};
 /// Start the pipeline and print each gesture it recognizes.
 ///
 /// The stages (capture → pose → gesture) run as child processes; one that dies is
-/// restarted after 100 ms. One that dies
-/// again within 2 s of its start is in a crash loop: each such restart waits twice as long
-/// (up to 5 s), and after --max-restarts of them within a minute the pipeline stops and
-/// says which stage and why.
+/// restarted after 100 ms, and one that dies again within 2 s of its start waits twice
+/// as long each time (up to 5 s). A stage that dies more than --max-restarts times
+/// within --crash-window seconds, however long each run lasted, is in a crash loop: the
+/// pipeline stops and says which stage and why.
 /// With --view the viewer stage runs too (a web page of what the camera sees, on
 /// http://127.0.0.1:8080/ unless --listen says otherwise); it is supervised the same
 /// way, except that a viewer in a crash loop is given up alone and the pipeline runs on.
@@ -53,10 +53,14 @@ pub struct Args {
     /// each one's arguments, which are checked before the pipeline starts.
     #[arg(long = "stage-args", value_name = "STAGE=ARGS")]
     pub stage_args: Vec<StageArgs>,
-    /// Crash-loop restarts of one stage (deaths within 2 s of starting) within a minute
-    /// after which the pipeline gives up.
-    #[arg(long, default_value_t = 5)]
+    /// Restarts of one stage within --crash-window after which it is in a crash loop and
+    /// the pipeline gives up (its deaths count whenever they come, not only soon after
+    /// a start).
+    #[arg(long, default_value_t = CrashRule::default().max_restarts, value_parser = airglyph_ipc::options::within(0usize, 1000), allow_negative_numbers = true)]
     pub max_restarts: usize,
+    /// The sliding window of --max-restarts, in seconds.
+    #[arg(long, value_name = "SECONDS", default_value_t = CrashRule::default().window.as_secs_f64(), value_parser = airglyph_ipc::options::seconds(airglyph_ipc::options::MAX_SECONDS), allow_negative_numbers = true)]
+    pub crash_window: f64,
     /// Also start the viewer: the live depth image, skeleton, hand trail, gestures and
     /// latencies as a web page.
     #[arg(long)]
@@ -73,6 +77,14 @@ pub struct Args {
 }
 
 impl Args {
+    /// When a stage that keeps dying is given up.
+    pub fn crash_rule(&self) -> CrashRule {
+        CrashRule {
+            max_restarts: self.max_restarts,
+            window: Duration::from_secs_f64(self.crash_window),
+        }
+    }
+
     /// `airglyph run --source SOURCE` with every other option at its command-line
     /// default, for the commands that run the pipeline themselves (demo, collect).
     pub fn with_source(source: SourceSpec) -> Self {
@@ -90,9 +102,9 @@ impl Args {
 /// The first restart waits this long; each further one twice as long, up to `MAX_BACKOFF`.
 const MIN_BACKOFF: Duration = Duration::from_millis(100);
 const MAX_BACKOFF: Duration = Duration::from_secs(5);
-/// A stage that dies sooner than this after its start counts towards a crash loop.
+/// A stage that dies sooner than this after its start waits longer for its restart each
+/// time; one that ran longer is restarted after `MIN_BACKOFF` again.
 const HEALTHY_AFTER: Duration = Duration::from_secs(2);
-const CRASH_WINDOW: Duration = Duration::from_secs(60);
 /// How long a stage gets to stop after SIGTERM before SIGKILL.
 const STOP_GRACE: Duration = Duration::from_secs(3);
 /// How long capture waits for the viewer to subscribe, so the page shows the stream from
@@ -107,11 +119,14 @@ struct Supervised {
     started: Instant,
     backoff: Duration,
     restart_at: Option<Instant>,
-    crashes: VecDeque<Instant>,
+    deaths: Deaths,
     /// Exited by itself with success (a finite source ran out), or given up: not restarted.
     finished: bool,
     /// Whether the pipeline stops when this stage is in a crash loop (the viewer is not).
     essential: bool,
+    /// The viewer's: whether its web server still answers (a stopped or hung viewer
+    /// lives on as a process).
+    health: Option<HealthWatch>,
 }
 
 impl Supervised {
@@ -124,6 +139,9 @@ impl Supervised {
         self.child = Some(child);
         self.started = Instant::now();
         self.restart_at = None;
+        if let Some(h) = &self.health {
+            h.restarted();
+        }
         Ok(())
     }
 
@@ -162,6 +180,23 @@ fn describe(status: ExitStatus) -> String {
         (None, Some(sig)) => format!("signal {sig}"),
         _ => "unknown status".into(),
     }
+}
+
+/// The health check of a viewer started with `args`, unless it listens on port 0 (any
+/// free port, which only the viewer knows; its own watchdog still ends it when its
+/// server stops).
+fn watch_viewer(args: &[OsString]) -> anyhow::Result<Option<HealthWatch>> {
+    let addr = crate::stage::viewer_address(args)
+        .map_err(|e| anyhow::anyhow!("the arguments of the viewer stage: {e}"))?;
+    if addr.port() == 0 {
+        tracing::info!(
+            "the viewer listens on any free port: the supervisor cannot check its health"
+        );
+        return Ok(None);
+    }
+    Ok(Some(
+        HealthWatch::start(addr).context("cannot start the viewer's health check")?,
+    ))
 }
 
 /// Runs the stages until SIGINT/SIGTERM, a finished source, or a crash loop.
@@ -376,19 +411,25 @@ pub fn run_listening<L: Listener>(
     if args.model.is_some() && !names.contains(&Stage::Gesture) {
         bail!("--model: the gesture stage does not run here (see --stages)");
     }
+    let rule = args.crash_rule();
     let mut stages = Vec::new();
     for stage in names {
         let args = stage_args(stage, &args);
         crate::stage::check_args(stage, &args)
             .map_err(|e| anyhow::anyhow!("the arguments of the {} stage: {e}", stage.name()))?;
+        let health = match stage {
+            Stage::Viewer => watch_viewer(&args)?,
+            _ => None,
+        };
         stages.push(Supervised {
             stage,
             args,
+            health,
             child: None,
             started: Instant::now(),
             backoff: MIN_BACKOFF,
             restart_at: None,
-            crashes: VecDeque::new(),
+            deaths: Deaths::new(rule),
             finished: false,
             essential: stage != Stage::Viewer,
         });
@@ -400,7 +441,7 @@ pub fn run_listening<L: Listener>(
     let pipeline = Pipeline::join("supervisor")?;
     let mut listener = listener(&pipeline)?;
     start_in_order(&mut stages, &pipeline)?;
-    let outcome = supervise(&mut stages, &pipeline, &mut listener, &args);
+    let outcome = supervise(&mut stages, &pipeline, &mut listener);
     for s in stages.iter_mut() {
         s.stop();
     }
@@ -415,7 +456,6 @@ fn supervise(
     stages: &mut [Supervised],
     pipeline: &Pipeline,
     listener: &mut impl Listener,
-    args: &Args,
 ) -> anyhow::Result<()> {
     while !shutdown::requested() {
         if listener.poll(Duration::from_millis(50))? == Poll::Done {
@@ -425,6 +465,17 @@ fn supervise(
         for s in stages.iter_mut() {
             if let Some(child) = s.child.as_mut() {
                 let Some(status) = child.try_wait()? else {
+                    if let Some(reason) = s.health.as_ref().and_then(HealthWatch::stopped_serving) {
+                        // SIGKILL: a stopped process would not act on SIGTERM. Its death
+                        // is then handled as any other, at the next round.
+                        tracing::warn!(
+                            stage = s.stage.name(),
+                            pid = child.id(),
+                            %reason,
+                            "the viewer lives but stopped serving; killing it to start it again"
+                        );
+                        let _ = child.kill();
+                    }
                     continue;
                 };
                 s.child = None;
@@ -435,23 +486,18 @@ fn supervise(
                 }
                 // Free the dead stage's shared memory now, not only when it restarts.
                 pipeline.cleanup_dead_nodes();
-                if s.started.elapsed() > HEALTHY_AFTER {
-                    // It was working: a one-off death (OOM, a kill), not a crash loop.
+                let young = s.started.elapsed() <= HEALTHY_AFTER;
+                if !young {
+                    // It was working: restart it at once, whatever came before.
                     s.backoff = MIN_BACKOFF;
-                } else {
-                    s.crashes.push_back(now);
                 }
-                while s
-                    .crashes
-                    .front()
-                    .is_some_and(|t| now.duration_since(*t) > CRASH_WINDOW)
-                {
-                    s.crashes.pop_front();
-                }
-                if s.crashes.len() > args.max_restarts && !s.essential {
+                let looping = s.deaths.record(now);
+                let window = s.deaths.rule().window.as_secs_f64();
+                if looping && !s.essential {
                     tracing::error!(
                         stage = s.stage.name(),
-                        crashes = s.crashes.len(),
+                        deaths = s.deaths.count(),
+                        window_s = window,
                         last = %describe(status),
                         "stage keeps dying; giving it up (the pipeline runs on) — run `{}` alone to see why",
                         crate::stage::invocation(s.stage)
@@ -459,12 +505,13 @@ fn supervise(
                     s.finished = true;
                     continue;
                 }
-                if s.crashes.len() > args.max_restarts {
+                if looping {
                     bail!(
-                        "stage {} died {} times within 2 s of starting, in a minute (last: {}); giving up — run `{}` alone to see why",
+                        "stage {} died {} times within {window} s (last: {}, {:.1} s after its start); giving up — run `{}` alone to see why",
                         s.stage.name(),
-                        s.crashes.len(),
+                        s.deaths.count(),
                         describe(status),
+                        s.started.elapsed().as_secs_f64(),
                         crate::stage::invocation(s.stage)
                     );
                 }
@@ -475,14 +522,14 @@ fn supervise(
                     "stage died; restarting"
                 );
                 s.restart_at = Some(now + s.backoff);
-                if !s.crashes.is_empty() {
+                if young {
                     s.backoff = (s.backoff * 2).min(MAX_BACKOFF);
                 }
             } else if s.restart_at.is_some_and(|t| now >= t) {
                 s.spawn()?;
                 tracing::info!(
                     stage = s.stage.name(),
-                    restarts = s.crashes.len(),
+                    deaths = s.deaths.count(),
                     "stage restarted"
                 );
             }

@@ -1,7 +1,7 @@
 //! `airglyph snapshot`: the viewer's picture of the running pipeline, as a PNG file.
 
 use airglyph_ipc::clock::monotonic_ns;
-use airglyph_ipc::{shutdown, Pipeline};
+use airglyph_ipc::{options, shutdown, Pipeline};
 use airglyph_viewer::render::{encode_png, render};
 use airglyph_viewer::{Feed, Scene};
 use anyhow::{bail, Context};
@@ -21,20 +21,15 @@ pub struct Args {
     /// The PNG to write.
     #[arg(long)]
     out: PathBuf,
-    /// Seconds to wait for the first depth frame before giving up.
-    #[arg(long, default_value_t = 5.0)]
+    /// Seconds to wait for the first depth frame before giving up (up to an hour).
+    #[arg(long, default_value_t = 5.0, value_parser = options::seconds_or_zero(3600.0), allow_negative_numbers = true)]
     timeout: f64,
-    /// Seconds to watch from the first frame, so the picture has a trail.
-    #[arg(long, default_value_t = 1.0)]
+    /// Seconds to watch from the first frame, so the picture has a trail (up to an hour).
+    #[arg(long, default_value_t = 1.0, value_parser = options::seconds_or_zero(3600.0), allow_negative_numbers = true)]
     watch: f64,
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    for (name, v) in [("--timeout", args.timeout), ("--watch", args.watch)] {
-        if !(v.is_finite() && (0.0..=3600.0).contains(&v)) {
-            bail!("{name} {v} must be between 0 and 3600 seconds");
-        }
-    }
     shutdown::install();
     let pipeline = Pipeline::join("snapshot")?;
     let mut feed = Feed::new(&pipeline)?;

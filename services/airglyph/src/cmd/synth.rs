@@ -41,7 +41,7 @@ pub struct Args {
     pub table: bool,
     /// Frames to write (at most the clip's length); default: the whole clip or symbol
     /// list, 300 for endless motion.
-    #[arg(long)]
+    #[arg(long, value_parser = airglyph_ipc::options::within(1usize, 1_000_000), allow_negative_numbers = true)]
     pub frames: Option<usize>,
     /// The recording directory to create.
     #[arg(long)]
@@ -59,8 +59,8 @@ pub struct Args {
     /// Camera preset: kinect-v1-640x480, kinect-v1-320x240, realsense-d435.
     #[arg(long, default_value = "kinect-v1-640x480")]
     pub camera: String,
-    /// Frames a second.
-    #[arg(long, default_value_t = 30.0)]
+    /// Frames a second (1–240).
+    #[arg(long, default_value_t = 30.0, value_parser = airglyph_ipc::options::within(1.0f32, 240.0), allow_negative_numbers = true)]
     pub fps: f32,
     /// Random seed: everything is deterministic given it.
     #[arg(long, default_value_t = 0)]

@@ -1,5 +1,6 @@
 //! `airglyph top`: each stage's telemetry, live.
 
+use airglyph_ipc::options;
 use airglyph_ipc::wire::Percentiles;
 use airglyph_ipc::{shutdown, Pipeline, Receiver, Stage, StageStatsMsg};
 use std::collections::BTreeMap;
@@ -17,8 +18,8 @@ pub struct Args {
     /// Print one snapshot as a JSON object and exit.
     #[arg(long)]
     json: bool,
-    /// With --json: how long to wait for every stage to report.
-    #[arg(long, default_value_t = 2.5)]
+    /// With --json: how long to wait for every stage to report (seconds, up to an hour).
+    #[arg(long, default_value_t = 2.5, value_parser = options::seconds(3600.0), allow_negative_numbers = true)]
     wait: f64,
 }
 

@@ -1,7 +1,9 @@
 //! `airglyph train`: trains a gesture model from trajectory JSONL files.
 
 use crate::interrupt::unless_interrupted;
+use airglyph_gesture::limits;
 use airglyph_gesture::{load_many, train, ClassifierKind, Model, TrainConfig};
+use airglyph_ipc::options;
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
@@ -18,24 +20,24 @@ pub struct Args {
     #[arg(long, default_value = "mlp")]
     pub classifier: String,
     /// Bezier points of the seed's descriptor (hmm, crf).
-    #[arg(long, default_value_t = 15)]
+    #[arg(long, default_value_t = 15, value_parser = options::within(2, limits::MAX_BEZIER_POINTS), allow_negative_numbers = true)]
     pub bezier_points: usize,
     /// HMM states (hmm).
-    #[arg(long, default_value_t = 14)]
+    #[arg(long, default_value_t = 14, value_parser = options::within(1, limits::MAX_STATES), allow_negative_numbers = true)]
     pub states: usize,
     /// Networks in the ensemble (mlp).
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, value_parser = options::within(1, limits::MAX_NETS), allow_negative_numbers = true)]
     pub ensemble: usize,
     /// Training epochs (mlp).
-    #[arg(long, default_value_t = 30)]
+    #[arg(long, default_value_t = 30, value_parser = options::within(1, limits::MAX_EPOCHS), allow_negative_numbers = true)]
     pub epochs: usize,
     /// Hidden units (mlp).
-    #[arg(long, default_value_t = 192)]
+    #[arg(long, default_value_t = 192, value_parser = options::within(2, limits::MAX_HIDDEN), allow_negative_numbers = true)]
     pub hidden: usize,
     /// Networks in the spotting verifier, each trained on synthetic streams of its own
     /// (their probabilities are averaged; each takes about as long as the rest of the
     /// spotting part).
-    #[arg(long, default_value_t = TrainConfig::default().verifiers)]
+    #[arg(long, default_value_t = TrainConfig::default().verifiers, value_parser = options::within(1, limits::MAX_NETS), allow_negative_numbers = true)]
     pub verifiers: usize,
     /// Use the pen-up flag of the data (off: treat every sample as one air-drawn path).
     #[arg(long)]
@@ -45,7 +47,7 @@ pub struct Args {
     /// Fraction of the network's augmented training samples that are also drawn in a
     /// synthetic stream and seen through the hand tracker's filter, as the spotter sees
     /// them (mlp; 0 = never).
-    #[arg(long, default_value_t = TrainConfig::default().stream_augment)]
+    #[arg(long, default_value_t = TrainConfig::default().stream_augment, value_parser = options::within(0.0f32, 1.0), allow_negative_numbers = true)]
     pub stream_augment: f32,
     /// Train the classifier only, without the spotting part (HMMs and verifier): quick,
     /// for comparing classifiers; such a model classifies but cannot spot.
@@ -64,17 +66,15 @@ pub struct Args {
     pub recalibrate: Option<PathBuf>,
 }
 
-/// The training configuration the arguments describe.
+/// The training configuration the arguments describe (their ranges are checked as
+/// they are parsed, and the whole by [`TrainConfig::validate`] before training).
 pub fn config(args: &Args) -> anyhow::Result<TrainConfig> {
     let kind = ClassifierKind::parse(&args.classifier)
         .with_context(|| format!("unknown classifier {:?} (mlp, hmm or crf)", args.classifier))?;
-    if !(2..=200).contains(&args.bezier_points) {
-        anyhow::bail!("--bezier-points {} is not in 2..=200", args.bezier_points);
-    }
     let mut cfg = TrainConfig {
         classifier: kind,
         bezier_points: args.bezier_points,
-        ensemble: args.ensemble.max(1),
+        ensemble: args.ensemble,
         seed: args.seed,
         data: args
             .data
@@ -87,17 +87,11 @@ pub fn config(args: &Args) -> anyhow::Result<TrainConfig> {
             .collect(),
         ..TrainConfig::default()
     };
-    cfg.hmm.states = args.states.max(1);
-    cfg.mlp.epochs = args.epochs.max(1);
-    cfg.mlp.hidden = args.hidden.max(2);
+    cfg.hmm.states = args.states;
+    cfg.mlp.epochs = args.epochs;
+    cfg.mlp.hidden = args.hidden;
     cfg.features.pen_up = args.pen_up;
-    if !(0.0..=1.0).contains(&args.stream_augment) {
-        anyhow::bail!("--stream-augment {} is not in [0, 1]", args.stream_augment);
-    }
     cfg.stream_augment = args.stream_augment;
-    if args.verifiers == 0 {
-        anyhow::bail!("--verifiers must be at least 1");
-    }
     cfg.verifiers = args.verifiers;
     cfg.spotting = !args.no_spotting;
     Ok(cfg)

@@ -31,6 +31,10 @@ pub struct Args {
     /// gesture stage then sees exact joints. Do not run the pose stage beside it.
     #[arg(long)]
     truth_skeletons: bool,
+    /// Fault injection for tests: fail after publishing this many frames (a stage that
+    /// dies seconds after every start, for the supervisor's crash-loop rule).
+    #[arg(long, hide = true, value_name = "FRAMES")]
+    fail_after: Option<u64>,
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
@@ -107,6 +111,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             Err(e @ PublishError::Transport(_)) => return Err(anyhow::anyhow!("{e}")),
         }
         telemetry.tick();
+        if args.fail_after.is_some_and(|n| publisher.sequence() >= n) {
+            anyhow::bail!(
+                "failing after {} frames, as --fail-after asks",
+                publisher.sequence()
+            );
+        }
     }
     // Let subscribers take the last frames before our shared memory goes away.
     std::thread::sleep(std::time::Duration::from_millis(100));

@@ -68,9 +68,8 @@ impl std::str::FromStr for StageArgs {
     }
 }
 
-/// Whether `stage` takes `args`, as its process would when started with them: a bad one
-/// is refused before the pipeline starts, not by a stage dying again and again.
-pub fn check_args(stage: Stage, args: &[OsString]) -> Result<(), String> {
+/// `stage` with `args`, parsed as its process will parse them.
+fn parse_args(stage: Stage, args: &[OsString]) -> Result<StageCommand, String> {
     #[derive(clap::Parser)]
     #[command(name = "airglyph stage")]
     struct Stages {
@@ -79,8 +78,23 @@ pub fn check_args(stage: Stage, args: &[OsString]) -> Result<(), String> {
     }
     let argv = ["airglyph stage", stage.name()].map(OsString::from);
     <Stages as clap::Parser>::try_parse_from(argv.into_iter().chain(args.iter().cloned()))
-        .map(drop)
+        .map(|s| s.stage)
         .map_err(|e| e.to_string().trim_end().to_owned())
+}
+
+/// Whether `stage` takes `args`, as its process would when started with them: a bad one
+/// is refused before the pipeline starts, not by a stage dying again and again.
+pub fn check_args(stage: Stage, args: &[OsString]) -> Result<(), String> {
+    parse_args(stage, args).map(drop)
+}
+
+/// The address a viewer started with `args` serves on (whatever `--stage-args` made
+/// of `--listen`), for the supervisor's health check.
+pub fn viewer_address(args: &[OsString]) -> Result<std::net::SocketAddr, String> {
+    match parse_args(Stage::Viewer, args)? {
+        StageCommand::Viewer(a) => Ok(a.listen),
+        _ => unreachable!("parsed as the viewer's arguments"),
+    }
 }
 
 /// How a person runs `stage` by hand, for messages that send them there.

@@ -2,9 +2,9 @@
 //! and serves a web page of what the camera sees: the depth image, the skeleton, the
 //! hand's trail with its Bezier points, the last gestures and each stage's latency.
 
-use airglyph_ipc::{shutdown, Pipeline};
+use airglyph_ipc::{options, shutdown, Pipeline};
 use airglyph_viewer::{Feed, ServeConfig, Server, Shared};
-use anyhow::{bail, Context};
+use anyhow::Context;
 use std::net::SocketAddr;
 use std::sync::Arc;
 use std::time::Duration;
@@ -21,29 +21,20 @@ use std::time::Duration;
 pub struct Args {
     /// Address and port to serve the page on (port 0: any free port, logged).
     #[arg(long, default_value = "127.0.0.1:8080")]
-    listen: SocketAddr,
+    pub listen: SocketAddr,
     /// Most pictures a second sent to browsers, all together; frames between are skipped.
-    #[arg(long, default_value_t = 15.0)]
+    #[arg(long, default_value_t = 15.0, value_parser = options::within(0.1f64, 120.0), allow_negative_numbers = true)]
     max_fps: f64,
     /// JPEG quality of the pictures (1–100).
-    #[arg(long, default_value_t = 80)]
+    #[arg(long, default_value_t = 80, value_parser = options::within(1u8, 100), allow_negative_numbers = true)]
     quality: u8,
     /// Scheduling niceness of the viewer (0–19): under load the pipeline's stages come
     /// first and the viewer takes what is left.
-    #[arg(long, default_value_t = 10)]
+    #[arg(long, default_value_t = 10, value_parser = options::within(0i32, 19), allow_negative_numbers = true)]
     nice: i32,
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    if !(args.max_fps.is_finite() && args.max_fps > 0.0 && args.max_fps <= 120.0) {
-        bail!("--max-fps {} must be in (0, 120]", args.max_fps);
-    }
-    if !(1..=100).contains(&args.quality) {
-        bail!("--quality {} must be in 1–100", args.quality);
-    }
-    if !(0..=19).contains(&args.nice) {
-        bail!("--nice {} must be in 0–19", args.nice);
-    }
     // Before any thread starts: Linux applies niceness per thread, and new threads
     // inherit their creator's.
     // SAFETY: setpriority(2) on this process; no memory is touched.
@@ -61,6 +52,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     tracing::info!("viewer on http://{}/", server.addr());
     let result = (|| {
         while !shutdown::requested() {
+            // A server that stopped serving (its thread ended, or its own health check
+            // failed three times in a row) ends the process with the reason, so that
+            // `airglyph run` or systemd starts a viewer that serves.
+            server.health()?;
             if feed
                 .poll(shared.scene(), Duration::from_millis(100))?
                 .frames
