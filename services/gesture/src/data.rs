@@ -1,5 +1,5 @@
-//! Trajectory JSONL datasets (DESIGN.md, "Files"): reading (plain or gzip), validation,
-//! strokes joined by the hand's travel, and writer-independent splits.
+//! Trajectory JSONL datasets (docs/architecture.md, "Trajectory JSONL"): reading (plain or
+//! gzip), validation, strokes joined by the hand's travel, and writer-independent splits.
 
 use rand::seq::SliceRandom;
 use rand::SeedableRng;

@@ -43,6 +43,10 @@ impl Default for AssignConfig {
     }
 }
 
+/// A maximum's path back to the torso centre that comes this near a shoulder (metres)
+/// came down an arm.
+const SHOULDER_PASSED: f32 = 0.1;
+
 /// The cost of giving each geodesic maximum (rows) to each limb (columns), and what the
 /// chains need of each maximum's path.
 #[derive(Debug, Clone, Default)]
@@ -61,7 +65,8 @@ pub struct LimbCosts {
 
 /// What giving each maximum to each limb costs (seed: the geodesic length against the
 /// limb's, plus the priors below), and each maximum's path back to the torso centre
-/// with where it is cut for each limb. `roots`: the limbs' roots in the camera frame;
+/// with where it is cut for each limb. `cut`: which maxima lie where the body is cut
+/// from view; `roots`: the limbs' roots in the camera frame;
 /// `inv`: camera frame → torso frame; `last_extremity`: each limb's extremity of the
 /// last frame, torso frame; `path`: a buffer.
 #[allow(clippy::too_many_arguments)]
@@ -69,6 +74,7 @@ pub fn limb_costs(
     graph: &GeoGraph,
     geo: &Geodesic,
     maxima: &[u32],
+    cut: &[bool],
     roots: &[Point3<f32>; 5],
     inv: &TorsoPose,
     last_extremity: &[Option<Point3<f32>>; 5],
@@ -81,7 +87,7 @@ pub fn limb_costs(
     let mut lengths: Vec<[f32; 5]> = Vec::with_capacity(maxima.len());
     let mut paths: Vec<Vec<u32>> = Vec::with_capacity(maxima.len());
     let a_cfg = &cfg.assign;
-    for &m in maxima {
+    for (&m, &at_a_cut) in maxima.iter().zip(cut) {
         path.clear();
         let mut a = m;
         let mut guard = 0;
@@ -91,6 +97,11 @@ pub fn limb_costs(
             guard += 1;
         }
         let dm = geo.dist(m) as f32 * 1e-3;
+        let passes_a_shoulder = [Limb::LeftArm, Limb::RightArm].iter().any(|a| {
+            let r = roots[a.index()];
+            path.iter()
+                .any(|&p| (graph.pos[p as usize] - r).norm() < SHOULDER_PASSED)
+        });
         let mut row = [f32::INFINITY; 5];
         let mut cut = [0usize; 5];
         let mut len = [0f32; 5];
@@ -150,6 +161,13 @@ pub fn limb_costs(
             if matches!(l, Limb::LeftLeg | Limb::RightLeg) {
                 c += (local.y - cfg.torso.keypoints.left_hip[1] + 0.2).max(0.0);
                 if local.y > 0.0 {
+                    c = f32::INFINITY;
+                }
+                // A path that passes a shoulder comes down an arm: a hand resting on a
+                // table or the thighs lies as low as a foot, and legs hidden by the
+                // table must not take it. (At a cut the maximum is no limb's end, and
+                // giving it to a leg keeps it from an arm.)
+                if passes_a_shoulder && !at_a_cut {
                     c = f32::INFINITY;
                 }
             }

@@ -328,6 +328,7 @@ impl PoseEstimator {
             width: size.0,
             height: size.1,
             k: &k,
+            floor: seg.floor,
         };
         let cut: Vec<bool> = maxima
             .iter()
@@ -352,7 +353,10 @@ impl PoseEstimator {
         // 5. The maxima given to the limbs (the head's holding the torso's height), and
         // the limbs' tips checked against the tracked body.
         let tpl = BodyTemplate::new(cfg);
-        let assigned = assign_limbs(s, t, &maxima, &cut, &mut torso, size, &tpl, cfg, d);
+        // A limb whose root the camera cannot see (hips below the image's border or
+        // behind a table) shows no end in view either.
+        let rooted = Limb::ALL.map(|l| frame.sees(torso.keypoints.root_of(l)));
+        let assigned = assign_limbs(s, t, &maxima, &cut, rooted, &mut torso, size, &tpl, cfg, d);
         // Without registration, the limbs' geodesic lengths measure the person.
         if !cfg.register.enabled {
             for l in Limb::ALL {
@@ -375,6 +379,7 @@ impl PoseEstimator {
                 width: size.0,
                 height: size.1,
                 k: &k,
+                floor: seg.floor,
             };
             let side_on = torso.side_on.then_some(seg.centroid);
             let offered = self.offered.take();
@@ -398,6 +403,7 @@ impl PoseEstimator {
             width: size.0,
             height: size.1,
             k: &k,
+            floor: seg.floor,
         };
         for j in 0..Joint::COUNT {
             skeleton.visible[j] = frame.sees(&skeleton.joints[j]);
@@ -628,6 +634,7 @@ fn assign_limbs(
     t: &mut Tracking,
     maxima: &[u32],
     cut: &[bool],
+    rooted: [bool; 5],
     torso: &mut Torso,
     (w, h): (usize, usize),
     tpl: &BodyTemplate,
@@ -645,12 +652,19 @@ fn assign_limbs(
         &s.graph,
         &s.geodesic,
         maxima,
+        cut,
         &Limb::ALL.map(|l| *torso.keypoints.root_of(l)),
         &inv,
         &t.limbs.map(|l| l.and_then(|l| l.extremity)),
         cfg,
         &mut s.path,
     );
+    let mut cost = cost;
+    for row in &mut cost {
+        for (c, _) in row.iter_mut().zip(rooted).filter(|(_, seen)| !seen) {
+            *c = f32::INFINITY;
+        }
+    }
     let limb = assign(&cost, cfg.assign.unassigned_cost);
     d.cost = cost;
     d.maxima_dist = maxima

@@ -235,6 +235,7 @@ mod tests {
                 width: k.width as usize,
                 height: k.height as usize,
                 k: &k,
+                floor: None,
             };
             hands_at_their_points(&skel, &frame, &t, &posed, cfg)
         };

@@ -3,6 +3,7 @@
 //! cannot look; nothing there is evidence of where it is, and the estimate must neither
 //! take the cut for a limb's end nor report what it could not see.
 
+use crate::segment::Plane;
 use airglyph_core::Intrinsics;
 use nalgebra::Point3;
 
@@ -10,6 +11,10 @@ use nalgebra::Point3;
 /// the legs, a chair's arm before a hand. Nearer than this the surface may be what the
 /// body touches (the floor under a foot, a table under a hand).
 pub(crate) const OCCLUDER_GAP: f32 = 0.12;
+
+/// A point this far under the floor the segmentation removed (a table top it took for
+/// the floor) is hidden by it, metres; nearer, it is what rests on it.
+const UNDER_THE_FLOOR: f32 = 0.05;
 
 /// How close to the image's edge (work pixels) the body counts as cut by it: the graph
 /// leaves out the last pixels of a noisy edge, so a maximum stops short of it.
@@ -29,14 +34,29 @@ pub struct Frame<'a> {
     pub height: usize,
     /// The camera, at the work image's size.
     pub k: &'a Intrinsics,
+    /// The floor the segmentation took out of `points` (or a table top it took for
+    /// the floor): its pixels have no point, but the surface is there.
+    pub floor: Option<Plane>,
 }
 
 impl Frame<'_> {
     /// Whether the pixel shows something that is not the person, nearer than `z` by
     /// [`OCCLUDER_GAP`]: the body at depth `z` there would be hidden behind it.
     pub(crate) fn occluded(&self, idx: usize, z: f32) -> bool {
+        if self.mask[idx] {
+            return false;
+        }
         let q = self.points[idx];
-        !self.mask[idx] && q.z > 0.0 && q.z < z - OCCLUDER_GAP
+        if q.z > 0.0 {
+            return q.z < z - OCCLUDER_GAP;
+        }
+        // No point: perhaps the floor the segmentation removed, or a table top taken
+        // for it. Legs under a table are hidden by its top, not missing from the
+        // frame; a foot on the floor is not under it.
+        self.floor.is_some_and(|pl| {
+            let (u, v) = ((idx % self.width) as f32, (idx / self.width) as f32);
+            pl.d > 0.0 && pl.height(&self.k.back_project(u, v, z)) < -UNDER_THE_FLOOR
+        })
     }
 
     /// Whether the person's pixel `idx` lies where the body is cut from view: at the
@@ -83,5 +103,50 @@ impl Frame<'_> {
             return false;
         }
         !self.occluded(v as usize * self.width + u as usize, p.z)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    /// A table top 0.3 m below the camera, taken out of the frame as its floor: every
+    /// pixel has no point and none is the person's.
+    fn under_a_table_top() -> (Vec<Point3<f32>>, Vec<bool>, Intrinsics, Plane) {
+        let k = Intrinsics::default().scaled_to(320, 240);
+        let n = (k.width * k.height) as usize;
+        // Up is −y in the camera frame; the plane y = 0.3.
+        let top = Plane {
+            n: -Vector3::y(),
+            d: 0.3,
+        };
+        (vec![Point3::origin(); n], vec![false; n], k, top)
+    }
+
+    #[test]
+    fn what_lies_under_the_floor_taken_out_is_hidden_and_what_rests_on_it_is_not() {
+        let (points, mask, k, top) = under_a_table_top();
+        let frame = |floor| Frame {
+            points: &points,
+            mask: &mask,
+            width: k.width as usize,
+            height: k.height as usize,
+            k: &k,
+            floor,
+        };
+        // A knee 0.15 m under the top, 1.6 m away; a hand on it; a head above it.
+        let knee = Point3::new(0.1, 0.45, 1.6);
+        let hand = Point3::new(0.1, 0.28, 1.0);
+        let head = Point3::new(0.0, -0.3, 1.4);
+        let f = frame(Some(top));
+        assert!(!f.sees(&knee));
+        assert!(f.sees(&hand));
+        assert!(f.sees(&head));
+        // Without the floor, a pixel without a point hides nothing.
+        assert!(frame(None).sees(&knee));
+        // A camera under the plane (a ceiling, not a floor) is not looking at its top.
+        let ceiling = Plane { n: top.n, d: -0.3 };
+        assert!(frame(Some(ceiling)).sees(&Point3::new(0.0, -0.4, 1.6)));
     }
 }

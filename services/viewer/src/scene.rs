@@ -21,7 +21,8 @@ const TRAIL_NS: u64 = 3_000_000_000;
 const GESTURES: usize = 8;
 /// Telemetry kept per stage.
 pub const HISTORY_NS: u64 = 60_000_000_000;
-/// Points of the trail's Bezier curve: the gesture descriptor's default N (DESIGN.md).
+/// Points of the trail's Bezier curve: the gesture descriptor's default N
+/// (`TrainConfig::default().bezier_points` in `services/gesture/src/train.rs`).
 pub const BEZIER_POINTS: usize = 15;
 /// A skeleton is drawn over the newest frame only when no frame of its own is kept and it
 /// is at most this many frames older (a stopped pose stage must not leave a stale body).

@@ -1,4 +1,5 @@
-//! The pinhole camera model of DESIGN.md: x right, y down, z forward, metres.
+//! The pinhole camera model: x right, y down, z forward, metres (docs/architecture.md,
+//! "Camera frame and joints").
 
 use nalgebra::Point3;
 use serde::{Deserialize, Serialize};

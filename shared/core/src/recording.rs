@@ -1,4 +1,4 @@
-//! Recordings on disk (DESIGN.md, "Files"):
+//! Recordings on disk (docs/architecture.md, "Recordings"):
 //!
 //! ```text
 //! DIR/recording.toml     format version, size, fps, intrinsics, depth unit, source

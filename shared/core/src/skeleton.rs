@@ -1,4 +1,7 @@
-//! The 16 joints of DESIGN.md and the skeleton of one frame.
+//! The 16 joints and the skeleton of one frame. Each joint is an anatomical centre
+//! inside the body: head = centre of the skull, hand = centre of the palm, foot = the
+//! ankle, torso = mid-chest on the spine, pelvis = between the hips (docs/architecture.md,
+//! "Camera frame and joints").
 
 use nalgebra::Point3;
 use serde::{Deserialize, Serialize};

@@ -1,5 +1,6 @@
 //! Built-in stroke templates for 0–9 and A–Z, as a person draws them in the air, and the
-//! trajectory JSONL reader (DESIGN.md "Files") for drawing real samples instead.
+//! trajectory JSONL reader (docs/architecture.md, "Trajectory JSONL") for drawing real
+//! samples instead.
 //!
 //! A template is a list of strokes (pen-down ink) in a unit box, x right and y down,
 //! as the writer sees it (air-drawing mirrors it for the camera facing the writer). An air-drawn symbol is its strokes joined by the hand's travel

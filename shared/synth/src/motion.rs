@@ -77,8 +77,8 @@ pub struct DrawSpec {
     /// The symbols to draw, in order (0–9, A–Z with the built-in templates; any label
     /// present in `samples`).
     pub symbols: String,
-    /// A trajectory JSONL file (DESIGN.md "Files") to take the symbols' shapes from
-    /// instead of the built-in templates.
+    /// A trajectory JSONL file (docs/architecture.md, "Trajectory JSONL") to take the
+    /// symbols' shapes from instead of the built-in templates.
     pub samples: Option<PathBuf>,
     /// Starts again after the last symbol: endless (the live demo).
     pub repeat: bool,

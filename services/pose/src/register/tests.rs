@@ -80,6 +80,7 @@ fn frame_of<'a>(points: &'a [Point3<f32>], mask: &'a [bool], k: &'a Intrinsics) 
         width: k.width as usize,
         height: k.height as usize,
         k,
+        floor: None,
     }
 }
 

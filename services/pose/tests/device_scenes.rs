@@ -1,0 +1,208 @@
+//! What a camera on a desk, a screen or a robot sees: a person close, seen from the
+//! waist up, seated behind a table, arms at rest, through the sensor model. Each frame
+//! is estimated afresh (no history), as a single real frame is: never a panic or NaN,
+//! the legs reported out of view when the image or the table hides them, nothing
+//! reported visible outside the image, and the upper body where the person is.
+
+use airglyph_core::{Intrinsics, Joint, Skeleton};
+use airglyph_pose::{PoseConfig, PoseEstimator, PoseResult};
+use airglyph_synth::{
+    Background, Chair, MotionSpec, Placement, Posture, Prop, SceneConfig, ScriptedPose,
+    Synthesizer, Table,
+};
+
+fn qvga() -> Intrinsics {
+    Intrinsics::default().scaled_to(320, 240)
+}
+
+/// `pose` held `distance_m` from the camera in a furnished room, with the sensor model.
+fn at(distance_m: f32, pose: ScriptedPose) -> SceneConfig {
+    SceneConfig {
+        intrinsics: qvga(),
+        motion: MotionSpec::Pose(pose),
+        background: Background::Room,
+        sensor_noise: true,
+        placement: Placement {
+            distance_m,
+            ..Placement::default()
+        },
+        ..SceneConfig::default()
+    }
+}
+
+fn seated(cfg: SceneConfig, table: bool) -> SceneConfig {
+    let chair = Chair::default();
+    let mut props = vec![Prop::Chair(chair)];
+    if table {
+        props.push(Prop::Table(Table::default()));
+    }
+    SceneConfig {
+        posture: Posture::Seated {
+            seat_height_m: chair.seat_height_m,
+        },
+        props,
+        ..cfg
+    }
+}
+
+fn upper_body(cfg: SceneConfig) -> SceneConfig {
+    cfg.framing_upper_body().expect("the procedural body")
+}
+
+/// Frame `frame` of the scene, estimated with no history.
+fn single(cfg: SceneConfig, frame: usize) -> (PoseResult, airglyph_synth::FrameTruth) {
+    let k = cfg.intrinsics;
+    let (img, truth) = Synthesizer::new(cfg).expect("scene").render(frame);
+    let r = PoseEstimator::new(k, PoseConfig::default()).estimate(img.view());
+    assert!(r.skeleton.is_finite(), "{r:?}");
+    assert!(r
+        .skeleton
+        .confidence
+        .iter()
+        .all(|c| (0.0..=1.0).contains(c)));
+    (r, truth)
+}
+
+/// Every joint reported visible projects inside the image, and has a confidence;
+/// every joint not visible has none.
+fn visibility_is_consistent(r: &PoseResult, k: &Intrinsics) {
+    for j in Joint::ALL {
+        let s = &r.skeleton;
+        if s.visible[j.index()] {
+            let (u, v) = k.project(&s[j]).expect("in front of the camera");
+            assert!(
+                (0.0..k.width as f32).contains(&u) && (0.0..k.height as f32).contains(&v),
+                "{j:?} reported visible at ({u:.0}, {v:.0}), outside the image"
+            );
+        } else {
+            assert_eq!(s.confidence[j.index()], 0.0, "{j:?} not visible");
+        }
+    }
+}
+
+fn error_m(r: &Skeleton, truth: &Skeleton, j: Joint) -> f32 {
+    (r[j] - truth[j]).norm()
+}
+
+const LEGS: [Joint; 4] = [
+    Joint::LeftKnee,
+    Joint::RightKnee,
+    Joint::LeftFoot,
+    Joint::RightFoot,
+];
+
+#[test]
+fn seen_from_the_waist_up_at_any_distance_the_legs_are_out_of_view() {
+    // (At 1.6 m and more the framing puts the knees at the image's lower edge, where a
+    // knee estimated a few pixels inside it is in view.)
+    for (distance_m, pose) in [
+        (0.8, ScriptedPose::ArmsAtSides),
+        (1.0, ScriptedPose::Wave),
+        (1.2, ScriptedPose::Neutral),
+        (1.2, ScriptedPose::HandsInFront),
+    ] {
+        let k = qvga();
+        let (r, truth) = single(upper_body(at(distance_m, pose)), 0);
+        assert!(r.person_found, "{distance_m} m, {pose:?}");
+        visibility_is_consistent(&r, &k);
+        for j in LEGS {
+            assert!(!truth.skeleton.visible[j.index()], "the scene hides {j:?}");
+            assert!(
+                !r.skeleton.visible[j.index()],
+                "{distance_m} m, {pose:?}: {j:?} reported visible"
+            );
+        }
+        for j in [Joint::LeftShoulder, Joint::RightShoulder] {
+            let e = error_m(&r.skeleton, &truth.skeleton, j);
+            assert!(r.skeleton.visible[j.index()], "{j:?} in view");
+            assert!(e < 0.12, "{distance_m} m, {pose:?}: {j:?} off by {e:.2} m");
+        }
+    }
+}
+
+#[test]
+fn arms_at_rest_are_found_in_a_single_frame_near_and_far() {
+    // (Not yet: arms at the sides at 1.0 m, where the procedural body's hanging arms
+    // merge with its torso, and at 3.8 m; the pose README's "Where it fails".)
+    for (distance_m, pose) in [
+        (1.4, ScriptedPose::HandsOnThighs),
+        (2.0, ScriptedPose::ArmsAtSides),
+        (2.5, ScriptedPose::ArmsAtSides),
+    ] {
+        let k = qvga();
+        let cfg = at(distance_m, pose);
+        let cfg = if distance_m < 2.0 {
+            upper_body(cfg)
+        } else {
+            cfg
+        };
+        let (r, truth) = single(cfg, 0);
+        assert!(r.person_found, "{distance_m} m, {pose:?}");
+        visibility_is_consistent(&r, &k);
+        for j in [
+            Joint::LeftElbow,
+            Joint::RightElbow,
+            Joint::LeftHand,
+            Joint::RightHand,
+        ] {
+            let e = error_m(&r.skeleton, &truth.skeleton, j);
+            assert!(e < 0.2, "{distance_m} m, {pose:?}: {j:?} off by {e:.2} m");
+        }
+    }
+}
+
+#[test]
+fn seated_behind_a_table_the_legs_under_it_are_not_invented() {
+    // (Not yet: hands on the table at 1.4 m, where the legs still take the forearms
+    // lying on it at 320×240; the pose README's "Where it fails".)
+    for (distance_m, pose, table) in [
+        (1.2, ScriptedPose::HandsInLap, false),
+        (1.6, ScriptedPose::Wave, true),
+        (1.4, ScriptedPose::ArmsCrossed, true),
+    ] {
+        let k = qvga();
+        let (r, truth) = single(upper_body(seated(at(distance_m, pose), table)), 0);
+        assert!(r.person_found, "{distance_m} m, {pose:?}");
+        visibility_is_consistent(&r, &k);
+        for j in Joint::ALL {
+            if !truth.skeleton.visible[j.index()] && LEGS.contains(&j) {
+                assert!(
+                    !r.skeleton.visible[j.index()],
+                    "{distance_m} m, {pose:?}: {j:?} is hidden but reported visible"
+                );
+            }
+        }
+        for j in [Joint::LeftShoulder, Joint::RightShoulder] {
+            let e = error_m(&r.skeleton, &truth.skeleton, j);
+            assert!(e < 0.12, "{distance_m} m, {pose:?}: {j:?} off by {e:.2} m");
+        }
+    }
+}
+
+#[test]
+fn hands_resting_on_a_table_are_no_feet() {
+    // At 640×480, as a Kinect delivers: the forearms lie on the table top, their hands
+    // as low in the image as feet would be, the legs hidden under the table. Without
+    // the sensor model too: with it, its shadows happen to cut the forearms' paths.
+    for noise in [false, true] {
+        let cfg = SceneConfig {
+            intrinsics: Intrinsics::default(),
+            sensor_noise: noise,
+            ..at(1.4, ScriptedPose::HandsOnTable)
+        };
+        let k = cfg.intrinsics;
+        let (r, truth) = single(upper_body(seated(cfg, true)), 0);
+        assert!(r.person_found);
+        visibility_is_consistent(&r, &k);
+        for j in LEGS {
+            assert!(!truth.skeleton.visible[j.index()], "the table hides {j:?}");
+            assert!(!r.skeleton.visible[j.index()], "{j:?} reported visible");
+        }
+        for foot in [Joint::LeftFoot, Joint::RightFoot] {
+            for hand in [Joint::LeftHand, Joint::RightHand] {
+                let d = (r.skeleton[foot] - truth.skeleton[hand]).norm();
+                assert!(d > 0.2, "{foot:?} on the {hand:?}, {d:.2} m from it");
+            }
+        }
+    }
+}
