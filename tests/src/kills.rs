@@ -3,11 +3,11 @@
 //! the system tests (a few kills, a short script) and by `scripts/eval kills` (ten
 //! kills of each stage, release build).
 //!
-//! A symbol counts as drawn when a capture session published all its frames: a
-//! restarted capture stage starts the script again in a new session (and frame numbers
-//! from 0), so a symbol a capture kill cut short was never drawn whole, and one drawn
-//! again in the next session is another drawing. Each symbol drawn must be reported
-//! exactly once, with its label, in its session.
+//! A symbol counts as drawn when a capture session published all its frames and
+//! [`SEEN_AFTER`] more: a restarted capture stage starts the script again in a new
+//! session (and frame numbers from 0), so a symbol a capture kill cut short was never
+//! drawn whole, and one drawn again in the next session is another drawing. Each symbol
+//! drawn must be reported exactly once, with its label, in its session.
 
 use crate::{drawn_for, drawn_symbols, json_lines, signal, stage_children, start_probe, Isolated};
 use airglyph_ipc::clock::monotonic_ns;
@@ -16,6 +16,12 @@ use std::process::{Child, Stdio};
 use std::sync::mpsc;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
+
+/// Frames a session must go on after a symbol for it to count as drawn: the end of a
+/// stroke shows only in the movement after it (the spotter's context, 0.4 s at 30 fps:
+/// `airglyph_gesture::spot::CONTEXT_SECONDS`). A capture killed 3 frames after a
+/// symbol's last one left the spotter a stroke still going.
+pub const SEEN_AFTER: u64 = 12;
 
 /// A small deterministic generator of kill moments (xorshift64*).
 pub struct Moments(pub u64);
@@ -48,7 +54,9 @@ pub struct KillReport {
     pub kills: usize,
     /// Capture sessions (one, and one more for every capture kill).
     pub sessions: usize,
-    /// Symbols drawn whole within a session.
+    /// Each session's last frame that became a skeleton.
+    pub session_ends: Vec<u64>,
+    /// Symbols drawn whole within a session (and [`SEEN_AFTER`] frames more).
     pub drawn: usize,
     /// Of those, reported exactly once with their label.
     pub once: usize,
@@ -61,7 +69,8 @@ pub struct KillReport {
     /// Every symbol drawn whole, in order, with what became of it: "once", "missed",
     /// "wrong" or "repeated" (to compare with a run without kills).
     pub outcomes: Vec<(String, &'static str)>,
-    /// Gestures reported over a symbol a capture kill cut short.
+    /// Gestures reported over a symbol a capture kill cut short (or ended the session
+    /// right after).
     pub cut: usize,
     /// Gestures reported where no symbol was drawn.
     pub stray: usize,
@@ -91,11 +100,12 @@ impl KillReport {
     /// One paragraph of figures.
     pub fn summary(&self) -> String {
         let mut s = format!(
-            "{}: {} kills; {} symbols drawn whole in {} sessions: {} reported exactly once, {} missed {:?}, {} more than once {:?}, {} under another label {:?}; {} over symbols cut short, {} where none was drawn; back (min/median/max): process {}, output {}",
+            "{}: {} kills; {} symbols drawn whole in {} sessions (ending at frames {:?}): {} reported exactly once, {} missed {:?}, {} more than once {:?}, {} under another label {:?}; {} over symbols cut short, {} where none was drawn; back (min/median/max): process {}, output {}",
             self.stage,
             self.kills,
             self.drawn,
             self.sessions,
+            self.session_ends,
             self.once,
             self.missed.len(),
             self.missed,
@@ -242,6 +252,7 @@ impl KillRun {
             *last = (*last).max(ns(s, "sequence"));
         }
         report.sessions = sessions.len();
+        report.session_ends = sessions.values().copied().collect();
         let mut labels: BTreeMap<(u64, usize), Vec<String>> = BTreeMap::new();
         for e in &reported {
             let (session, start, end) =
@@ -249,7 +260,7 @@ impl KillRun {
             let whole = |i: usize| {
                 sessions
                     .get(&session)
-                    .is_some_and(|&last| truth[i].end_frame as u64 <= last)
+                    .is_some_and(|&last| truth[i].end_frame as u64 + SEEN_AFTER <= last)
             };
             match drawn_for(&truth, start, end) {
                 Some(i) if whole(i) => labels
@@ -262,7 +273,7 @@ impl KillRun {
         }
         for (n, (&session, &last)) in sessions.iter().enumerate() {
             for (i, t) in truth.iter().enumerate() {
-                if t.end_frame as u64 > last {
+                if t.end_frame as u64 + SEEN_AFTER > last {
                     continue;
                 }
                 report.drawn += 1;
