@@ -406,7 +406,8 @@ impl PoseEstimator {
             floor: seg.floor,
         };
         for j in 0..Joint::COUNT {
-            skeleton.visible[j] = frame.sees(&skeleton.joints[j]);
+            let p = &skeleton.joints[j];
+            skeleton.visible[j] = frame.sees(p) && !frame.refutes(p);
             if !skeleton.visible[j] {
                 skeleton.confidence[j] = 0.0;
             }
