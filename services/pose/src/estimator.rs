@@ -406,8 +406,7 @@ impl PoseEstimator {
             floor: seg.floor,
         };
         for j in 0..Joint::COUNT {
-            let p = &skeleton.joints[j];
-            skeleton.visible[j] = frame.sees(p) && !frame.refutes(p);
+            skeleton.visible[j] = frame.sees(&skeleton.joints[j]);
             if !skeleton.visible[j] {
                 skeleton.confidence[j] = 0.0;
             }

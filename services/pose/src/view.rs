@@ -16,10 +16,6 @@ pub(crate) const OCCLUDER_GAP: f32 = 0.12;
 /// the floor) is hidden by it, metres; nearer, it is what rests on it.
 const UNDER_THE_FLOOR: f32 = 0.05;
 
-/// How near the person's pixels (work pixels) a joint may be estimated and still be
-/// taken for seen: a hand a little off the silhouette's edge is where the person is.
-const NEAR_THE_PERSON_PX: usize = 6;
-
 /// How close to the image's edge (work pixels) the body counts as cut by it: the graph
 /// leaves out the last pixels of a noisy edge, so a maximum stops short of it.
 const BORDER_PX: usize = 4;
@@ -88,31 +84,6 @@ impl Frame<'_> {
                     && self.occluded(j, z)
             })
         })
-    }
-
-    /// Whether the frame says the body is not at `p`: it projects inside the image,
-    /// no pixel of the person lies within [`NEAR_THE_PERSON_PX`] of it, and where it
-    /// projects the camera sees past it (a surface farther away). A knee estimated
-    /// beside the person, out in the room, is a guess the camera refutes.
-    pub(crate) fn refutes(&self, p: &Point3<f32>) -> bool {
-        let Some((u, v)) = self.k.project(p) else {
-            return false;
-        };
-        let (u, v) = (u.round(), v.round());
-        if u < 0.0 || v < 0.0 || u >= self.width as f32 || v >= self.height as f32 {
-            return false;
-        }
-        let (u, v) = (u as usize, v as usize);
-        let q = self.points[v * self.width + u];
-        if self.mask[v * self.width + u] || q.z <= p.z + OCCLUDER_GAP {
-            return false;
-        }
-        let r = NEAR_THE_PERSON_PX;
-        let rows = v.saturating_sub(r)..(v + r + 1).min(self.height);
-        let cols = u.saturating_sub(r)..(u + r + 1).min(self.width);
-        !rows
-            .flat_map(|y| cols.clone().map(move |x| y * self.width + x))
-            .any(|i| self.mask[i])
     }
 
     /// Whether the camera could see any of `points`.
