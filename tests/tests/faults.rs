@@ -317,7 +317,7 @@ fn a_symbol_pending_when_the_gesture_stage_is_killed_is_reported_once() {
     for (t, labels) in truth.iter().zip(&per_symbol) {
         assert_eq!(
             labels,
-            &[t.label.clone()],
+            std::slice::from_ref(&t.label),
             "{} reported exactly once: {reported:#?}",
             t.label
         );
