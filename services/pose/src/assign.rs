@@ -43,6 +43,10 @@ impl Default for AssignConfig {
     }
 }
 
+/// Half the width of the head, metres: a maximum this near the torso's axis, above its
+/// centre, may be the head's.
+const HEAD_HALF_WIDTH: f32 = 0.1;
+
 /// A maximum's path back to the torso centre that comes this near a shoulder (metres)
 /// came down an arm.
 const SHOULDER_PASSED: f32 = 0.1;
@@ -179,6 +183,24 @@ pub fn limb_costs(
         cuts.push(cut);
         lengths.push(len);
         paths.push(path.clone());
+    }
+    // The head's end is its top: of the maxima on the torso's axis above it (an ear,
+    // the chin, the top), the highest. Judged by geodesic length alone, a side of the
+    // head wins when the torso sits a little low, as it does close to the camera.
+    let head = Limb::Head.index();
+    let heights: Vec<Option<f32>> = maxima
+        .iter()
+        .map(|&m| {
+            let local = inv.apply(&graph.pos[m as usize]);
+            (local.y > 0.0 && local.x.abs() < HEAD_HALF_WIDTH).then_some(local.y)
+        })
+        .collect();
+    if let Some(top) = heights.iter().flatten().copied().reduce(f32::max) {
+        for (row, h) in cost.iter_mut().zip(&heights) {
+            if let Some(h) = h {
+                row[head] += top - h;
+            }
+        }
     }
     // A bent elbow or knee is a geodesic maximum of its own, beside the path to the
     // hand or foot beyond it. Such a maximum is no limb's end while the farther one is
