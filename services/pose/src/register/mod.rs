@@ -148,8 +148,17 @@ impl Registration {
             .clamp(1, cfg.solver.iterations.max(1));
         let mut best: Option<Fit> = None;
         let mut passes = 0;
-        // The starts race on what the frame says of them, without the tips' pull.
-        let evidence = |f: &Fit| f.energy - f.tip_energy;
+        // The starts race on their whole energy, the tips' pull with it. (Racing on
+        // the frame's evidence alone, without the tips, lost the drawing hand before
+        // the chest for seconds at a time: the frame hardly tells that forearm from
+        // one hanging, its hand's maximum does.)
+        let evidence = |f: &Fit| {
+            if search {
+                f.energy - f.tip_energy
+            } else {
+                f.energy
+            }
+        };
         // A tip far from a pose's limb end is not that limb's for it: each start races
         // with the tips it agrees with.
         let agreeing = |pose: &BodyPose| {
