@@ -348,21 +348,7 @@ pub fn drawn_symbols(script: &str) -> Vec<airglyph_synth::GestureTruth> {
         .gestures()
 }
 
-/// The drawn symbol a reported gesture's frames overlap most, if any (as `airglyph
-/// demo` matches them).
-pub fn drawn_for(truth: &[airglyph_synth::GestureTruth], start: u64, end: u64) -> Option<usize> {
-    truth
-        .iter()
-        .enumerate()
-        .map(|(i, t)| {
-            let lo = start.max(t.start_frame as u64);
-            let hi = end.min(t.end_frame as u64);
-            (i, hi.saturating_sub(lo))
-        })
-        .filter(|&(_, overlap)| overlap > 0)
-        .max_by_key(|&(_, overlap)| overlap)
-        .map(|(i, _)| i)
-}
+pub use airglyph_synth::drawn_for;
 
 /// Waits for a line of a probe's skeleton stream at frame `sequence` or later; its
 /// session. Panics after `within`.

@@ -85,7 +85,7 @@ pub mod sensor;
 pub use body::{Affine, Body, ProceduralBody};
 pub use canon::{Bone, Pose, TposeSkeleton};
 pub use error::SynthError;
-pub use motion::{DrawSpec, GestureTruth, MotionSpec};
+pub use motion::{drawn_for, DrawSpec, GestureTruth, MotionSpec};
 pub use poses::{Posture, ScriptedPose};
 pub use room::{Background, Chair, Prop, Table};
 

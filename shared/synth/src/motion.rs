@@ -158,6 +158,22 @@ pub struct GestureTruth {
     pub end_frame: usize,
 }
 
+/// Of the drawn symbols `truth`, the one a gesture reported over frames `start..=end`
+/// overlaps most, if any: how a recognized gesture is matched to what was drawn.
+pub fn drawn_for(truth: &[GestureTruth], start: u64, end: u64) -> Option<usize> {
+    truth
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            let lo = start.max(t.start_frame as u64);
+            let hi = end.min(t.end_frame as u64);
+            (i, hi.saturating_sub(lo))
+        })
+        .filter(|&(_, overlap)| overlap > 0)
+        .max_by_key(|&(_, overlap)| overlap)
+        .map(|(i, _)| i)
+}
+
 pub(crate) enum Motion {
     Static(Box<Pose>),
     Cycle {

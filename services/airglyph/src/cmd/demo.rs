@@ -6,7 +6,7 @@ use crate::cmd::run::{run_with, Args as RunArgs};
 use airglyph_capture::synthetic::{scene, DEMO_SYMBOLS};
 use airglyph_capture::SourceSpec;
 use airglyph_ipc::GestureEventMsg;
-use airglyph_synth::{GestureTruth, Synthesizer};
+use airglyph_synth::{drawn_for, Synthesizer};
 use anyhow::Context;
 use std::io::Write;
 
@@ -38,21 +38,6 @@ pub struct Args {
     /// skeleton from the capture stage (to tell pose errors from gesture errors).
     #[arg(long)]
     truth: bool,
-}
-
-/// The drawn symbol a spotted gesture belongs to: the one its frames overlap most.
-pub fn drawn_for(truth: &[GestureTruth], start: u64, end: u64) -> Option<usize> {
-    truth
-        .iter()
-        .enumerate()
-        .map(|(i, t)| {
-            let lo = start.max(t.start_frame as u64);
-            let hi = end.min(t.end_frame as u64);
-            (i, hi.saturating_sub(lo))
-        })
-        .filter(|&(_, overlap)| overlap > 0)
-        .max_by_key(|&(_, overlap)| overlap)
-        .map(|(i, _)| i)
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {

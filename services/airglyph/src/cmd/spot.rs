@@ -1,6 +1,5 @@
 //! `airglyph spot DIR`: the gesture stage's spotter over a recording, offline.
 
-use crate::cmd::demo::drawn_for;
 use crate::cmd::gesture_json::GestureJson;
 use crate::interrupt::Interrupted;
 use airglyph_core::recording::Recording;
@@ -8,6 +7,7 @@ use airglyph_core::{Joint, Skeleton};
 use airglyph_gesture::{Model, ModelSource, Spotter};
 use airglyph_ipc::shutdown;
 use airglyph_pose::{PoseConfig, PoseEstimator};
+use airglyph_synth::drawn_for;
 use airglyph_synth::GestureTruth;
 use anyhow::Context;
 use std::path::{Path, PathBuf};
