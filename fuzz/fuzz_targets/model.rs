@@ -7,8 +7,7 @@
 //! little-endian f32 (x, y); without it, a fixed circle.
 #![no_main]
 
-use airglyph_gesture::data::Trajectory;
-use airglyph_gesture::{Hand, HandPoint, Model, Spotter, SpotterConfig};
+use airglyph_gesture::{Hand, HandPoint, Model, Spotter, SpotterConfig, Trajectory};
 use libfuzzer_sys::fuzz_target;
 
 fn circle() -> Vec<[f32; 2]> {

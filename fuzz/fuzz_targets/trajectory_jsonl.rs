@@ -4,5 +4,5 @@
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    let _ = airglyph_gesture::data::parse_jsonl(data, std::path::Path::new("fuzz.jsonl"));
+    let _ = airglyph_gesture::lab::parse_jsonl(data, std::path::Path::new("fuzz.jsonl"));
 });

@@ -4,11 +4,8 @@
 //!
 //! usage: cargo run --release -p airglyph-gesture --example stream_stages --
 //!        MODEL DATA.jsonl [GESTURES (1000)] [SEED (1)]
-use airglyph_gesture::data::load_many;
-use airglyph_gesture::features::resample;
-use airglyph_gesture::stream::{build_stream, trajectory, StreamConfig};
-use airglyph_gesture::tracker::skeleton_with_hand;
-use airglyph_gesture::{HandTracker, Model, Sample, Trajectory};
+use airglyph_gesture::lab::{build_stream, load_many, resample, Sample, StreamConfig};
+use airglyph_gesture::{skeleton_with_hand, HandTracker, Model, Trajectory};
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -72,6 +69,7 @@ fn main() -> anyhow::Result<()> {
                 (tracked(&clean.points, &cfg), tracked(&noisy.points, &cfg));
             let last = noisy.points.len() - 1;
             let model = &model;
+            let trajectory = |points: &[[f32; 2]]| Trajectory::from_points(points.to_vec());
             chunk.iter().zip(clean.truth).map(move |(sample, t)| {
                 let ok = |t: Trajectory| model.labels[model.classify(&t).class] == sample.label;
                 let (a, b) = (t.start as usize, t.end as usize);

@@ -2,7 +2,7 @@
 //! the trajectory, evaluated with de Casteljau; the direction between consecutive points
 //! by atan2 over the full circle, quantized into codes of equal angle.
 
-use crate::data::Point;
+use crate::trajectory::Point;
 
 /// The Bezier curve with control points `ctrl` at parameter `t` in [0, 1], by de
 /// Casteljau's algorithm (stable at any degree, unlike the power basis).

@@ -150,10 +150,44 @@ impl FrameSmoother {
     }
 }
 
+/// A skeleton of a person facing the camera at `distance` metres with the right hand at
+/// body-frame point (x, y) (shoulder widths; x to the person's right, y down) and the
+/// left hand hanging. For tests and synthetic streams.
+pub fn skeleton_with_hand(x: f32, y: f32, distance: f32) -> Skeleton {
+    use nalgebra::Point3;
+    let sw = 0.36f32;
+    let z = distance;
+    // Facing the camera: the person's right is the camera's left (−x); y down.
+    let mut j = [Point3::new(0.0, 0.0, z); Joint::COUNT];
+    let set = |j: &mut [Point3<f32>; Joint::COUNT], k: Joint, p: [f32; 3]| {
+        j[k.index()] = Point3::new(p[0], p[1], p[2]);
+    };
+    set(&mut j, Joint::Head, [0.0, -0.55, z]);
+    set(&mut j, Joint::Neck, [0.0, -0.35, z]);
+    set(&mut j, Joint::Torso, [0.0, -0.1, z]);
+    set(&mut j, Joint::Pelvis, [0.0, 0.2, z]);
+    set(&mut j, Joint::LeftShoulder, [sw / 2.0, -0.3, z]);
+    set(&mut j, Joint::RightShoulder, [-sw / 2.0, -0.3, z]);
+    set(&mut j, Joint::LeftElbow, [0.22, -0.05, z]);
+    set(&mut j, Joint::LeftHand, [0.24, 0.2, z]);
+    set(&mut j, Joint::RightHand, [-x * sw, -0.3 + y * sw, z - 0.35]);
+    set(
+        &mut j,
+        Joint::RightElbow,
+        [-0.2 - x * sw * 0.3, -0.1, z - 0.15],
+    );
+    set(&mut j, Joint::LeftHip, [0.1, 0.22, z]);
+    set(&mut j, Joint::RightHip, [-0.1, 0.22, z]);
+    set(&mut j, Joint::LeftKnee, [0.1, 0.65, z]);
+    set(&mut j, Joint::RightKnee, [-0.1, 0.65, z]);
+    set(&mut j, Joint::LeftFoot, [0.1, 1.05, z]);
+    set(&mut j, Joint::RightFoot, [-0.1, 1.05, z]);
+    Skeleton::new(j)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::tracker::skeleton_with_hand;
     use nalgebra::{Rotation3, Vector3};
 
     /// The frame of a person facing the camera 2.5 m away, turned by `yaw` (radians,

@@ -1,8 +1,14 @@
 //! The gesture stage as a library: from skeletons to the drawing hand's body-frame
 //! trajectory ([`HandTracker`]), from trajectories to symbols (the seed's Bezier
 //! descriptor with discrete HMMs, a linear-chain CRF, and the default network
-//! ensemble), and from a continuous stream to spotted gestures ([`Spotter`], with a
-//! Lee & Kim threshold model). No IPC here: deterministic given a seed.
+//! ensemble, behind [`Model`]), and from a continuous stream to spotted gestures
+//! ([`Spotter`], with a Lee & Kim threshold model and a verifier network). No IPC here:
+//! deterministic given a seed.
+//!
+//! What the stage runs on the device is this crate without its [`lab`] (training,
+//! evaluation and its plots, synthetic streams, datasets), which sits behind the cargo
+//! feature `lab`, on by default: the runtime never uses the lab, so a build without
+//! the feature links no plotting or font code.
 //!
 //! The stage process uses three calls:
 //! ```no_run
@@ -10,7 +16,7 @@
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! let model = Model::load(std::path::Path::new("models/unipen-36.json"))?;
 //! let mut spotter = Spotter::new(model, SpotterConfig::default())?;
-//! # let skeleton = airglyph_gesture::tracker::skeleton_with_hand(0.0, 0.0, 2.0);
+//! # let skeleton = airglyph_gesture::skeleton_with_hand(0.0, 0.0, 2.0);
 //! if let Some(g) = spotter.push(&skeleton, 42, 1_000_000) {
 //!     println!("{} {:.2} frames {}..{}", g.label, g.score, g.start_seq, g.end_seq);
 //! }
@@ -20,25 +26,24 @@
 // Numeric code indexes several arrays with one index; iterators would obscure it.
 #![allow(clippy::needless_range_loop)]
 
-pub mod bezier;
-pub mod body_frame;
-pub mod collect;
-pub mod crf;
-pub mod data;
-pub mod dtw;
-pub mod eval;
-pub mod features;
-pub mod hmm;
+mod bezier;
+mod body_frame;
+mod crf;
+mod features;
+mod hmm;
 pub mod limits;
-pub mod mlp;
+mod mlp;
 pub mod model;
-pub mod spot;
-pub mod stream;
-pub mod tracker;
-pub mod train;
+mod spot;
+mod tracker;
+mod trajectory;
 
-pub use data::{load_jsonl, load_many, Sample, Trajectory};
-pub use model::{Classification, Model, ModelError, ModelSource};
-pub use spot::{RankBy, SpotError, SpottedGesture, Spotter, SpotterConfig};
-pub use tracker::{Hand, HandPoint, HandTracker, OneEuro, TrackerConfig};
-pub use train::{train, ClassifierKind, TrainConfig};
+#[cfg(feature = "lab")]
+pub mod lab;
+
+pub use bezier::bezier_points;
+pub use body_frame::{skeleton_with_hand, FrameSmoothing};
+pub use model::{Classification, Model, ModelError, ModelSource, MAX_LABEL_BYTES, MODEL_ENV};
+pub use spot::{Candidate, LeeKim, RankBy, SpotError, SpottedGesture, Spotter, SpotterConfig};
+pub use tracker::{Hand, HandPoint, HandTracker, TrackerConfig};
+pub use trajectory::{Point, Trajectory};

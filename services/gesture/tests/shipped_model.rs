@@ -3,8 +3,7 @@
 //! A glyph drawn in an order no writer of the training data uses fails here, not in a
 //! 3-minute demo (the "4" once went up its stem first and was read as a "C").
 
-use airglyph_gesture::data::Trajectory;
-use airglyph_gesture::ModelSource;
+use airglyph_gesture::{ModelSource, Trajectory};
 use airglyph_synth::glyphs::{template, BUILT_IN};
 
 #[test]

@@ -1,9 +1,11 @@
 //! Training and spotting on small synthetic gestures the test makes itself (no data
 //! files needed), and the model loader's errors.
 
-use airglyph_gesture::data::Sample;
-use airglyph_gesture::stream::{build_stream, random_movement, score, StreamConfig};
-use airglyph_gesture::{train, ClassifierKind, Model, Spotter, SpotterConfig, TrainConfig};
+use airglyph_gesture::lab::{
+    build_stream, random_movement, score, train, ClassifierKind, Sample, StreamConfig,
+    SyntheticStream, TrainConfig,
+};
+use airglyph_gesture::{Model, Spotter, SpotterConfig};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::path::Path;
@@ -249,7 +251,7 @@ fn a_symbol_ordinary_movement_passes_for_gets_a_higher_bar() {
     let test = samples_of(4, 10, 5);
     let refs: Vec<&Sample> = test.iter().collect();
     let drawn = build_stream(&refs, &scfg, &mut ChaCha8Rng::seed_from_u64(6));
-    let spot = |label_bars: bool, stream: &airglyph_gesture::stream::SyntheticStream| {
+    let spot = |label_bars: bool, stream: &SyntheticStream| {
         let cfg = SpotterConfig {
             label_bars,
             ..SpotterConfig::default()

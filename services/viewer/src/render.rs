@@ -205,7 +205,7 @@ fn caption(img: &mut RgbImage, caption: &str, s: u32) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use airglyph_gesture::tracker::skeleton_with_hand;
+    use airglyph_gesture::skeleton_with_hand;
 
     fn wall(k: &Intrinsics, mm: u16) -> Vec<u16> {
         vec![mm; (k.width * k.height) as usize]

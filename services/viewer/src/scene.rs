@@ -5,8 +5,7 @@
 
 use crate::render::{project_joints, GestureLine, Overlay};
 use airglyph_core::{DepthView, Intrinsics, Joint, Skeleton};
-use airglyph_gesture::bezier::bezier_points;
-use airglyph_gesture::{Hand, HandTracker, SpotterConfig};
+use airglyph_gesture::{bezier_points, Hand, HandTracker, SpotterConfig};
 use airglyph_ipc::{DepthHeader, GestureEventMsg, SkeletonMsg, Stage, StageStatsMsg};
 use nalgebra::Point3;
 use serde_json::{json, Value};
@@ -415,7 +414,7 @@ fn stats_json(h: &VecDeque<StageStatsMsg>, now_ns: u64) -> Value {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use airglyph_gesture::tracker::skeleton_with_hand;
+    use airglyph_gesture::skeleton_with_hand;
     use airglyph_ipc::LatencyChain;
 
     const SESSION: u64 = 77;

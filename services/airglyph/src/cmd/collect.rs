@@ -4,7 +4,7 @@
 use crate::cmd::run::{run_listening, Args as RunArgs, Listener, Poll};
 use crate::interrupt::Interrupted;
 use airglyph_capture::SourceSpec;
-use airglyph_gesture::collect::{RepetitionConfig, RepetitionSegmenter};
+use airglyph_gesture::lab::{RepetitionConfig, RepetitionSegmenter};
 use airglyph_gesture::model::MAX_LABEL_BYTES;
 use airglyph_ipc::{options, Receiver, SkeletonMsg};
 use anyhow::{bail, Context};

@@ -5,10 +5,11 @@
 //! trained on the same data in the same run.
 
 use crate::interrupt::unless_interrupted;
-use airglyph_gesture::data::{folds_by_subject, labels_of, load_many, Sample};
-use airglyph_gesture::dtw::DtwClassifier;
-use airglyph_gesture::eval::Confusion;
-use airglyph_gesture::{train, ClassifierKind, Model, TrainConfig};
+use airglyph_gesture::lab::{
+    folds_by_subject, labels_of, load_many, train, ClassifierKind, Confusion, DtwClassifier,
+    Sample, TrainConfig,
+};
+use airglyph_gesture::Model;
 use airglyph_ipc::options;
 use anyhow::{bail, Context};
 use indicatif::{ProgressBar, ProgressStyle};

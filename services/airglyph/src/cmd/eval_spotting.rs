@@ -4,13 +4,11 @@
 //! spotted gesture is an insertion.
 
 use crate::interrupt::unless_interrupted;
-use airglyph_gesture::data::{load_many, Sample};
-use airglyph_gesture::eval::{plot_timeline, Span};
-use airglyph_gesture::spot::Candidate;
-use airglyph_gesture::stream::{
-    build_stream, matched, random_movement, SpottingScore, StreamConfig, SyntheticStream,
+use airglyph_gesture::lab::{
+    build_stream, load_many, matched, plot_timeline, random_movement, Sample, Span, SpottingScore,
+    StreamConfig, SyntheticStream,
 };
-use airglyph_gesture::{Model, SpottedGesture, Spotter, SpotterConfig};
+use airglyph_gesture::{Candidate, Model, SpottedGesture, Spotter, SpotterConfig, Trajectory};
 use airglyph_ipc::options;
 use anyhow::bail;
 use rand::seq::SliceRandom;
@@ -146,25 +144,25 @@ fn explain(
     let mut lines = Vec::new();
     for t in &s.truth {
         let seg = &filtered[t.start as usize..=t.end as usize];
-        let oracle = model.classify(&airglyph_gesture::stream::trajectory(seg));
+        let oracle = model.classify(&Trajectory::from_points(seg.to_vec()));
         let truth_pg = model
             .spotting
             .as_ref()
             .and_then(|m| m.verifier.as_ref())
             .map_or(f64::NAN, |v| {
-                use airglyph_gesture::spot::VerifierInput;
+                use airglyph_gesture::model::VerifierInput;
                 let times = (0..seg.len()).map(|i| i as f32 / cfg.fps).collect();
                 let (s, e) = (t.start as usize, t.end as usize);
                 let input = VerifierInput {
                     posterior: model
-                        .posterior(&airglyph_gesture::stream::trajectory(seg))
+                        .posterior(&Trajectory::from_points(seg.to_vec()))
                         .iter()
                         .map(|&p| p as f32)
                         .collect(),
                     ratio: model
                         .spotting
                         .as_ref()
-                        .map_or(0.0, |sm| airglyph_gesture::spot::LeeKim::new(sm).ratio(seg)),
+                        .map_or(0.0, |sm| airglyph_gesture::LeeKim::new(sm).ratio(seg)),
                     ..VerifierInput::cut(&filtered, s, e, times, cfg.fps as f64)
                 };
                 1.0 - v.probs(&input)[0]
@@ -457,7 +455,7 @@ fn dump_lines(
     let filtered = filtered(s, cfg);
     let truth = s.truth.iter().map(|t| {
         let seg = &filtered[t.start as usize..=t.end as usize];
-        let alone = model.classify(&airglyph_gesture::stream::trajectory(seg));
+        let alone = model.classify(&Trajectory::from_points(seg.to_vec()));
         json!({"stream": stream, "kind": "drawn", "label": t.label, "subject": t.subject, "start": t.start,
                "end": t.end, "alone": model.labels[alone.class], "alone_score": alone.score})
     });

@@ -105,7 +105,7 @@ fn read_poses(path: &Path) -> anyhow::Result<Vec<Option<Skeleton>>> {
     Ok(out)
 }
 
-fn trace(candidates: &[airglyph_gesture::spot::Candidate], model: &Model) {
+fn trace(candidates: &[airglyph_gesture::Candidate], model: &Model) {
     for c in candidates {
         eprintln!(
             "segment {}–{}: {} score {:.2} p(gesture) {:.2} Lee&Kim {:+.2}{}",

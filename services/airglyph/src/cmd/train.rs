@@ -1,8 +1,9 @@
 //! `airglyph train`: trains a gesture model from trajectory JSONL files.
 
 use crate::interrupt::unless_interrupted;
+use airglyph_gesture::lab::{load_many, train, ClassifierKind, TrainConfig};
 use airglyph_gesture::limits;
-use airglyph_gesture::{load_many, train, ClassifierKind, Model, TrainConfig};
+use airglyph_gesture::Model;
 use airglyph_ipc::options;
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -148,10 +149,10 @@ fn model(args: &Args, cfg: &TrainConfig) -> anyhow::Result<Model> {
             };
             let before = verifier.label_bars.clone();
             bar.set_message("calibrating the label bars");
-            let bars = airglyph_gesture::spot::calibrate_label_bars(
+            let bars = airglyph_gesture::lab::calibrate_label_bars(
                 &model,
                 &samples,
-                airglyph_gesture::spot::CALIBRATION_SEED,
+                airglyph_gesture::lab::CALIBRATION_SEED,
                 &progress,
             );
             eprintln!("label bars: {before:?} → {bars:?}");
@@ -163,7 +164,7 @@ fn model(args: &Args, cfg: &TrainConfig) -> anyhow::Result<Model> {
         (Some(path), None) => {
             let mut old = reusable(path, &samples)?;
             bar.set_message("spotting");
-            old.spotting = Some(airglyph_gesture::spot::SpottingModel::train(
+            old.spotting = Some(airglyph_gesture::model::SpottingModel::train(
                 &samples,
                 &old,
                 cfg.spotting_step,
@@ -185,9 +186,12 @@ fn model(args: &Args, cfg: &TrainConfig) -> anyhow::Result<Model> {
 }
 
 /// A model whose parts are kept: its labels must be the data's.
-fn reusable(path: &std::path::Path, samples: &[airglyph_gesture::Sample]) -> anyhow::Result<Model> {
+fn reusable(
+    path: &std::path::Path,
+    samples: &[airglyph_gesture::lab::Sample],
+) -> anyhow::Result<Model> {
     let model = Model::load(path)?;
-    if airglyph_gesture::data::labels_of(samples) != model.labels {
+    if airglyph_gesture::lab::labels_of(samples) != model.labels {
         anyhow::bail!(
             "{}: its labels differ from the data's; cannot reuse it",
             path.display()

@@ -1,8 +1,8 @@
 //! The template baseline: dynamic time warping 1-nearest-neighbour over every training
 //! sample (trajectories resampled to equal arc length and normalized).
 
-use crate::data::Trajectory;
 use crate::features::resample;
+use crate::trajectory::Trajectory;
 
 /// Templates: resampled, normalized point sequences with their class index.
 #[derive(Debug, Clone, Default)]

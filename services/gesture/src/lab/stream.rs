@@ -18,10 +18,12 @@
 //!   probability `pause_prob` it also rests there for 0.1–0.5 s.
 //! - Tracking noise is added last.
 
-use crate::data::{Sample, Trajectory};
+use crate::body_frame::skeleton_with_hand;
 use crate::features::resample;
+use crate::lab::data::Sample;
 use crate::spot::{Candidate, SpottedGesture, Spotter};
-use crate::tracker::{skeleton_with_hand, HandFilter, TrackerConfig};
+use crate::tracker::{HandFilter, TrackerConfig};
+use crate::trajectory::Trajectory;
 use airglyph_core::Skeleton;
 use rand::Rng;
 use serde::Serialize;
@@ -255,43 +257,6 @@ pub fn reach_path(path: &[[f32; 2]], secs: f32, v0: f32, v1: f32, fps: f32) -> V
             d[i][0] + t * (d[i + 1][0] - d[i][0]),
             d[i][1] + t * (d[i + 1][1] - d[i][1]),
         ]);
-    }
-    out
-}
-
-/// A smooth random movement from `from` to `to` through random curves (quadratic Bezier
-/// pieces through `segments − 1` random waypoints).
-pub fn random_path<R: Rng>(
-    rng: &mut R,
-    from: [f32; 2],
-    to: [f32; 2],
-    segments: usize,
-) -> Vec<[f32; 2]> {
-    let mut way = vec![from];
-    for _ in 1..segments {
-        way.push([rng.gen_range(-1.2..1.6), rng.gen_range(-0.8..1.6)]);
-    }
-    way.push(to);
-    let mut out = Vec::new();
-    for w in way.windows(2) {
-        let (a, b) = (w[0], w[1]);
-        let (mx, my) = ((a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0);
-        let len = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
-        let bend = rng.gen_range(-0.6..0.6) * len;
-        let (nx, ny) = if len > 1e-6 {
-            (-(b[1] - a[1]) / len, (b[0] - a[0]) / len)
-        } else {
-            (0.0, 0.0)
-        };
-        let c = [mx + nx * bend, my + ny * bend];
-        for k in 0..=24 {
-            let t = k as f32 / 24.0;
-            let u = 1.0 - t;
-            out.push([
-                u * u * a[0] + 2.0 * u * t * c[0] + t * t * b[0],
-                u * u * a[1] + 2.0 * u * t * c[1] + t * t * b[1],
-            ]);
-        }
     }
     out
 }
@@ -613,97 +578,6 @@ pub fn random_movement<R: Rng>(seconds: f32, cfg: &StreamConfig, rng: &mut R) ->
         points,
         truth: Vec::new(),
     }
-}
-
-/// Spotting result counts.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
-pub struct SpottingScore {
-    pub gestures: usize,
-    pub correct: usize,
-    pub substitutions: usize,
-    pub deletions: usize,
-    pub insertions: usize,
-    pub reliability: f64,
-}
-
-impl SpottingScore {
-    pub fn add(&mut self, o: &SpottingScore) {
-        self.gestures += o.gestures;
-        self.correct += o.correct;
-        self.substitutions += o.substitutions;
-        self.deletions += o.deletions;
-        self.insertions += o.insertions;
-        self.reliability = self.correct as f64 / (self.gestures + self.insertions).max(1) as f64;
-    }
-}
-
-/// Matches spotted gestures to the truth: a spotted gesture matches a drawn one when
-/// their frame intervals overlap by at least half of the shorter one.
-pub fn score(truth: &[TruthGesture], spotted: &[SpottedGesture]) -> SpottingScore {
-    matched(truth, spotted).score
-}
-
-/// How a stream's spotted gestures matched its drawn ones.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct Matching {
-    pub score: SpottingScore,
-    /// For each drawn gesture, whether it was spotted with its own label.
-    pub correct: Vec<bool>,
-    /// For each spotted gesture, whether it matched a drawn one (if not, an insertion).
-    pub matched: Vec<bool>,
-}
-
-/// [`score`], with what matched what.
-pub fn matched(truth: &[TruthGesture], spotted: &[SpottedGesture]) -> Matching {
-    let mut used = vec![false; spotted.len()];
-    let mut sc = SpottingScore {
-        gestures: truth.len(),
-        ..Default::default()
-    };
-    let mut correct = Vec::with_capacity(truth.len());
-    for t in truth {
-        let mut found = None;
-        for (i, g) in spotted.iter().enumerate() {
-            if used[i] {
-                continue;
-            }
-            let lo = t.start.max(g.start_seq);
-            let hi = t.end.min(g.end_seq);
-            let ov = hi.saturating_sub(lo) as f64;
-            let shorter = (t.end - t.start)
-                .min(g.end_seq.saturating_sub(g.start_seq))
-                .max(1) as f64;
-            if hi > lo && ov >= 0.5 * shorter {
-                found = Some(i);
-                break;
-            }
-        }
-        let right = found.is_some_and(|i| spotted[i].label == t.label);
-        match found {
-            Some(i) => {
-                used[i] = true;
-                if right {
-                    sc.correct += 1;
-                } else {
-                    sc.substitutions += 1;
-                }
-            }
-            None => sc.deletions += 1,
-        }
-        correct.push(right);
-    }
-    sc.insertions = used.iter().filter(|u| !**u).count();
-    sc.reliability = sc.correct as f64 / (sc.gestures + sc.insertions).max(1) as f64;
-    Matching {
-        score: sc,
-        correct,
-        matched: used,
-    }
-}
-
-/// Convenience for a trajectory of body-frame points.
-pub fn trajectory(points: &[[f32; 2]]) -> Trajectory {
-    Trajectory::from_points(points.to_vec())
 }
 
 #[cfg(test)]

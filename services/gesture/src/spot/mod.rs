@@ -19,245 +19,26 @@
 //!    ([`RankBy`]); the winner is published once nothing better has come for
 //!    `hold_seconds` or the hand rests.
 
-mod calibrate;
+mod config;
 mod segmenter;
 mod threshold;
-mod verifier;
 
-pub use calibrate::{calibrate_label_bars, BAR_STEPS};
-pub use segmenter::Segmenter;
-pub use threshold::{sample_codes, LeeKim, Quantizer, ThresholdModel, REST_CODE, STREAM_SYMBOLS};
-pub use verifier::{
-    context, context_steps, stream_examples, Verifier, VerifierInput, CONTEXT_ARC, CONTEXT_POINTS,
-    CONTEXT_SECONDS,
-};
+pub use config::{RankBy, SpotterConfig};
+pub(crate) use segmenter::Segmenter;
+pub use threshold::LeeKim;
 
-use crate::data::{Sample, Trajectory};
-use crate::hmm::{DiscreteHmm, HmmTrainConfig};
-use crate::model::{LabelledHmm, Model};
-use crate::tracker::{Hand, HandPoint, HandTracker, TrackerConfig};
+use crate::model::verifier::context_steps;
+use crate::model::Model;
+use crate::tracker::{Hand, HandPoint, HandTracker};
+use crate::trajectory::Trajectory;
 use airglyph_core::Skeleton;
-use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
-
-/// The HMMs over stream codes, stored in the model file.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct SpottingModel {
-    /// Chord step as a fraction of the gesture's larger side.
-    pub step: f64,
-    pub models: Vec<LabelledHmm>,
-    /// Judge of candidate segments: not a gesture, or a whole gesture of which label.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub verifier: Option<Verifier>,
-}
+use serde::Serialize;
 
 /// Whether a segment's size (larger side, gesture-size units) can be a gesture's.
-fn size_ok(pts: &[[f32; 2]], cfg: &SpotterConfig) -> bool {
+pub(crate) fn size_ok(pts: &[[f32; 2]], cfg: &SpotterConfig) -> bool {
     let (x0, y0, x1, y1) = crate::features::bbox(pts);
     let size = (x1 - x0).max(y1 - y0);
     size >= cfg.min_size && size <= cfg.max_size
-}
-
-impl SpottingModel {
-    pub fn validate(&self) -> Result<(), String> {
-        if !(self.step > 0.0 && self.step < 1.0) {
-            return Err(format!("spotting step {} is not in (0, 1)", self.step));
-        }
-        if let Some(v) = &self.verifier {
-            if v.nets.is_empty() {
-                return Err("spotting verifier has no network".into());
-            }
-            use crate::limits::{within, MAX_NETS, MAX_TIMING};
-            v.features.validate("spotting verifier's features")?;
-            within("spotting verifier's timing points", v.timing, 0, MAX_TIMING)?;
-            within("spotting verifier's networks", v.nets.len(), 1, MAX_NETS)?;
-            for net in &v.nets {
-                net.validate()
-                    .map_err(|e| format!("spotting verifier: {e}"))?;
-                if net.inputs() != v.dim() || net.outputs() != v.classes.len() + 1 {
-                    return Err("spotting verifier has the wrong dimensions".into());
-                }
-            }
-            for (label, bar) in &v.label_bars {
-                if !v.classes.contains(label) {
-                    return Err(format!(
-                        "spotting verifier has a bar for label {label:?}, which the model does not have"
-                    ));
-                }
-                if !(0.0..=1.0).contains(bar) {
-                    return Err(format!(
-                        "spotting verifier's bar {bar} for label {label:?} is not a probability"
-                    ));
-                }
-            }
-        }
-        for m in &self.models {
-            m.hmm
-                .validate()
-                .map_err(|e| format!("spotting HMM of label {:?}: {e}", m.label))?;
-            if m.hmm.n_symbols() != STREAM_SYMBOLS {
-                return Err(format!(
-                    "spotting HMM of label {:?} has {} symbols, expected {STREAM_SYMBOLS}",
-                    m.label,
-                    m.hmm.n_symbols()
-                ));
-            }
-        }
-        Ok(())
-    }
-
-    /// Trains one banded HMM per label on the stream codes of the samples (each scaled
-    /// so that its larger side is 1), and the verifier, which uses `classifier` (a model
-    /// with the same labels; its spotting part is not used) and has `verifiers`
-    /// networks (at least one); then calibrates the verifier's per-label bars
-    /// ([`calibrate_label_bars`]).
-    pub fn train(
-        samples: &[Sample],
-        classifier: &Model,
-        step: f64,
-        states: usize,
-        verifiers: usize,
-    ) -> Self {
-        let labels = &classifier.labels;
-        let cfg = HmmTrainConfig {
-            states,
-            symbols: STREAM_SYMBOLS,
-            band: 1,
-            iterations: 12,
-            emission_prior: 0.3,
-            transition_prior: 0.5,
-            floor: 1e-3,
-        };
-        let models = labels
-            .par_iter()
-            .map(|l| {
-                let seqs: Vec<Vec<usize>> = samples
-                    .iter()
-                    .filter(|s| &s.label == l)
-                    .map(|s| sample_codes(&s.trajectory(), step))
-                    .filter(|c| !c.is_empty())
-                    .collect();
-                LabelledHmm {
-                    label: l.clone(),
-                    hmm: DiscreteHmm::train(&seqs, &cfg),
-                }
-            })
-            .collect();
-        let mut model = Self {
-            step,
-            models,
-            verifier: None,
-        };
-        // Seed 7 first: a one-network verifier is the one trained before ensembles.
-        let seeds: Vec<u64> = (7..).take(verifiers.max(1)).collect();
-        model.verifier = Some(Verifier::train(samples, classifier, &model, &seeds));
-        let mut whole = classifier.clone();
-        whole.spotting = Some(model.clone());
-        let bars = calibrate_label_bars(&whole, samples, CALIBRATION_SEED, &|_, _| {});
-        if let Some(v) = model.verifier.as_mut() {
-            v.label_bars = bars;
-        }
-        model
-    }
-}
-
-/// Seed of the streams the label bars are calibrated on: other streams than the
-/// verifier's (seeds 7…) and the evaluation's (1–3).
-pub const CALIBRATION_SEED: u64 = 101;
-
-/// What overlapping accepted candidates are ranked by: the classifier's confidence
-/// times the verifier's probability of…
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum RankBy {
-    /// …a whole gesture of any label (what acceptance tests).
-    Gesture,
-    /// …a whole gesture of the classifier's label: a stretch the verifier takes for a
-    /// whole gesture, but less surely for the one the classifier names, ranks lower
-    /// (an approach and a "1" that the classifier calls a "7"). The held-out digits
-    /// lose fewer competitions (gesture README, "Spotting").
-    #[default]
-    Label,
-}
-
-impl RankBy {
-    /// The log of the evidence that ranks a candidate among overlapping ones.
-    pub fn rank(self, p_gesture: f64, p_label: f64, score: f64) -> f64 {
-        let verifier = match self {
-            RankBy::Gesture => p_gesture,
-            RankBy::Label => p_label,
-        };
-        verifier.max(1e-9).ln() + score.max(1e-9).ln()
-    }
-}
-
-/// Run-time settings of the spotter.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct SpotterConfig {
-    /// Expected size of a drawn gesture (its larger side) in shoulder widths.
-    pub gesture_size: f32,
-    /// A break is a local minimum of the hand's speed over this many frames each side…
-    pub min_window: usize,
-    /// …below this fraction of the fastest speed of the last `peak_seconds`.
-    pub break_ratio: f32,
-    pub peak_seconds: f64,
-    /// Below this speed (gesture sizes a second) the hand is at rest.
-    pub rest_speed: f32,
-    /// Shortest and longest gesture, seconds.
-    pub min_seconds: f64,
-    pub max_seconds: f64,
-    /// Smallest and largest gesture (larger side), in gesture sizes.
-    pub min_size: f32,
-    pub max_size: f32,
-    /// Lee & Kim as a hard test: the best gesture HMM must beat the threshold model
-    /// by this log-likelihood margin per code (None: the ratio is only evidence for
-    /// the verifier).
-    pub margin: Option<f64>,
-    /// Smallest classifier confidence to publish a gesture.
-    pub min_score: f64,
-    /// Smallest verifier probability that the segment is a whole gesture (None: the
-    /// verifier's own, [`Verifier::min_gesture_prob`]).
-    pub min_gesture_prob: Option<f64>,
-    /// Whether the labels the model's calibration found ordinary movement passing for
-    /// must reach their higher bars ([`Verifier::label_bars`]).
-    pub label_bars: bool,
-    /// How long after a candidate's end to wait for a longer, better one (seconds);
-    /// a rest of `rest_seconds` after it decides at once.
-    pub hold_seconds: f64,
-    pub rest_seconds: f64,
-    pub rank_by: RankBy,
-    pub tracker: TrackerConfig,
-}
-
-impl Default for SpotterConfig {
-    fn default() -> Self {
-        Self {
-            gesture_size: 1.0,
-            min_window: 3,
-            break_ratio: 0.6,
-            peak_seconds: 0.5,
-            rest_speed: 0.15,
-            min_seconds: 0.3,
-            max_seconds: 4.0,
-            min_size: 0.3,
-            max_size: 2.5,
-            margin: None,
-            min_score: 0.5,
-            min_gesture_prob: None,
-            label_bars: true,
-            // Held-out writers in synthetic streams, seeds 1–3, at 1.5 s and at 2.5 s:
-            // digits 89.7, 91.1, 88.5 and 90.1, 91.1, 89.7 %; uppercase 81.6, 82.4, 83.2
-            // and 84.7, 85.8, 85.9 %; all 36 78.0, 78.9, 76.8 and 81.5, 80.8, 80.8 %
-            // (fewer substitutions and insertions: a better candidate overlapping the
-            // pending one may end more than 1.5 s after it). 3 s is no better (digits,
-            // uppercase).
-            hold_seconds: 2.5,
-            rest_seconds: 0.4,
-            rank_by: RankBy::default(),
-            tracker: TrackerConfig::default(),
-        }
-    }
 }
 
 /// A gesture found in the stream.
@@ -562,30 +343,5 @@ impl Spotter {
             from = from.min(p.start);
         }
         self.seg.forget_before(from);
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn ranking_by_label_prefers_the_stretch_the_verifier_names_as_the_classifier_does() {
-        // Both whole gestures to the verifier, equally sure to the classifier; the first
-        // the verifier reads as the classifier's label, the second mostly as another.
-        let (named, other) = ((0.9, 0.88, 0.99), (0.95, 0.6, 0.99));
-        let rank = |by: RankBy, (g, l, s): (f64, f64, f64)| by.rank(g, l, s);
-        assert!(rank(RankBy::Gesture, other) > rank(RankBy::Gesture, named));
-        assert!(rank(RankBy::Label, named) > rank(RankBy::Label, other));
-        // Nothing is -inf.
-        assert!(RankBy::Label.rank(1.0, 0.0, 0.0).is_finite());
-    }
-
-    #[test]
-    fn settings_without_the_ranking_field_still_load() {
-        let mut v = serde_json::to_value(SpotterConfig::default()).unwrap();
-        v.as_object_mut().unwrap().remove("rank_by");
-        let cfg: SpotterConfig = serde_json::from_value(v).unwrap();
-        assert_eq!(cfg.rank_by, RankBy::Label);
     }
 }

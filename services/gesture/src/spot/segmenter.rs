@@ -1,6 +1,7 @@
 //! Where a gesture can start or end: breaks of the hand's speed, and rests.
 
-use super::{context_steps, SpotterConfig, VerifierInput};
+use super::SpotterConfig;
+use crate::model::verifier::{context_steps, VerifierInput};
 
 /// A place where a gesture may end (`end`) and the next begin (`start`): a dip of the
 /// hand's speed (both the same point) or a rest (its first and last point).
@@ -154,12 +155,6 @@ impl Segmenter {
         self.pts.get(i.checked_sub(self.base)?).copied()
     }
 
-    /// The points s..=e (gesture-size units), while they are kept.
-    pub fn points(&self, s: usize, e: usize) -> Option<Vec<[f32; 2]>> {
-        let (a, b) = (s.checked_sub(self.base)?, e.checked_sub(self.base)?);
-        (a <= b && b < self.pts.len()).then(|| self.pts[a..=b].iter().map(|p| p.0).collect())
-    }
-
     /// The verifier's input for the segment s..=e: its points, and the hand's path just
     /// before and after it ([`VerifierInput::cut`]; as far as kept).
     pub fn input(&self, s: usize, e: usize, fps: f64) -> Option<VerifierInput> {
@@ -208,10 +203,6 @@ impl Segmenter {
 
     pub fn len(&self) -> usize {
         self.pts.len()
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.pts.is_empty()
     }
 }
 

@@ -1,65 +1,11 @@
 //! Lee & Kim's threshold model ("An HMM-based threshold model approach for gesture
-//! recognition", PAMI 1999): the stream's direction codes, one left-right HMM per label,
-//! and the ergodic non-gesture HMM made of all their states.
+//! recognition", PAMI 1999): over a stretch's direction codes, one left-right HMM per
+//! label against the ergodic non-gesture HMM made of all their states.
 
-use crate::data::Trajectory;
 use crate::hmm::LogHmm;
-use crate::model::LabelledHmm;
-
-use super::SpottingModel;
-
-/// Symbols of the spotting HMMs: direction codes 0..8 and a resting code 8 (which a
-/// segment between two breaks never holds: rests are breaks; it stays so that the
-/// models keep their shape).
-pub const STREAM_SYMBOLS: usize = 9;
-pub const REST_CODE: usize = 8;
-
-/// Quantizes a path into direction codes at equal chord steps.
-#[derive(Debug, Clone)]
-pub struct Quantizer {
-    pub step: f32,
-    anchor: Option<[f32; 2]>,
-}
-
-impl Quantizer {
-    pub fn new(step: f32) -> Self {
-        Self { step, anchor: None }
-    }
-
-    pub fn reset(&mut self) {
-        self.anchor = None;
-    }
-
-    /// Feeds a point; calls `emit(code)` for every full step the path made.
-    pub fn push(&mut self, p: [f32; 2], mut emit: impl FnMut(usize)) {
-        let Some(mut a) = self.anchor else {
-            self.anchor = Some(p);
-            return;
-        };
-        loop {
-            let (dx, dy) = (p[0] - a[0], p[1] - a[1]);
-            let d = (dx * dx + dy * dy).sqrt();
-            if d < self.step {
-                break;
-            }
-            emit(crate::bezier::direction_code(dx as f64, dy as f64, 8, 0.0));
-            a = [a[0] + dx / d * self.step, a[1] + dy / d * self.step];
-        }
-        self.anchor = Some(a);
-    }
-}
-
-/// The stream codes of a whole trajectory scaled so that its larger side is 1.
-pub fn sample_codes(t: &Trajectory, step: f64) -> Vec<usize> {
-    let (x0, y0, x1, y1) = crate::features::bbox(&t.points);
-    let s = (x1 - x0).max(y1 - y0).max(1e-6);
-    let mut q = Quantizer::new(step as f32);
-    let mut out = Vec::new();
-    for p in &t.points {
-        q.push([(p[0] - x0) / s, (p[1] - y0) / s], |c| out.push(c));
-    }
-    out
-}
+use crate::model::spotting::{sample_codes, STREAM_SYMBOLS};
+use crate::model::{LabelledHmm, SpottingModel};
+use crate::trajectory::Trajectory;
 
 const NEG: f64 = f64::NEG_INFINITY;
 
@@ -186,38 +132,38 @@ impl LeeKim {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::hmm::{DiscreteHmm, HmmTrainConfig};
+    use crate::hmm::DiscreteHmm;
+
+    /// A left-right HMM of four states over the stream's symbols: the first two emit
+    /// `first`, the last two `then` (every other code with a small floor), as a
+    /// trained one of a two-stroke gesture does.
+    fn two_strokes(label: &str, first: usize, then: usize) -> LabelledHmm {
+        let emit = |code: usize| {
+            let mut row = vec![0.01; STREAM_SYMBOLS];
+            row[code] = 1.0 - 0.01 * (STREAM_SYMBOLS - 1) as f64;
+            row
+        };
+        let hmm = DiscreteHmm {
+            pi: vec![1.0, 0.0, 0.0, 0.0],
+            a: vec![
+                vec![0.7, 0.3, 0.0, 0.0],
+                vec![0.0, 0.7, 0.3, 0.0],
+                vec![0.0, 0.0, 0.7, 0.3],
+                vec![0.0, 0.0, 0.0, 1.0],
+            ],
+            b: vec![emit(first), emit(first), emit(then), emit(then)],
+        };
+        hmm.validate().unwrap();
+        LabelledHmm {
+            label: label.into(),
+            hmm,
+        }
+    }
 
     #[test]
     fn the_threshold_model_beats_gesture_models_on_a_shuffled_gesture() {
-        let models = ["A", "B"]
-            .iter()
-            .enumerate()
-            .map(|(k, l)| {
-                // A: right then down; B: left then up (codes 0 and 2, 4 and 6).
-                let seqs = vec![
-                    if k == 0 {
-                        [vec![0; 6], vec![2; 6]].concat()
-                    } else {
-                        [vec![4; 6], vec![6; 6]].concat()
-                    };
-                    5
-                ];
-                let cfg = HmmTrainConfig {
-                    states: 4,
-                    symbols: STREAM_SYMBOLS,
-                    band: 1,
-                    iterations: 5,
-                    emission_prior: 0.1,
-                    transition_prior: 0.5,
-                    floor: 1e-3,
-                };
-                LabelledHmm {
-                    label: l.to_string(),
-                    hmm: DiscreteHmm::train(&seqs, &cfg),
-                }
-            })
-            .collect::<Vec<_>>();
+        // A: right then down; B: left then up (codes 0 and 2, 4 and 6).
+        let models = [two_strokes("A", 0, 2), two_strokes("B", 4, 6)];
         let thr = ThresholdModel::new(&models);
         let a = models[0].hmm.to_log();
         let mut buf = Vec::new();

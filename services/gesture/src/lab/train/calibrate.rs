@@ -13,11 +13,12 @@
 //! seen; so the drawn symbols' probabilities are a little higher than an unseen
 //! writer's, and the bars are capped at [`BAR_STEPS`]' last.
 
-use super::{Spotter, SpotterConfig};
-use crate::data::Sample;
+use super::Progress;
+use crate::lab::data::Sample;
+use crate::lab::scoring::{matched, SpottingScore};
+use crate::lab::stream::{build_stream, StreamConfig, SyntheticStream};
 use crate::model::Model;
-use crate::stream::{build_stream, matched, SpottingScore, StreamConfig, SyntheticStream};
-use crate::train::Progress;
+use crate::spot::{Spotter, SpotterConfig};
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;

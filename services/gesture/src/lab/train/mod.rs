@@ -1,17 +1,31 @@
 //! Training a model from samples: the seed's HMMs, the CRF, or the default network
 //! ensemble; spotting HMMs are added to every model.
 
+mod calibrate;
+mod crf;
+mod hmm;
+mod mlp;
+mod spotting;
+mod verifier;
+
+pub use calibrate::{calibrate_label_bars, BAR_STEPS};
+pub use crf::CrfTrainConfig;
+pub use hmm::HmmTrainConfig;
+pub use mlp::MlpTrainConfig;
+pub use spotting::CALIBRATION_SEED;
+
 use crate::bezier::bezier_codes;
-use crate::crf::{Crf, CrfTrainConfig};
-use crate::data::{labels_of, Sample};
-use crate::features::{augment, feature_vector, FeatureConfig};
-use crate::hmm::{DiscreteHmm, HmmTrainConfig};
-use crate::mlp::{Mlp, MlpTrainConfig};
+use crate::crf::Crf;
+use crate::features::{feature_vector, FeatureConfig};
+use crate::hmm::DiscreteHmm;
+use crate::lab::augment::augment;
+use crate::lab::data::{labels_of, Sample};
+use crate::lab::stream::{drawn_in_stream, training_stream};
+use crate::mlp::Mlp;
 use crate::model::{
-    Classifier, LabelledHmm, Model, TrainingInfo, MAX_LABEL_BYTES, MODEL_FORMAT, MODEL_VERSION,
+    Classifier, LabelledHmm, Model, SpottingModel, TrainingInfo, MAX_LABEL_BYTES, MODEL_FORMAT,
+    MODEL_VERSION,
 };
-use crate::spot::SpottingModel;
-use crate::stream::{drawn_in_stream, training_stream};
 use crate::tracker::TrackerConfig;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

@@ -1,19 +1,13 @@
 //! The verifier: a network that judges a stretch of the hand's path between two breaks
 //! — a whole gesture (and which), or movement, part of a gesture, a gesture with
 //! movement around it — from its coarse shape, size, place, timing, the hand's path
-//! just before and after it, the classifier's posterior and Lee & Kim's ratio; and its
-//! training on the stretches the spotter itself cuts from synthetic streams.
+//! just before and after it, the classifier's posterior and Lee & Kim's ratio. Its
+//! training, on the stretches the spotter itself cuts from synthetic streams, is the
+//! lab's (`lab::train`).
 
-use super::threshold::LeeKim;
-use super::{size_ok, Segmenter, SpotterConfig, SpottingModel};
-use crate::data::{Sample, Trajectory};
 use crate::features::{arc_lengths, feature_vector, locate, FeatureConfig};
-use crate::mlp::{Mlp, MlpTrainConfig};
-use crate::model::Model;
-use crate::tracker::HandTracker;
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
-use rayon::prelude::*;
+use crate::mlp::Mlp;
+use crate::trajectory::Trajectory;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -149,28 +143,6 @@ fn one_or_many<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<Mlp>, D::Er
     })
 }
 
-/// The segment's coarse shape the verifier sees (the classifier has the fine one).
-const SHAPE: FeatureConfig = FeatureConfig {
-    pen_up: false,
-    points: 12,
-    grid: 3,
-};
-
-/// Training examples for every drawn gesture (each sample is drawn this many times, in
-/// different streams and a little distorted each time)…
-const VERIFIER_REPEATS: usize = 3;
-/// …and this many other segments for each whole gesture.
-const VERIFIER_NEGATIVES: f64 = 4.0;
-/// A segment is a whole gesture when it covers a drawn one this closely (intersection
-/// over union)…
-const WHOLE_IOU: f64 = 0.85;
-/// …and not one below this.
-const NOT_WHOLE_IOU: f64 = 0.6;
-/// Points of the timing profile a newly trained verifier sees: a coarse profile. With
-/// 10 the held-out digits gain as much, but parts of letters (the "R" in a "B"),
-/// drawn like whole symbols, win more often (gesture README, "Spotting").
-const TIMING_POINTS: usize = 4;
-
 impl Verifier {
     /// Input size: segment features, log size, context, posterior, ratio, place,
     /// timing profile.
@@ -218,96 +190,11 @@ impl Verifier {
         }
         probs
     }
-
-    /// Trains on the segments the spotter will judge: the samples are drawn in
-    /// synthetic continuous streams (see [`crate::stream`]), the [`Segmenter`] cuts
-    /// them, and every segment between two of its breaks is an example — a whole
-    /// gesture of its label when it covers a drawn gesture closely (intersection over
-    /// union ≥ 0.85), not a gesture when it does not (< 0.6: movement, part of a
-    /// gesture, a gesture with movement before or after it); those in between are
-    /// left out. `labels` are the model's labels.
-    pub fn train(
-        samples: &[Sample],
-        classifier: &Model,
-        spotting: &SpottingModel,
-        seeds: &[u64],
-    ) -> Verifier {
-        let mut shell = Verifier {
-            features: SHAPE,
-            classes: classifier.labels.clone(),
-            timing: TIMING_POINTS,
-            nets: Vec::new(),
-            label_bars: BTreeMap::new(),
-        };
-        let lee_kim = LeeKim::new(spotting);
-        shell.nets = seeds
-            .iter()
-            .map(|&seed| shell.train_net(samples, classifier, &lee_kim, seed))
-            .collect();
-        shell
-    }
-
-    /// One network, on streams of its own drawn from `seed`.
-    fn train_net(
-        &self,
-        samples: &[Sample],
-        classifier: &Model,
-        lee_kim: &LeeKim,
-        seed: u64,
-    ) -> Mlp {
-        let mut examples = stream_examples(samples, classifier, lee_kim, seed);
-        let pos = examples.iter().filter(|e| e.1 > 0).count().max(1);
-        let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5EED);
-        let keep =
-            (VERIFIER_NEGATIVES * pos as f64 / (examples.len() - pos).max(1) as f64).min(1.0);
-        examples.retain(|e| e.1 > 0 || rng.gen_bool(keep));
-        let targets: Vec<usize> = examples.iter().map(|e| e.1).collect();
-        let cfg = MlpTrainConfig {
-            hidden: 128,
-            epochs: 20,
-            seed,
-            ..MlpTrainConfig::default()
-        };
-        let feats = |epoch: usize, i: usize| {
-            let input = &examples[i].0;
-            let mut f = Vec::new();
-            if epoch == usize::MAX {
-                verifier_features(input, self, &mut f);
-                return f;
-            }
-            // A little rotation and scale, fresh every epoch.
-            let mut rng = ChaCha8Rng::seed_from_u64(
-                seed ^ ((epoch as u64).wrapping_mul(0x1000_0001))
-                    ^ (i as u64).wrapping_mul(0x9E37_79B9),
-            );
-            let scale = rng.gen_range(0.85..1.15f32);
-            let rot = rng.gen_range(-0.1..0.1f32);
-            let (c, s) = (rot.cos(), rot.sin());
-            let tf = |p: &[f32; 2]| [scale * (c * p[0] - s * p[1]), scale * (s * p[0] + c * p[1])];
-            let moved = VerifierInput {
-                segment: input.segment.iter().map(tf).collect(),
-                times: input.times.clone(),
-                before: input.before.map(|p| tf(&p)),
-                after: input.after.map(|p| tf(&p)),
-                posterior: input.posterior.clone(),
-                ratio: input.ratio,
-            };
-            verifier_features(&moved, self, &mut f);
-            f
-        };
-        Mlp::train(
-            examples.len(),
-            self.dim(),
-            &targets,
-            self.classes.len() + 1,
-            &cfg,
-            feats,
-            |_| {},
-        )
-    }
 }
 
-fn verifier_features(input: &VerifierInput, v: &Verifier, out: &mut Vec<f32>) {
+/// The network's input: the segment's features, log size, context, posterior, ratio,
+/// place and timing profile.
+pub(crate) fn verifier_features(input: &VerifierInput, v: &Verifier, out: &mut Vec<f32>) {
     let t = Trajectory::from_points(input.segment.clone());
     feature_vector(&t, &v.features, out);
     let (x0, y0, x1, y1) = crate::features::bbox(&input.segment);
@@ -360,106 +247,22 @@ fn timing_profile(segment: &[[f32; 2]], times: &[f32], n: usize) -> Vec<f32> {
         .collect()
 }
 
-/// Candidate segments of synthetic streams of the samples, each with its verifier
-/// target: 0 = not a whole gesture, 1 + i = a whole gesture of the classifier's label i
-/// (see [`Verifier::train`]).
-pub fn stream_examples(
-    samples: &[Sample],
-    classifier: &Model,
-    lee_kim: &LeeKim,
-    seed: u64,
-) -> Vec<(VerifierInput, usize)> {
-    use crate::stream::{build_stream, training_stream};
-    use rand::seq::SliceRandom;
-    let labels = &classifier.labels;
-    let mut order: Vec<&Sample> = (0..VERIFIER_REPEATS).flat_map(|_| samples.iter()).collect();
-    order.shuffle(&mut ChaCha8Rng::seed_from_u64(seed));
-    let chunks: Vec<(usize, Vec<&Sample>)> =
-        order.chunks(20).map(|c| c.to_vec()).enumerate().collect();
-    let scfg = SpotterConfig::default();
-    chunks
-        .par_iter()
-        .flat_map_iter(|(k, chunk)| {
-            let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_mul(31).wrapping_add(*k as u64));
-            let cfg = training_stream(&mut rng);
-            // Writer variation (as the classifier is trained with): every sample a
-            // little rotated, sheared and stretched.
-            let varied: Vec<Sample> = chunk
-                .iter()
-                .map(|s| {
-                    let t = crate::features::augment(&s.trajectory(), &mut rng, 1.0);
-                    Sample {
-                        label: s.label.clone(),
-                        subject: s.subject.clone(),
-                        strokes: vec![t.points],
-                    }
-                })
-                .collect();
-            let refs: Vec<&Sample> = varied.iter().collect();
-            let stream = build_stream(&refs, &cfg, &mut rng);
-            let mut tracker = HandTracker::new(scfg.tracker);
-            let mut seg = Segmenter::new(&scfg);
-            let dt = (1e9 / cfg.fps as f64) as u64;
-            let mut ends = Vec::new();
-            for i in 0..stream.points.len() {
-                let sk = stream.skeleton(i, cfg.distance);
-                let Some(p) = tracker.update(&sk, i as u64 * dt) else {
-                    continue;
-                };
-                ends.extend(seg.push([p.x, p.y], i as u64, i as u64 * dt));
-            }
-            let fps = cfg.fps as f64;
-            let min_len = (scfg.min_seconds * fps) as usize;
-            let max_len = (scfg.max_seconds * fps) as usize;
-            let mut out = Vec::new();
-            for e in ends {
-                for s in seg.starts(e, 0, min_len, max_len) {
-                    let Some(mut input) = seg.input(s, e, fps) else {
-                        continue;
-                    };
-                    if !size_ok(&input.segment, &scfg) {
-                        continue;
-                    }
-                    let t = Trajectory::from_points(input.segment.clone());
-                    input.posterior = classifier.posterior(&t).iter().map(|&p| p as f32).collect();
-                    input.ratio = lee_kim.ratio(&input.segment);
-                    let (Some(a), Some(b)) = (seg.point(s), seg.point(e)) else {
-                        continue;
-                    };
-                    // The drawn gesture it overlaps most (intersection over union).
-                    let best = stream
-                        .truth
-                        .iter()
-                        .map(|t| {
-                            let inter = b.1.min(t.end) as f64 - a.1.max(t.start) as f64;
-                            let union = b.1.max(t.end) as f64 - a.1.min(t.start) as f64;
-                            ((inter / union.max(1.0)).max(0.0), t)
-                        })
-                        .max_by(|x, y| x.0.total_cmp(&y.0));
-                    match best {
-                        Some((iou, t)) if iou >= WHOLE_IOU => {
-                            if let Some(c) = labels.iter().position(|l| *l == t.label) {
-                                out.push((input, 1 + c));
-                            }
-                        }
-                        Some((iou, _)) if iou >= NOT_WHOLE_IOU => {}
-                        _ => out.push((input, 0)),
-                    }
-                }
-            }
-            out
-        })
-        .collect()
-}
-
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::mlp::Layer;
 
+    /// A verifier's coarse shape and timing profile as training makes them.
+    const SHAPE: FeatureConfig = FeatureConfig {
+        pen_up: false,
+        points: 12,
+        grid: 3,
+    };
+    const TIMING_POINTS: usize = 4;
+
     /// A verifier over two labels whose single-layer networks answer `biases` (as
     /// log-odds) whatever they see.
-    fn constant_verifier(biases: &[[f32; 3]]) -> Verifier {
+    pub(crate) fn constant_verifier(biases: &[[f32; 3]]) -> Verifier {
         let mut v = Verifier {
             features: SHAPE,
             classes: vec!["a".into(), "b".into()],
@@ -560,26 +363,12 @@ mod tests {
     }
 
     #[test]
-    fn label_bars_raise_only_their_own_label_and_bad_ones_are_refused() {
+    fn label_bars_raise_only_their_own_label() {
         let mut v = constant_verifier(&[[0.0, 0.0, 0.0]]);
         v.label_bars.insert("b".into(), 0.6);
         assert_eq!(v.bar(0, 0.3), 0.3);
         assert_eq!(v.bar(1, 0.3), 0.6);
         // A bar below the common one does not lower it.
         assert_eq!(v.bar(1, 0.7), 0.7);
-        let model = |v: &Verifier| SpottingModel {
-            step: 0.1,
-            models: Vec::new(),
-            verifier: Some(v.clone()),
-        };
-        assert_eq!(model(&v).validate(), Ok(()));
-        let mut unknown = v.clone();
-        unknown.label_bars.insert("zz".into(), 0.5);
-        let e = model(&unknown).validate().unwrap_err();
-        assert!(e.contains("\"zz\"") && e.contains("does not have"), "{e}");
-        let mut broken = v.clone();
-        broken.label_bars.insert("a".into(), f64::NAN);
-        let e = model(&broken).validate().unwrap_err();
-        assert!(e.contains("not a probability"), "{e}");
     }
 }

@@ -1,0 +1,35 @@
+//! The lab: what trains and measures the gesture stage, and what the stage never runs.
+//! Trajectory datasets, the training of every classifier and of the spotting part,
+//! synthetic continuous streams, scoring and evaluation with their pictures, the DTW
+//! baseline, and cutting repetitions out of a recording session for a vocabulary of
+//! one's own.
+//!
+//! Behind the cargo feature `lab` (on by default). The runtime never uses it, so a
+//! build without it (`default-features = false`) leaves out all of this and the
+//! plotting and font code the evaluation's pictures need.
+
+mod augment;
+mod collect;
+mod data;
+mod dtw;
+mod eval;
+mod scoring;
+mod stream;
+mod train;
+
+pub use crate::features::{resample, Resampled};
+pub use collect::{Repetition, RepetitionConfig, RepetitionSegmenter};
+pub use data::{
+    folds_by_subject, labels_of, load_jsonl, load_many, parse_jsonl, DataError, Sample,
+};
+pub use dtw::DtwClassifier;
+pub use eval::{plot_timeline, Confusion, Span};
+pub use scoring::{matched, score, Matching, SpottingScore};
+pub use stream::{
+    build_stream, drawn_in_stream, random_movement, training_stream, StreamConfig, SyntheticStream,
+    TruthGesture,
+};
+pub use train::{
+    calibrate_label_bars, train, ClassifierKind, CrfTrainConfig, HmmTrainConfig, MlpTrainConfig,
+    Progress, TrainConfig, TrainError, BAR_STEPS, CALIBRATION_SEED,
+};

@@ -1,0 +1,70 @@
+//! Training a model's spotting part: the HMMs over stream codes, the verifier and its
+//! per-label bars.
+
+use super::calibrate::calibrate_label_bars;
+use crate::hmm::DiscreteHmm;
+use crate::lab::data::Sample;
+use crate::lab::train::hmm::HmmTrainConfig;
+use crate::model::spotting::{sample_codes, STREAM_SYMBOLS};
+use crate::model::{LabelledHmm, Model, SpottingModel, Verifier};
+use rayon::prelude::*;
+
+/// Seed of the streams the label bars are calibrated on: other streams than the
+/// verifier's (seeds 7…) and the evaluation's (1–3).
+pub const CALIBRATION_SEED: u64 = 101;
+
+impl SpottingModel {
+    /// Trains one banded HMM per label on the stream codes of the samples (each scaled
+    /// so that its larger side is 1), and the verifier, which uses `classifier` (a model
+    /// with the same labels; its spotting part is not used) and has `verifiers`
+    /// networks (at least one); then calibrates the verifier's per-label bars
+    /// ([`calibrate_label_bars`]).
+    pub fn train(
+        samples: &[Sample],
+        classifier: &Model,
+        step: f64,
+        states: usize,
+        verifiers: usize,
+    ) -> Self {
+        let labels = &classifier.labels;
+        let cfg = HmmTrainConfig {
+            states,
+            symbols: STREAM_SYMBOLS,
+            band: 1,
+            iterations: 12,
+            emission_prior: 0.3,
+            transition_prior: 0.5,
+            floor: 1e-3,
+        };
+        let models = labels
+            .par_iter()
+            .map(|l| {
+                let seqs: Vec<Vec<usize>> = samples
+                    .iter()
+                    .filter(|s| &s.label == l)
+                    .map(|s| sample_codes(&s.trajectory(), step))
+                    .filter(|c| !c.is_empty())
+                    .collect();
+                LabelledHmm {
+                    label: l.clone(),
+                    hmm: DiscreteHmm::train(&seqs, &cfg),
+                }
+            })
+            .collect();
+        let mut model = Self {
+            step,
+            models,
+            verifier: None,
+        };
+        // Seed 7 first: a one-network verifier is the one trained before ensembles.
+        let seeds: Vec<u64> = (7..).take(verifiers.max(1)).collect();
+        model.verifier = Some(Verifier::train(samples, classifier, &model, &seeds));
+        let mut whole = classifier.clone();
+        whole.spotting = Some(model.clone());
+        let bars = calibrate_label_bars(&whole, samples, CALIBRATION_SEED, &|_, _| {});
+        if let Some(v) = model.verifier.as_mut() {
+            v.label_bars = bars;
+        }
+        model
+    }
+}
