@@ -44,6 +44,8 @@ pub mod lab;
 pub use bezier::bezier_points;
 pub use body_frame::{skeleton_with_hand, FrameSmoothing};
 pub use model::{Classification, Model, ModelError, ModelSource, MAX_LABEL_BYTES, MODEL_ENV};
-pub use spot::{Candidate, LeeKim, RankBy, SpotError, SpottedGesture, Spotter, SpotterConfig};
+pub use spot::{
+    Candidate, Judgement, RankBy, SettingsError, SpotError, SpottedGesture, Spotter, SpotterConfig,
+};
 pub use tracker::{Hand, HandPoint, HandTracker, TrackerConfig};
 pub use trajectory::{Point, Trajectory};

@@ -10,7 +10,7 @@ use airglyph_gesture::lab::{
 };
 use airglyph_gesture::{Candidate, Model, SpottedGesture, Spotter, SpotterConfig, Trajectory};
 use airglyph_ipc::options;
-use anyhow::bail;
+use anyhow::{bail, Context};
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -106,67 +106,35 @@ impl LabelCount {
     }
 }
 
+/// What the spotter finds in one stream.
 fn run_stream(
     model: &Model,
     scfg: &SpotterConfig,
     points_stream: &SyntheticStream,
     cfg: &StreamConfig,
 ) -> anyhow::Result<Vec<SpottedGesture>> {
-    Ok(run_traced(model, scfg, points_stream, cfg, false)?.0)
-}
-
-/// The spotted gestures and, with `trace`, every candidate the spotter scored.
-fn run_traced(
-    model: &Model,
-    scfg: &SpotterConfig,
-    points_stream: &SyntheticStream,
-    cfg: &StreamConfig,
-    trace: bool,
-) -> anyhow::Result<(Vec<SpottedGesture>, Vec<Candidate>)> {
     let mut sp = Spotter::new(model.clone(), *scfg)?;
-    sp.set_trace(trace);
-    let mut cands = Vec::new();
-    let out = points_stream.spot_traced(&mut sp, cfg, |c| cands.extend(c));
-    Ok((out, cands))
+    Ok(points_stream.spot(&mut sp, cfg))
 }
 
-/// For each drawn gesture: what the classifier says of its true segment, and the
-/// scored candidate closest to it (why it was or was not published).
+/// For each drawn gesture: how the spotter weighs its true segment, and the scored
+/// candidate closest to it (why it was or was not published).
 fn explain(
     stream: usize,
-    model: &Model,
+    spotter: &Spotter,
     s: &SyntheticStream,
     cfg: &StreamConfig,
     spotted: &[SpottedGesture],
     cands: &[Candidate],
 ) {
+    let model = spotter.model();
     let filtered = filtered(s, cfg);
     let mut lines = Vec::new();
     for t in &s.truth {
-        let seg = &filtered[t.start as usize..=t.end as usize];
-        let oracle = model.classify(&Trajectory::from_points(seg.to_vec()));
-        let truth_pg = model
-            .spotting
-            .as_ref()
-            .and_then(|m| m.verifier.as_ref())
-            .map_or(f64::NAN, |v| {
-                use airglyph_gesture::model::VerifierInput;
-                let times = (0..seg.len()).map(|i| i as f32 / cfg.fps).collect();
-                let (s, e) = (t.start as usize, t.end as usize);
-                let input = VerifierInput {
-                    posterior: model
-                        .posterior(&Trajectory::from_points(seg.to_vec()))
-                        .iter()
-                        .map(|&p| p as f32)
-                        .collect(),
-                    ratio: model
-                        .spotting
-                        .as_ref()
-                        .map_or(0.0, |sm| airglyph_gesture::LeeKim::new(sm).ratio(seg)),
-                    ..VerifierInput::cut(&filtered, s, e, times, cfg.fps as f64)
-                };
-                1.0 - v.probs(&input)[0]
-            });
+        let (start, end) = (t.start as usize, t.end as usize);
+        let Some(alone) = spotter.explain(&filtered, start, end, cfg.fps as f64) else {
+            continue;
+        };
         let iou = |c: &Candidate| {
             let lo = c.start_seq.max(t.start);
             let hi = c.end_seq.min(t.end);
@@ -194,7 +162,7 @@ fn explain(
             t.start,
             format!(
                 "drawn   {:>4} {:>6}..{:<6} alone: {} {:.2} p_g {:.2} | {desc} | stream {stream}",
-                t.label, t.start, t.end, model.labels[oracle.class], oracle.score, truth_pg
+                t.label, t.start, t.end, model.labels[alone.class], alone.score, alone.p_gesture
             ),
         ));
     }
@@ -332,7 +300,7 @@ fn evaluate(args: &Args) -> anyhow::Result<Evaluation> {
         speed: args.speed,
         ..StreamConfig::default()
     };
-    let scfg = spotter_config(args.spotter.as_deref())?;
+    let scfg = SpotterConfig::with_overrides(args.spotter.as_deref()).context("--spotter")?;
     let per = args.per_stream;
     let chunks: Vec<(usize, u64, Vec<&Sample>)> = known
         .chunks(per)
@@ -364,10 +332,12 @@ fn evaluate(args: &Args) -> anyhow::Result<Evaluation> {
         .map(|(index, seed, c)| {
             let mut r = ChaCha8Rng::seed_from_u64(*seed);
             let s = build_stream(c, &cfg, &mut r);
-            let traced = args.verbose || args.dump.is_some();
-            let (spotted, cands) = run_traced(&model, &scfg, &s, &cfg, traced)?;
+            let mut spotter = Spotter::new(model.clone(), scfg)?;
+            spotter.set_trace(args.verbose || args.dump.is_some());
+            let mut cands = Vec::new();
+            let spotted = s.spot_traced(&mut spotter, &cfg, |c| cands.extend(c));
             if args.verbose {
-                explain(*index, &model, &s, &cfg, &spotted, &cands);
+                explain(*index, &spotter, &s, &cfg, &spotted, &cands);
             }
             let dumped = if args.dump.is_some() {
                 dump_lines(*index, &model, &s, &cfg, &spotted, &cands)
@@ -527,23 +497,4 @@ fn plot(
     )?;
     eprintln!("wrote {}", path.display());
     Ok(())
-}
-
-/// The default spotter settings with the given JSON fields replaced.
-pub fn spotter_config(json: Option<&str>) -> anyhow::Result<SpotterConfig> {
-    let mut v = serde_json::to_value(SpotterConfig::default())?;
-    if let Some(j) = json {
-        let o: serde_json::Value = serde_json::from_str(j)
-            .map_err(|e| anyhow::anyhow!("--spotter {j:?}: not JSON: {e}"))?;
-        let (Some(dst), Some(src)) = (v.as_object_mut(), o.as_object()) else {
-            bail!("--spotter {j:?}: expected a JSON object");
-        };
-        for (k, x) in src {
-            if !dst.contains_key(k) {
-                bail!("--spotter: unknown setting {k:?}");
-            }
-            dst.insert(k.clone(), x.clone());
-        }
-    }
-    Ok(serde_json::from_value(v)?)
 }

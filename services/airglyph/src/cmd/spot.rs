@@ -4,7 +4,7 @@ use crate::cmd::gesture_json::GestureJson;
 use crate::interrupt::Interrupted;
 use airglyph_core::recording::Recording;
 use airglyph_core::{Joint, Skeleton};
-use airglyph_gesture::{Model, ModelSource, Spotter};
+use airglyph_gesture::{Model, ModelSource, Spotter, SpotterConfig};
 use airglyph_ipc::shutdown;
 use airglyph_pose::{PoseConfig, PoseEstimator};
 use airglyph_synth::drawn_for;
@@ -126,7 +126,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         anyhow::bail!("{}: --truth needs a joints.csv", args.dir.display());
     }
     let model = ModelSource::choose(args.model.as_deref()).load()?;
-    let scfg = crate::cmd::eval_spotting::spotter_config(args.spotter.as_deref())?;
+    let scfg = SpotterConfig::with_overrides(args.spotter.as_deref()).context("--spotter")?;
     let mut spotter = Spotter::new(model, scfg)?;
     spotter.set_trace(args.trace);
     let k = rec.intrinsics();

@@ -98,6 +98,61 @@ impl Default for SpotterConfig {
     }
 }
 
+/// Why spotter settings given as JSON were refused.
+#[derive(Debug, thiserror::Error)]
+pub enum SettingsError {
+    /// The text is not JSON.
+    #[error("{json:?} is not JSON")]
+    NotJson {
+        /// The text given.
+        json: String,
+        /// What the parser said.
+        #[source]
+        source: serde_json::Error,
+    },
+    /// The JSON is not an object of settings.
+    #[error("{json:?} is not a JSON object of settings")]
+    NotAnObject {
+        /// The text given.
+        json: String,
+    },
+    /// A setting the spotter does not have: refused rather than ignored, so that a
+    /// misspelt setting does not silently leave its default in place.
+    #[error("unknown setting {0:?}")]
+    Unknown(String),
+    /// A setting of the wrong kind (text for a number, …).
+    #[error("a setting has the wrong type")]
+    Value(#[source] serde_json::Error),
+}
+
+impl SpotterConfig {
+    /// The default settings with the fields of `overrides`, a JSON object, replaced
+    /// (`{"min_score":0.6}`; `tracker` is replaced whole), or the defaults when there
+    /// are none: how the commands take spotter settings on their command line.
+    pub fn with_overrides(overrides: Option<&str>) -> Result<SpotterConfig, SettingsError> {
+        let mut v = serde_json::to_value(SpotterConfig::default()).map_err(SettingsError::Value)?;
+        if let Some(json) = overrides {
+            let given: serde_json::Value =
+                serde_json::from_str(json).map_err(|source| SettingsError::NotJson {
+                    json: json.to_owned(),
+                    source,
+                })?;
+            let (Some(settings), Some(given)) = (v.as_object_mut(), given.as_object()) else {
+                return Err(SettingsError::NotAnObject {
+                    json: json.to_owned(),
+                });
+            };
+            for (k, x) in given {
+                if !settings.contains_key(k) {
+                    return Err(SettingsError::Unknown(k.clone()));
+                }
+                settings.insert(k.clone(), x.clone());
+            }
+        }
+        serde_json::from_value(v).map_err(SettingsError::Value)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -120,5 +175,32 @@ mod tests {
         v.as_object_mut().unwrap().remove("rank_by");
         let cfg: SpotterConfig = serde_json::from_value(v).unwrap();
         assert_eq!(cfg.rank_by, RankBy::Label);
+    }
+
+    #[test]
+    fn overrides_replace_the_fields_they_name_and_refuse_the_others() {
+        let cfg =
+            SpotterConfig::with_overrides(Some(r#"{"min_score":0.6,"hold_seconds":1}"#)).unwrap();
+        assert_eq!(
+            cfg,
+            SpotterConfig {
+                min_score: 0.6,
+                hold_seconds: 1.0,
+                ..SpotterConfig::default()
+            }
+        );
+        assert_eq!(
+            SpotterConfig::with_overrides(None).unwrap(),
+            SpotterConfig::default()
+        );
+        let refused = |json: &str| {
+            SpotterConfig::with_overrides(Some(json))
+                .unwrap_err()
+                .to_string()
+        };
+        assert_eq!(refused(r#"{"nope":1}"#), r#"unknown setting "nope""#);
+        assert!(refused("[1]").contains("not a JSON object"));
+        assert!(refused("x").contains("not JSON"));
+        assert!(refused(r#"{"min_score":"high"}"#).contains("wrong type"));
     }
 }

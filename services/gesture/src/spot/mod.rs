@@ -23,11 +23,11 @@ mod config;
 mod segmenter;
 mod threshold;
 
-pub use config::{RankBy, SpotterConfig};
+pub use config::{RankBy, SettingsError, SpotterConfig};
 pub(crate) use segmenter::Segmenter;
-pub use threshold::LeeKim;
+pub(crate) use threshold::LeeKim;
 
-use crate::model::verifier::context_steps;
+use crate::model::verifier::{context_steps, VerifierInput};
 use crate::model::Model;
 use crate::tracker::{Hand, HandPoint, HandTracker};
 use crate::trajectory::Trajectory;
@@ -83,6 +83,22 @@ pub struct Candidate {
     /// What candidates are ranked by.
     pub rank: f64,
     pub accepted: bool,
+}
+
+/// The spotter's evidence on one stretch of the hand's path ([`Spotter::explain`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Judgement {
+    /// The classifier's label for the stretch (an index into the model's labels)…
+    pub class: usize,
+    /// …and its confidence.
+    pub score: f64,
+    /// The verifier's probability that the stretch is a whole gesture (1 without a
+    /// verifier)…
+    pub p_gesture: f64,
+    /// …and a whole gesture of the classifier's label.
+    pub p_label: f64,
+    /// Lee & Kim's ratio: the best gesture HMM against the threshold model, per code.
+    pub ratio: f64,
 }
 
 /// The streaming spotter: feed it skeletons (or body-frame points), get gestures.
@@ -202,7 +218,7 @@ impl Spotter {
             self.reset();
             self.hand = hand;
         }
-        let inv = 1.0 / self.cfg.gesture_size.max(1e-3);
+        let inv = self.inverse_size();
         let now = self.seg.next_index();
         self.waiting
             .extend(self.seg.push([p.x * inv, p.y * inv], seq, time_ns));
@@ -256,11 +272,32 @@ impl Spotter {
 
     /// Scores the segment of points s..=e.
     fn score(&mut self, s: usize, e: usize) -> Option<Candidate> {
-        let mut input = self.seg.input(s, e, self.seg.fps())?;
+        let input = self.seg.input(s, e, self.seg.fps())?;
         if !size_ok(&input.segment, &self.cfg) {
             return None;
         }
-        let sm = self.model.spotting.as_ref()?;
+        let j = self.judge(input);
+        let accepted = self.cfg.margin.is_none_or(|m| j.ratio > m)
+            && j.score >= self.cfg.min_score
+            && j.p_gesture >= self.bars.get(j.class).copied().unwrap_or(0.0);
+        Some(Candidate {
+            start: s,
+            end: e,
+            start_seq: self.seg.point(s)?.1,
+            end_seq: self.seg.point(e)?.1,
+            class: j.class,
+            score: j.score,
+            p_gesture: j.p_gesture,
+            p_label: j.p_label,
+            ratio: j.ratio,
+            rank: self.cfg.rank_by.rank(j.p_gesture, j.p_label, j.score),
+            accepted,
+        })
+    }
+
+    /// The evidence on one segment with its context: the classifier's posterior, Lee &
+    /// Kim's ratio, and the verifier, which sees both.
+    fn judge(&self, mut input: VerifierInput) -> Judgement {
         let t = Trajectory::from_points(input.segment.clone());
         let post = self.model.posterior(&t);
         input.posterior = post.iter().map(|&p| p as f32).collect();
@@ -269,27 +306,49 @@ impl Spotter {
         let class = (0..post.len())
             .max_by(|&a, &b| post[a].total_cmp(&post[b]))
             .unwrap_or(0);
-        let (p_gesture, p_label) = sm.verifier.as_ref().map_or((1.0, 1.0), |v| {
+        let verifier = self
+            .model
+            .spotting
+            .as_ref()
+            .and_then(|s| s.verifier.as_ref());
+        let (p_gesture, p_label) = verifier.map_or((1.0, 1.0), |v| {
             let probs = v.probs(&input);
             (1.0 - probs[0], probs.get(class + 1).copied().unwrap_or(0.0))
         });
-        let score = post.get(class).copied().unwrap_or(0.0);
-        let accepted = self.cfg.margin.is_none_or(|m| ratio > m)
-            && score >= self.cfg.min_score
-            && p_gesture >= self.bars.get(class).copied().unwrap_or(0.0);
-        Some(Candidate {
-            start: s,
-            end: e,
-            start_seq: self.seg.point(s)?.1,
-            end_seq: self.seg.point(e)?.1,
+        Judgement {
             class,
-            score,
+            score: post.get(class).copied().unwrap_or(0.0),
             p_gesture,
             p_label,
             ratio,
-            rank: self.cfg.rank_by.rank(p_gesture, p_label, score),
-            accepted,
-        })
+        }
+    }
+
+    /// How the spotter weighs the stretch `path[s..=e]` of a hand's path (body-frame
+    /// points, shoulder widths, one a frame at `fps`), whether or not its breaks would
+    /// cut it there: for tools that ask why a drawn symbol was or was not spotted. The
+    /// same computation as a candidate's, on the same context. None when `s..=e` is not
+    /// a stretch of `path`.
+    pub fn explain(&self, path: &[[f32; 2]], s: usize, e: usize, fps: f64) -> Option<Judgement> {
+        if s > e || e >= path.len() {
+            return None;
+        }
+        // Only the context's reach around the stretch, in gesture sizes, as the
+        // segmenter keeps it.
+        let reach = context_steps(fps);
+        let (from, to) = (s.saturating_sub(reach), (e + reach + 1).min(path.len()));
+        let inv = self.inverse_size();
+        let window: Vec<[f32; 2]> = path[from..to]
+            .iter()
+            .map(|p| [p[0] * inv, p[1] * inv])
+            .collect();
+        let times = (0..=e - s).map(|i| i as f32 / fps as f32).collect();
+        Some(self.judge(VerifierInput::cut(&window, s - from, e - from, times, fps)))
+    }
+
+    /// Gesture sizes a shoulder width: the segmenter's unit.
+    fn inverse_size(&self) -> f32 {
+        1.0 / self.cfg.gesture_size.max(1e-3)
     }
 
     /// Publishes the pending gesture when it has waited long enough.
