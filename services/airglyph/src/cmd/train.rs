@@ -1,7 +1,9 @@
 //! `airglyph train`: trains a gesture model from trajectory JSONL files.
 
 use crate::interrupt::unless_interrupted;
-use airglyph_gesture::lab::{load_many, train, ClassifierKind, TrainConfig};
+use airglyph_gesture::lab::{
+    load_many, recalibrate, retrain_spotting, train, ClassifierKind, TrainConfig,
+};
 use airglyph_gesture::limits;
 use airglyph_gesture::Model;
 use airglyph_ipc::options;
@@ -140,62 +142,18 @@ fn model(args: &Args, cfg: &TrainConfig) -> anyhow::Result<Model> {
     let model = match (&args.reuse_classifier, &args.recalibrate) {
         (None, None) => train(&samples, cfg, &progress)?,
         (_, Some(path)) => {
-            let mut model = reusable(path, &samples)?;
-            let Some(verifier) = model.spotting.as_ref().and_then(|s| s.verifier.as_ref()) else {
-                anyhow::bail!(
-                    "{}: it has no spotting verifier to calibrate; train its spotting part with --reuse-classifier",
-                    path.display()
-                );
-            };
-            let before = verifier.label_bars.clone();
             bar.set_message("calibrating the label bars");
-            let bars = airglyph_gesture::lab::calibrate_label_bars(
-                &model,
-                &samples,
-                airglyph_gesture::lab::CALIBRATION_SEED,
-                &progress,
-            );
-            eprintln!("label bars: {before:?} → {bars:?}");
-            if let Some(v) = model.spotting.as_mut().and_then(|s| s.verifier.as_mut()) {
-                v.label_bars = bars;
-            }
-            model
+            let r = recalibrate(Model::load(path)?, &samples, &progress)
+                .with_context(|| format!("{}: cannot recalibrate it", path.display()))?;
+            eprintln!("label bars: {:?} → {:?}", r.before, r.after());
+            r.model
         }
         (Some(path), None) => {
-            let mut old = reusable(path, &samples)?;
             bar.set_message("spotting");
-            old.spotting = Some(airglyph_gesture::model::SpottingModel::train(
-                &samples,
-                &old,
-                cfg.spotting_step,
-                cfg.spotting_states,
-                cfg.verifiers,
-            ));
-            // The recorded parameters are the classifier's; say what the spotting
-            // part was trained with now.
-            if let Some(p) = old.training.parameters.as_object_mut() {
-                p.insert("spotting_step".into(), cfg.spotting_step.into());
-                p.insert("spotting_states".into(), cfg.spotting_states.into());
-                p.insert("verifiers".into(), cfg.verifiers.into());
-            }
-            old
+            retrain_spotting(Model::load(path)?, &samples, cfg)
+                .with_context(|| format!("{}: cannot reuse it", path.display()))?
         }
     };
     bar.finish_and_clear();
-    Ok(model)
-}
-
-/// A model whose parts are kept: its labels must be the data's.
-fn reusable(
-    path: &std::path::Path,
-    samples: &[airglyph_gesture::lab::Sample],
-) -> anyhow::Result<Model> {
-    let model = Model::load(path)?;
-    if airglyph_gesture::lab::labels_of(samples) != model.labels {
-        anyhow::bail!(
-            "{}: its labels differ from the data's; cannot reuse it",
-            path.display()
-        );
-    }
     Ok(model)
 }

@@ -30,6 +30,7 @@ pub use stream::{
     TruthGesture,
 };
 pub use train::{
-    calibrate_label_bars, train, ClassifierKind, CrfTrainConfig, HmmTrainConfig, MlpTrainConfig,
-    Progress, TrainConfig, TrainError, BAR_STEPS, CALIBRATION_SEED,
+    calibrate_label_bars, recalibrate, retrain_spotting, train, ClassifierKind, CrfTrainConfig,
+    HmmTrainConfig, MlpTrainConfig, Progress, Recalibrated, TrainConfig, TrainError, BAR_STEPS,
+    CALIBRATION_SEED,
 };

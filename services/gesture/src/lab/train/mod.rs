@@ -5,6 +5,7 @@ mod calibrate;
 mod crf;
 mod hmm;
 mod mlp;
+mod reuse;
 mod spotting;
 mod verifier;
 
@@ -12,6 +13,7 @@ pub use calibrate::{calibrate_label_bars, BAR_STEPS};
 pub use crf::CrfTrainConfig;
 pub use hmm::HmmTrainConfig;
 pub use mlp::MlpTrainConfig;
+pub use reuse::{recalibrate, retrain_spotting, Recalibrated};
 pub use spotting::CALIBRATION_SEED;
 
 use crate::bezier::bezier_codes;
@@ -181,6 +183,12 @@ pub enum TrainError {
     OneLabel(String),
     #[error("label {label:?} is {bytes} bytes long; labels are at most {MAX_LABEL_BYTES} bytes (UTF-8), the size of a gesture event's label")]
     LabelTooLong { label: String, bytes: usize },
+    #[error("its labels differ from the data's: {0:?} is in the model, not in the data")]
+    OnlyInModel(String),
+    #[error("its labels differ from the data's: {0:?} is in the data, not in the model")]
+    OnlyInData(String),
+    #[error("it has no spotting verifier to calibrate; train its spotting part first (`airglyph train --reuse-classifier`)")]
+    NoVerifier,
 }
 
 /// Progress of training: (units done, units total).
@@ -326,13 +334,7 @@ pub fn train(
         spotting: None,
     };
     if cfg.spotting {
-        model.spotting = Some(SpottingModel::train(
-            samples,
-            &model,
-            cfg.spotting_step,
-            cfg.spotting_states,
-            cfg.verifiers,
-        ));
+        model.spotting = Some(SpottingModel::train(samples, &model, cfg));
     }
     Ok(model)
 }

@@ -2,6 +2,7 @@
 //! per-label bars.
 
 use super::calibrate::calibrate_label_bars;
+use super::TrainConfig;
 use crate::hmm::DiscreteHmm;
 use crate::lab::data::Sample;
 use crate::lab::train::hmm::HmmTrainConfig;
@@ -15,20 +16,15 @@ pub const CALIBRATION_SEED: u64 = 101;
 
 impl SpottingModel {
     /// Trains one banded HMM per label on the stream codes of the samples (each scaled
-    /// so that its larger side is 1), and the verifier, which uses `classifier` (a model
-    /// with the same labels; its spotting part is not used) and has `verifiers`
-    /// networks (at least one); then calibrates the verifier's per-label bars
-    /// ([`calibrate_label_bars`]).
-    pub fn train(
-        samples: &[Sample],
-        classifier: &Model,
-        step: f64,
-        states: usize,
-        verifiers: usize,
-    ) -> Self {
+    /// so that its larger side is 1; `spotting_step`, `spotting_states` of `train`),
+    /// and the verifier, which uses `classifier` (a model with the same labels; its
+    /// spotting part is not used) and has `train.verifiers` networks (at least one);
+    /// then calibrates the verifier's per-label bars ([`calibrate_label_bars`]).
+    pub fn train(samples: &[Sample], classifier: &Model, train: &TrainConfig) -> Self {
+        let (step, verifiers) = (train.spotting_step, train.verifiers);
         let labels = &classifier.labels;
         let cfg = HmmTrainConfig {
-            states,
+            states: train.spotting_states,
             symbols: STREAM_SYMBOLS,
             band: 1,
             iterations: 12,
