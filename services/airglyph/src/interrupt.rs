@@ -5,15 +5,19 @@
 //! eval-spotting) compute through [`unless_interrupted`]. Either way they say what they
 //! kept, and exit with 128 + the signal ([`Interrupted`]).
 
-use airglyph_ipc::shutdown;
 pub use airglyph_ipc::shutdown::Interrupted;
-use std::sync::mpsc::{self, RecvTimeoutError};
-use std::time::Duration;
+#[cfg(feature = "lab")]
+use {
+    airglyph_ipc::shutdown,
+    std::sync::mpsc::{self, RecvTimeoutError},
+    std::time::Duration,
+};
 
 /// Runs `work` on a thread of its own and waits for it, or for SIGINT/SIGTERM, whichever
 /// comes first. For work that writes nothing until it returns: interrupted, it is left
 /// where it is (the process is about to end, taking the thread with it), and `kept` says
 /// what there is of it.
+#[cfg(feature = "lab")]
 pub fn unless_interrupted<T: Send + 'static>(
     kept: &str,
     work: impl FnOnce() -> T + Send + 'static,

@@ -61,14 +61,19 @@ enum Command {
     Synth(cmd::synth::Args),
     /// Fetch the MakeHuman body for `synth --body makehuman` into the asset cache.
     FetchAssets(cmd::fetch_assets::Args),
+    #[cfg(feature = "lab")]
     Collect(cmd::collect::Args),
+    #[cfg(feature = "lab")]
     /// Train a gesture model from trajectory JSONL files.
     Train(cmd::train::Args),
+    #[cfg(feature = "lab")]
     /// Accuracy, per-class recall and confusion matrices of a gesture model.
     EvalGestures(cmd::eval_gestures::Args),
+    #[cfg(feature = "lab")]
     EvalSpotting(cmd::eval_spotting::Args),
     /// Estimate the skeleton of every frame of a recording.
     Pose(cmd::pose::Args),
+    #[cfg(feature = "lab")]
     /// Pose error against a recording's ground truth (e_m, e_j, within 10 cm, mAP, fps).
     EvalPose(cmd::eval_pose::Args),
     Completions(cmd::completions::Args),
@@ -95,6 +100,16 @@ impl Command {
     /// (`airglyph pose DIR --json | head`). The commands that run stages are not:
     /// when their reader goes they stop their stages and clean up first.
     fn is_filter(&self) -> bool {
+        #[cfg(feature = "lab")]
+        if matches!(
+            self,
+            Command::Train(_)
+                | Command::EvalGestures(_)
+                | Command::EvalSpotting(_)
+                | Command::EvalPose(_)
+        ) {
+            return true;
+        }
         matches!(
             self,
             Command::Spot(_)
@@ -102,11 +117,7 @@ impl Command {
                 | Command::Man(_)
                 | Command::Devices(_)
                 | Command::Synth(_)
-                | Command::Train(_)
-                | Command::EvalGestures(_)
-                | Command::EvalSpotting(_)
                 | Command::Pose(_)
-                | Command::EvalPose(_)
         )
     }
 }
@@ -132,11 +143,16 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Command::Profile(a) => cmd::profile::run(a),
         Command::Synth(a) => cmd::synth::run(a),
         Command::FetchAssets(a) => cmd::fetch_assets::run(a),
+        #[cfg(feature = "lab")]
         Command::Collect(a) => cmd::collect::run(a),
+        #[cfg(feature = "lab")]
         Command::Train(a) => cmd::train::run(a),
+        #[cfg(feature = "lab")]
         Command::EvalGestures(a) => cmd::eval_gestures::run(a),
+        #[cfg(feature = "lab")]
         Command::EvalSpotting(a) => cmd::eval_spotting::run(a),
         Command::Pose(a) => cmd::pose::run(a),
+        #[cfg(feature = "lab")]
         Command::EvalPose(a) => cmd::eval_pose::run(a),
         Command::Completions(a) => cmd::completions::run(a, Cli::command()),
         Command::Man(a) => cmd::man::run(a, Cli::command()),
@@ -227,7 +243,18 @@ mod tests {
                 "5",
             ],
         ];
+        // Commands of the lab, which a build without it does not have.
+        let lab = [
+            "collect",
+            "train",
+            "eval-gestures",
+            "eval-spotting",
+            "eval-pose",
+        ];
         for line in lines {
+            if !cfg!(feature = "lab") && lab.contains(&line[0]) {
+                continue;
+            }
             let argv = std::iter::once("airglyph").chain(line.iter().copied());
             if let Err(e) = Cli::try_parse_from(argv) {
                 panic!("{line:?}: {e}");

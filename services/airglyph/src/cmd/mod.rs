@@ -1,11 +1,16 @@
-//! One module a subcommand: its clap `Args` and a `run(args) -> anyhow::Result<()>`.
+//! One module a subcommand: its clap `Args` and a `run(args) -> anyhow::Result<()>`. The
+//! lab's commands are in a build with the feature `lab` only.
 
+#[cfg(feature = "lab")]
 pub mod collect;
 pub mod completions;
 pub mod demo;
 pub mod devices;
+#[cfg(feature = "lab")]
 pub mod eval_gestures;
+#[cfg(feature = "lab")]
 pub mod eval_pose;
+#[cfg(feature = "lab")]
 pub mod eval_spotting;
 pub mod fetch_assets;
 pub mod gesture_json;
@@ -18,6 +23,7 @@ pub mod snapshot;
 pub mod spot;
 pub mod synth;
 pub mod top;
+#[cfg(feature = "lab")]
 pub mod train;
 
 use airglyph_ipc::GestureEventMsg;

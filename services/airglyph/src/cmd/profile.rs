@@ -3,8 +3,10 @@
 use crate::interrupt::Interrupted;
 use airglyph_capture::SourceSpec;
 use airglyph_ipc::{options, shutdown, LatencyChain, Pipeline, Stage, StageStatsMsg};
+#[cfg(feature = "lab")]
 use airglyph_plot::PlotError;
 use anyhow::Context;
+#[cfg(feature = "lab")]
 use plotters::prelude::*;
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -14,7 +16,7 @@ use std::time::{Duration, Instant};
 /// Profile the pipeline: for each stage, p50/p90/p99/max of its processing time and of
 /// the time frames wait for it; end-to-end capture→skeleton and capture→gesture-decision
 /// latency; drops. Writes profile.json, summary.csv, frames.csv (one row a frame) and a
-/// latency histogram PNG per measure into OUT.
+/// latency histogram PNG per measure into OUT (in a build with plots, the feature `lab`).
 ///
 /// Attaches to the running pipeline, or with --source starts one first.
 #[derive(clap::Args, Debug)]
@@ -223,8 +225,13 @@ fn measure(args: &Args) -> anyhow::Result<()> {
         eprintln!("report in {}", args.out.display());
     }
     // The pictures last: one that fails loses none of the figures written above.
+    #[cfg(feature = "lab")]
     for (name, v) in &measured {
         histogram_png(&args.out.join(format!("{name}.png")), name, v)?;
+    }
+    #[cfg(not(feature = "lab"))]
+    if !args.json {
+        eprintln!("no histograms: this build has no plots (the feature `lab`)");
     }
     if shutdown::requested() {
         return Err(Interrupted::new(format!(
@@ -256,6 +263,7 @@ fn write_frames_csv(path: &Path, frames: &BTreeMap<(u64, u64), FrameTimes>) -> a
     Ok(())
 }
 
+#[cfg(feature = "lab")]
 fn histogram_png(path: &Path, title: &str, sorted_ns: &[u64]) -> Result<(), PlotError> {
     let ms: Vec<f64> = sorted_ns.iter().map(|&n| n as f64 * 1e-6).collect();
     let hi = quantile(sorted_ns, 0.999).max(0.01) * 1.05;
