@@ -3,10 +3,9 @@
 //! person draws.
 //!
 //! A skeleton's own frame is not steady enough. An estimated chest turns a little with
-//! the drawing arm (the pose stage fits the torso and the arm together: about 2° per
-//! shoulder width the hand moves), and a frame that turns with the hand squeezes the
-//! hand's path along the way it moves: on the demo's 36 symbols the strokes came out
-//! 10 % taller for their width than drawn, enough to read a "5" as an "S". A person
+//! the drawing arm (the pose stage fits the torso and the arm together), and a frame
+//! that turns with the hand squeezes the hand's path along the way it moves, enough to
+//! read a "5" as an "S" (README, "Why the body frame is held steady"). A person
 //! drawing does not turn or walk, so the frame is smoothed with a time constant longer
 //! than a symbol. A real turn or step is not a wobble of a few degrees or centimetres:
 //! the further the skeleton's frame is from the smoothed one, the faster the smoothed

@@ -7,15 +7,20 @@
 
 use serde::{Deserialize, Serialize};
 
+/// A trained CRF: its sizes and weights.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Crf {
+    /// Classes.
     pub labels: usize,
+    /// Direction codes it reads (8, or 9 with the resting code).
     pub symbols: usize,
+    /// Parts of a sequence with weights of their own for the code at t.
     pub time_bins: usize,
     /// features × labels, row-major.
     pub w_obs: Vec<f64>,
     /// labels × labels (from, to).
     pub w_trans: Vec<f64>,
+    /// One a label, for the first position.
     pub w_start: Vec<f64>,
 }
 
@@ -27,6 +32,8 @@ impl Crf {
             .saturating_add(time_bins.saturating_mul(symbols))
     }
 
+    /// Checks sizes within [`crate::limits`], weights that match them and are finite: a
+    /// model file is not trusted.
     pub fn validate(&self) -> Result<(), String> {
         use crate::limits::{product, within, MAX_LABELS, MAX_SYMBOLS, MAX_TIME_BINS};
         if self.labels == 0 || self.symbols == 0 {

@@ -9,7 +9,9 @@ use serde::{Deserialize, Serialize};
 /// and divided by its larger side (aspect ratio kept).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Resampled {
+    /// The points, normalized.
     pub points: Vec<[f32; 2]>,
+    /// For each point, whether the path reached it by pen-up travel.
     pub pen_up: Vec<bool>,
     /// Height / width of the bounding box before normalization (clamped).
     pub aspect: f32,

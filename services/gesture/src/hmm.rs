@@ -8,16 +8,22 @@ use serde::{Deserialize, Serialize};
 /// `b[i][k]`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct DiscreteHmm {
+    /// Initial state distribution.
     pub pi: Vec<f64>,
+    /// Transition probabilities, from state i (row) to j.
     pub a: Vec<Vec<f64>>,
+    /// Emission probabilities of each symbol (column) in state i.
     pub b: Vec<Vec<f64>>,
 }
 
 /// The HMM with logarithms precomputed, for fast decoding.
 #[derive(Debug, Clone)]
 pub struct LogHmm {
+    /// States.
     pub n: usize,
+    /// Symbols.
     pub m: usize,
+    /// ln of the initial distribution (−∞ where it is 0).
     pub log_pi: Vec<f64>,
     /// Row-major n×n.
     pub log_a: Vec<f64>,
@@ -26,10 +32,12 @@ pub struct LogHmm {
 }
 
 impl DiscreteHmm {
+    /// The number of states.
     pub fn n_states(&self) -> usize {
         self.pi.len()
     }
 
+    /// The number of symbols it emits.
     pub fn n_symbols(&self) -> usize {
         self.b.first().map_or(0, |r| r.len())
     }
@@ -83,6 +91,7 @@ impl DiscreteHmm {
         Ok(())
     }
 
+    /// The model in logarithms, to decode with.
     pub fn to_log(&self) -> LogHmm {
         let n = self.n_states();
         let m = self.n_symbols();

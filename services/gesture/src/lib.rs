@@ -5,7 +5,7 @@
 //! ([`Spotter`], with a Lee & Kim threshold model and a verifier network). No IPC here:
 //! deterministic given a seed.
 //!
-//! What the stage runs on the device is this crate without its [`lab`] (training,
+//! What the stage runs on the device is this crate without its module `lab` (training,
 //! evaluation and its plots, synthetic streams, datasets), which sits behind the cargo
 //! feature `lab`, on by default: the runtime never uses the lab, so a build without
 //! the feature links no plotting or font code.
@@ -23,6 +23,7 @@
 //! # Ok(()) }
 //! ```
 
+#![warn(missing_docs)]
 // Numeric code indexes several arrays with one index; iterators would obscure it.
 #![allow(clippy::needless_range_loop)]
 

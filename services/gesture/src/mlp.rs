@@ -1,28 +1,37 @@
 //! A small multilayer perceptron (ReLU hidden layers, softmax output): what a model file
 //! holds of it and its forward pass. Its training (mini-batch SGD) is the lab's
-//! (`lab::train`).
-//! Plain `f32` loops: a forward pass over a few hundred inputs takes microseconds.
+//! (`lab::train`). Plain `f32` loops: a forward pass over a few hundred inputs takes
+//! microseconds.
 
 use serde::{Deserialize, Serialize};
 
+/// One fully connected layer.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Layer {
+    /// Its inputs (the previous layer's outputs)…
     pub inputs: usize,
+    /// …and outputs.
     pub outputs: usize,
     /// Row-major outputs × inputs.
     pub w: Vec<f32>,
+    /// One an output.
     pub b: Vec<f32>,
 }
 
+/// A trained network.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct Mlp {
     /// Input standardization: x' = (x − mean) / std.
     pub mean: Vec<f32>,
+    /// See `mean`.
     pub std: Vec<f32>,
+    /// From the input on; ReLU between them, softmax after the last.
     pub layers: Vec<Layer>,
 }
 
 impl Mlp {
+    /// Checks sizes within [`crate::limits`], layers that fit together and finite
+    /// weights: a model file is not trusted.
     pub fn validate(&self) -> Result<(), String> {
         use crate::limits::{product, within, MAX_LAYERS, MAX_UNITS};
         let Some(first) = self.layers.first() else {
@@ -62,10 +71,12 @@ impl Mlp {
         Ok(())
     }
 
+    /// The size of its input.
     pub fn inputs(&self) -> usize {
         self.layers.first().map_or(0, |l| l.inputs)
     }
 
+    /// The number of classes it tells apart.
     pub fn outputs(&self) -> usize {
         self.layers.last().map_or(0, |l| l.outputs)
     }
@@ -120,6 +131,7 @@ fn dot(a: &[f32], b: &[f32]) -> f32 {
     t
 }
 
+/// Turns scores into log-probabilities, in place.
 pub fn log_softmax(z: &mut [f32]) {
     let m = z.iter().cloned().fold(f32::NEG_INFINITY, f32::max);
     let s: f32 = z.iter().map(|v| (v - m).exp()).sum();

@@ -14,11 +14,14 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Hand {
+    /// The person's left.
     Left,
+    /// The person's right.
     Right,
 }
 
 impl Hand {
+    /// Its name in JSON and in logs: "left" or "right".
     pub fn name(self) -> &'static str {
         match self {
             Hand::Left => "left",
@@ -31,9 +34,12 @@ impl Hand {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct TrackerConfig {
-    /// One Euro parameters for body-frame coordinates (shoulder widths).
+    /// One Euro parameters for body-frame coordinates (shoulder widths): the cut-off
+    /// of a still hand (Hz)…
     pub min_cutoff: f64,
+    /// …how fast it rises with the hand's speed…
     pub beta: f64,
+    /// …and the cut-off of the speed's own filter (Hz).
     pub d_cutoff: f64,
     /// Joints below this confidence make the frame unusable.
     pub min_confidence: f32,
@@ -41,6 +47,7 @@ pub struct TrackerConfig {
     pub hand: Option<Hand>,
     /// The other hand must lead by this much (metres) for this many frames to switch.
     pub switch_margin: f32,
+    /// See `switch_margin`.
     pub switch_frames: u32,
     /// How the body frame is held steady while the person draws.
     pub frame: FrameSmoothing,
@@ -78,9 +85,13 @@ impl Default for TrackerConfig {
 /// front of the shoulders (towards where the person faces, shoulder widths, unfiltered).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HandPoint {
+    /// Towards the person's right shoulder…
     pub x: f32,
+    /// …and down the spine, filtered.
     pub y: f32,
+    /// In front of the shoulders, unfiltered.
     pub forward: f32,
+    /// The hand it is.
     pub hand: Hand,
 }
 
@@ -95,6 +106,7 @@ pub struct HandTracker {
 }
 
 impl HandTracker {
+    /// A tracker that has seen nothing yet; it starts with `cfg.hand`, or the right.
     pub fn new(cfg: TrackerConfig) -> Self {
         Self {
             hand: cfg.hand.unwrap_or(Hand::Right),
@@ -105,10 +117,13 @@ impl HandTracker {
         }
     }
 
+    /// The hand it follows now.
     pub fn hand(&self) -> Hand {
         self.hand
     }
 
+    /// Forgets the person (the filter's and the body frame's state); the hand it
+    /// follows stays.
     pub fn reset(&mut self) {
         self.filter.reset();
         self.lead = 0;

@@ -9,6 +9,7 @@ pub type Point = [f32; 2];
 /// `false` for every point of a continuous hand trajectory).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Trajectory {
+    /// The points, in the order drawn.
     pub points: Vec<Point>,
     /// `pen_up[i]` is true when the segment ending at point `i` is travel between strokes.
     pub pen_up: Vec<bool>,
@@ -33,10 +34,12 @@ impl Trajectory {
         t
     }
 
+    /// The number of points.
     pub fn len(&self) -> usize {
         self.points.len()
     }
 
+    /// Whether it has no point.
     pub fn is_empty(&self) -> bool {
         self.points.is_empty()
     }

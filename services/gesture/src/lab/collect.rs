@@ -25,8 +25,11 @@ pub struct RepetitionConfig {
     pub min_forward: f32,
     /// Smallest drawing (larger side, shoulder widths) and its duration range.
     pub min_size: f32,
+    /// See `min_size`.
     pub min_seconds: f64,
+    /// See `min_size`.
     pub max_seconds: f64,
+    /// How the drawing hand is followed.
     pub tracker: TrackerConfig,
 }
 
@@ -48,8 +51,11 @@ impl Default for RepetitionConfig {
 /// with the time of each point in milliseconds from its start, and the frames it spans.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Repetition {
+    /// x, y (shoulder widths) and t (ms) of each point.
     pub points: Vec<[f32; 3]>,
+    /// The frame sequence numbers of its first and last point.
     pub start_seq: u64,
+    /// See `start_seq`.
     pub end_seq: u64,
 }
 
@@ -67,6 +73,7 @@ pub struct RepetitionSegmenter {
 }
 
 impl RepetitionSegmenter {
+    /// A segmenter that has seen nothing yet: the hand rests.
     pub fn new(cfg: RepetitionConfig) -> Self {
         Self {
             tracker: HandTracker::new(cfg.tracker),

@@ -14,12 +14,17 @@ use crate::trajectory::{Point, Trajectory};
 /// One labelled gesture sample.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Sample {
+    /// What it is.
     pub label: String,
+    /// Who drew it ("" when the data does not say); folds keep a writer's samples
+    /// together.
     pub subject: String,
+    /// Pen-down ink, one list of points a stroke.
     pub strokes: Vec<Vec<Point>>,
 }
 
 impl Sample {
+    /// The strokes joined by the hand's travel between them.
     pub fn trajectory(&self) -> Trajectory {
         Trajectory::from_strokes(&self.strokes)
     }
@@ -29,26 +34,41 @@ impl Sample {
 #[derive(Debug, thiserror::Error)]
 pub enum DataError {
     // The reason is the source, which error reports print after this (`{:#}`).
+    /// The file could not be read.
     #[error("{path}: cannot read")]
     Io {
+        /// The file.
         path: PathBuf,
+        /// Why.
         #[source]
         source: std::io::Error,
     },
+    /// A line is not JSON of a sample's shape.
     #[error("{path}:{line}: not a trajectory JSON object: {msg}")]
     Json {
+        /// The file.
         path: PathBuf,
+        /// The line, from 1.
         line: usize,
+        /// What the parser said.
         msg: String,
     },
+    /// A sample without a label or strokes, or with a point that is not one.
     #[error("{path}:{line}: {msg}")]
     Invalid {
+        /// The file.
         path: PathBuf,
+        /// The line, from 1.
         line: usize,
+        /// What is wrong.
         msg: String,
     },
+    /// A file without a sample.
     #[error("{path}: no samples")]
-    Empty { path: PathBuf },
+    Empty {
+        /// The file.
+        path: PathBuf,
+    },
 }
 
 #[derive(Deserialize)]

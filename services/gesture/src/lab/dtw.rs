@@ -7,13 +7,16 @@ use crate::trajectory::Trajectory;
 /// Templates: resampled, normalized point sequences with their class index.
 #[derive(Debug, Clone, Default)]
 pub struct DtwClassifier {
+    /// Points every trajectory is resampled to.
     pub points: usize,
     /// Sakoe–Chiba band half-width in samples.
     pub band: usize,
+    /// Every training sample, resampled, with its class.
     pub templates: Vec<(Vec<[f32; 2]>, usize)>,
 }
 
 impl DtwClassifier {
+    /// A classifier without templates yet.
     pub fn new(points: usize, band: usize) -> Self {
         Self {
             points,
@@ -22,6 +25,7 @@ impl DtwClassifier {
         }
     }
 
+    /// Adds a training sample of class `class`.
     pub fn add(&mut self, t: &Trajectory, class: usize) {
         self.templates
             .push((resample(t, self.points).points, class));

@@ -8,11 +8,14 @@ use std::path::Path;
 /// A confusion matrix: `m[truth][predicted]`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Confusion {
+    /// The labels, in the order of the rows and columns.
     pub labels: Vec<String>,
+    /// The counts.
     pub m: Vec<Vec<u32>>,
 }
 
 impl Confusion {
+    /// A matrix of zeros over `labels`.
     pub fn new(labels: Vec<String>) -> Self {
         let n = labels.len();
         Self {
@@ -21,20 +24,24 @@ impl Confusion {
         }
     }
 
+    /// Counts one decision (indices out of range are left out).
     pub fn add(&mut self, truth: usize, predicted: usize) {
         if truth < self.m.len() && predicted < self.m.len() {
             self.m[truth][predicted] += 1;
         }
     }
 
+    /// Decisions counted.
     pub fn total(&self) -> u64 {
         self.m.iter().flatten().map(|&v| v as u64).sum()
     }
 
+    /// Decisions right.
     pub fn correct(&self) -> u64 {
         (0..self.m.len()).map(|i| self.m[i][i] as u64).sum()
     }
 
+    /// The fraction right (0 with no decision).
     pub fn accuracy(&self) -> f64 {
         self.correct() as f64 / self.total().max(1) as f64
     }
@@ -127,8 +134,11 @@ impl Confusion {
 /// A labelled frame interval on a stream timeline.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Span {
+    /// What it is.
     pub label: String,
+    /// Its first frame…
     pub start: u64,
+    /// …and its last.
     pub end: u64,
 }
 

@@ -7,15 +7,22 @@ use serde::Serialize;
 /// Spotting result counts.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct SpottingScore {
+    /// Drawn gestures…
     pub gestures: usize,
+    /// …spotted with their label…
     pub correct: usize,
+    /// …spotted with another…
     pub substitutions: usize,
+    /// …or not at all.
     pub deletions: usize,
+    /// Spotted gestures that match none drawn.
     pub insertions: usize,
+    /// correct / (gestures + insertions).
     pub reliability: f64,
 }
 
 impl SpottingScore {
+    /// Adds another stream's counts.
     pub fn add(&mut self, o: &SpottingScore) {
         self.gestures += o.gestures;
         self.correct += o.correct;
@@ -35,6 +42,7 @@ pub fn score(truth: &[TruthGesture], spotted: &[SpottedGesture]) -> SpottingScor
 /// How a stream's spotted gestures matched its drawn ones.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Matching {
+    /// The counts.
     pub score: SpottingScore,
     /// For each drawn gesture, whether it was spotted with its own label.
     pub correct: Vec<bool>,

@@ -31,6 +31,7 @@ use serde::Serialize;
 /// How streams are made.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StreamConfig {
+    /// Frames a second.
     pub fps: f32,
     /// Mean hand speed while drawing, shoulder widths per second (each gesture ×0.75–1.3).
     pub speed: f32,
@@ -75,21 +76,29 @@ impl Default for StreamConfig {
 /// A drawn gesture in a stream: its label and its first and last frame.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct TruthGesture {
+    /// The sample's label.
     pub label: String,
     /// Who wrote the sample drawn here (the data's subject).
     pub subject: String,
+    /// Its first frame…
     pub start: u64,
+    /// …and its last.
     pub end: u64,
 }
 
 /// A stream: body-frame hand points, one a frame, and what was drawn where.
 #[derive(Debug, Clone, Default)]
 pub struct SyntheticStream {
+    /// The hand, one point a frame (shoulder widths, body frame).
     pub points: Vec<[f32; 2]>,
+    /// What was drawn, in order.
     pub truth: Vec<TruthGesture>,
 }
 
 impl SyntheticStream {
+    /// The skeleton of a person at `distance` metres whose right hand is at frame
+    /// `frame`'s point: what the spotter is fed, so that the hand tracker is part of
+    /// what is measured.
     pub fn skeleton(&self, frame: usize, distance: f32) -> Skeleton {
         let p = self.points[frame];
         skeleton_with_hand(p[0], p[1], distance)

@@ -35,30 +35,63 @@ pub const MAX_LABEL_BYTES: usize = airglyph_ipc::wire::LABEL_CAPACITY;
 #[derive(Debug, thiserror::Error)]
 pub enum ModelError {
     // The reason is the source, which error reports print after this (`{:#}`).
+    /// The file could not be read.
     #[error("{path}: cannot read model")]
     Io {
+        /// The file.
         path: PathBuf,
+        /// Why.
         #[source]
         source: std::io::Error,
     },
+    /// Not JSON, or not JSON of a model's shape.
     #[error("{path}: not a model JSON file: {msg}")]
-    Json { path: PathBuf, msg: String },
+    Json {
+        /// The file.
+        path: PathBuf,
+        /// What the parser said.
+        msg: String,
+    },
+    /// JSON of something else.
     #[error("{path}: not an airglyph gesture model (format {found:?}, expected {MODEL_FORMAT:?})")]
-    Format { path: PathBuf, found: String },
+    Format {
+        /// The file.
+        path: PathBuf,
+        /// Its `format`.
+        found: String,
+    },
+    /// A model of another version.
     #[error("{path}: model file version {found} is not supported (this build reads version {MODEL_VERSION}); retrain it with `airglyph train`")]
-    Version { path: PathBuf, found: String },
+    Version {
+        /// The file.
+        path: PathBuf,
+        /// Its `version`.
+        found: String,
+    },
+    /// A model whose parts do not fit together or exceed the limits.
     #[error("{path}: invalid model: {msg}")]
-    Invalid { path: PathBuf, msg: String },
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        msg: String,
+    },
 }
 
 /// The training parameters recorded inside a model.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TrainingInfo {
+    /// The classifier's name (`hmm`, `crf`, `mlp`).
     pub classifier: String,
+    /// Bezier points of the seed's descriptor (what `hmm` and `crf` read).
     pub bezier_points: usize,
+    /// Samples trained on…
     pub samples: usize,
+    /// …and their writers.
     pub subjects: usize,
+    /// The data files' names.
     pub data: Vec<String>,
+    /// The training seed.
     pub seed: u64,
     /// Everything else (state counts, epochs, learning rate, …) as JSON.
     pub parameters: serde_json::Value,
@@ -67,7 +100,9 @@ pub struct TrainingInfo {
 /// One HMM per label.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct LabelledHmm {
+    /// The label it models…
     pub label: String,
+    /// …and the model.
     pub hmm: DiscreteHmm,
 }
 
@@ -78,32 +113,41 @@ pub enum Classifier {
     /// The seed's pipeline: Bezier points, 8 direction codes, one banded discrete HMM per
     /// label, decision by Viterbi.
     Hmm {
+        /// Bezier points of the descriptor.
         bezier_points: usize,
         /// Resting code threshold (fraction of the diagonal; 0 = no resting code).
         zero_frac: f64,
+        /// One a label.
         models: Vec<LabelledHmm>,
+        /// The models in logarithms, made on first use (not in the file).
         #[serde(skip)]
         cache: OnceLock<Vec<LogHmm>>,
     },
     /// A linear-chain CRF over the same codes.
     Crf {
+        /// Bezier points of the descriptor.
         bezier_points: usize,
+        /// Resting code threshold, as the HMMs'.
         zero_frac: f64,
         /// Label of each CRF class, in order.
         classes: Vec<String>,
+        /// The CRF.
         crf: Crf,
     },
     /// The default: an ensemble of small neural networks over resampled trajectory
     /// features (positions, directions, pen-up) and 8-direction feature maps.
     Mlp {
+        /// What the networks see of a trajectory.
         features: FeatureConfig,
         /// Label of each network output, in order.
         classes: Vec<String>,
+        /// The ensemble, whose probabilities are averaged.
         nets: Vec<Mlp>,
     },
 }
 
 impl Classifier {
+    /// Its name in model files and on the command line: `hmm`, `crf` or `mlp`.
     pub fn name(&self) -> &'static str {
         match self {
             Classifier::Hmm { .. } => "hmm",
@@ -116,11 +160,15 @@ impl Classifier {
 /// A trained gesture model.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Model {
+    /// [`MODEL_FORMAT`].
     pub format: String,
+    /// [`MODEL_VERSION`].
     pub version: u32,
     /// The vocabulary: any strings, unique.
     pub labels: Vec<String>,
+    /// How it was trained.
     pub training: TrainingInfo,
+    /// What names a whole trajectory.
     pub classifier: Classifier,
     /// HMMs over the stream's direction codes for spotting (absent: no spotting).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -179,6 +227,7 @@ impl Model {
         Ok(model)
     }
 
+    /// The model file's text.
     pub fn to_json(&self) -> String {
         serde_json::to_string(self).unwrap_or_default()
     }

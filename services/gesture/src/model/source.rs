@@ -33,6 +33,7 @@ impl ModelSource {
         named.map_or(ModelSource::Shipped, ModelSource::File)
     }
 
+    /// Reads and validates the model.
     pub fn load(&self) -> Result<Model, ModelError> {
         match self {
             ModelSource::File(path) => Model::load(path),

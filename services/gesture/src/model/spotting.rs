@@ -11,6 +11,7 @@ use serde::{Deserialize, Serialize};
 pub struct SpottingModel {
     /// Chord step as a fraction of the gesture's larger side.
     pub step: f64,
+    /// One a label.
     pub models: Vec<LabelledHmm>,
     /// Judge of candidate segments: not a gesture, or a whole gesture of which label.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -18,6 +19,8 @@ pub struct SpottingModel {
 }
 
 impl SpottingModel {
+    /// Checks the step, the HMMs' shapes and the verifier's sizes, networks and bars: a
+    /// model file is not trusted.
     pub fn validate(&self) -> Result<(), String> {
         if !(self.step > 0.0 && self.step < 1.0) {
             return Err(format!("spotting step {} is not in (0, 1)", self.step));

@@ -69,15 +69,18 @@ pub fn context(
 /// before and just after it (nearest first), all in gesture-size units.
 #[derive(Debug, Clone, PartialEq)]
 pub struct VerifierInput {
+    /// The segment's points.
     pub segment: Vec<[f32; 2]>,
     /// When the hand was at each point of `segment`, seconds from its first.
     pub times: Vec<f32>,
+    /// Where the hand was before the segment (`context`)…
     pub before: [[f32; 2]; CONTEXT_POINTS],
+    /// …and after it.
     pub after: [[f32; 2]; CONTEXT_POINTS],
     /// The classifier's posterior of the segment (model label order), when the
     /// verifier uses it.
     pub posterior: Vec<f32>,
-    /// Lee & Kim's ratio of the segment ([`LeeKim::ratio`]).
+    /// Lee & Kim's ratio of the segment (Lee & Kim's threshold model, in the spotter).
     pub ratio: f64,
 }
 
@@ -108,6 +111,7 @@ impl VerifierInput {
 /// gesture of label L".
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Verifier {
+    /// What it sees of the segment's shape.
     pub features: FeatureConfig,
     /// Labels of outputs 1…; output 0 is "not a whole gesture".
     pub classes: Vec<String>,
@@ -124,7 +128,7 @@ pub struct Verifier {
     /// Labels whose whole-gesture probability must reach more than
     /// [`Verifier::min_gesture_prob`]: those ordinary movement passes for often (a
     /// straight reach for a "1"), calibrated on streams of the training samples
-    /// ([`super::calibrate_label_bars`]). Empty in models trained before.
+    /// (`lab::calibrate_label_bars`). Empty in models trained before.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub label_bars: BTreeMap<String, f64>,
 }

@@ -39,14 +39,17 @@ pub struct SpotterConfig {
     pub min_window: usize,
     /// …below this fraction of the fastest speed of the last `peak_seconds`.
     pub break_ratio: f32,
+    /// See `break_ratio`.
     pub peak_seconds: f64,
     /// Below this speed (gesture sizes a second) the hand is at rest.
     pub rest_speed: f32,
     /// Shortest and longest gesture, seconds.
     pub min_seconds: f64,
+    /// See `min_seconds`.
     pub max_seconds: f64,
     /// Smallest and largest gesture (larger side), in gesture sizes.
     pub min_size: f32,
+    /// See `min_size`.
     pub max_size: f32,
     /// Lee & Kim as a hard test: the best gesture HMM must beat the threshold model
     /// by this log-likelihood margin per code (None: the ratio is only evidence for
@@ -55,16 +58,19 @@ pub struct SpotterConfig {
     /// Smallest classifier confidence to publish a gesture.
     pub min_score: f64,
     /// Smallest verifier probability that the segment is a whole gesture (None: the
-    /// verifier's own, [`Verifier::min_gesture_prob`]).
+    /// verifier's own, [`crate::model::Verifier::min_gesture_prob`]).
     pub min_gesture_prob: Option<f64>,
     /// Whether the labels the model's calibration found ordinary movement passing for
-    /// must reach their higher bars ([`Verifier::label_bars`]).
+    /// must reach their higher bars ([`crate::model::Verifier::label_bars`]).
     pub label_bars: bool,
     /// How long after a candidate's end to wait for a longer, better one (seconds);
     /// a rest of `rest_seconds` after it decides at once.
     pub hold_seconds: f64,
+    /// See `hold_seconds`.
     pub rest_seconds: f64,
+    /// What overlapping candidates are ranked by.
     pub rank_by: RankBy,
+    /// How the drawing hand is followed.
     pub tracker: TrackerConfig,
 }
 
@@ -84,12 +90,9 @@ impl Default for SpotterConfig {
             min_score: 0.5,
             min_gesture_prob: None,
             label_bars: true,
-            // Held-out writers in synthetic streams, seeds 1–3, at 1.5 s and at 2.5 s:
-            // digits 89.7, 91.1, 88.5 and 90.1, 91.1, 89.7 %; uppercase 81.6, 82.4, 83.2
-            // and 84.7, 85.8, 85.9 %; all 36 78.0, 78.9, 76.8 and 81.5, 80.8, 80.8 %
-            // (fewer substitutions and insertions: a better candidate overlapping the
-            // pending one may end more than 1.5 s after it). 3 s is no better (digits,
-            // uppercase).
+            // Not 1.5 s: a better candidate overlapping the pending one may end more than
+            // 1.5 s after it (fewer substitutions and insertions); 3 s is no better
+            // (NOTES.md, the hold).
             hold_seconds: 2.5,
             rest_seconds: 0.4,
             rank_by: RankBy::default(),

@@ -44,21 +44,28 @@ pub(crate) fn size_ok(pts: &[[f32; 2]], cfg: &SpotterConfig) -> bool {
 /// A gesture found in the stream.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SpottedGesture {
+    /// Its label…
     pub label: String,
     /// Index into the model's labels.
     pub class: usize,
     /// The classifier's confidence in [0, 1].
     pub score: f64,
+    /// The frame sequence numbers of its first and last point…
     pub start_seq: u64,
+    /// See `start_seq`.
     pub end_seq: u64,
+    /// …and their times, as given to [`Spotter::push`].
     pub start_ns: u64,
+    /// See `start_ns`.
     pub end_ns: u64,
+    /// The hand that drew it.
     pub hand: Hand,
 }
 
 /// Why a spotter cannot be built.
 #[derive(Debug, thiserror::Error)]
 pub enum SpotError {
+    /// The model can classify but not spot: it was trained without its spotting part.
     #[error("the model has no spotting HMMs (train it with `airglyph train`, which adds them)")]
     NoSpottingModel,
 }
@@ -66,11 +73,15 @@ pub enum SpotError {
 /// A scored segment of the stream (point indices, inclusive).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Candidate {
+    /// Its first point…
     pub start: usize,
+    /// …and its last, numbered from the stream's first.
     pub end: usize,
     /// Frame sequence numbers of `start` and `end`.
     pub start_seq: u64,
+    /// See `start_seq`.
     pub end_seq: u64,
+    /// The classifier's label (an index into the model's labels).
     pub class: usize,
     /// Classifier confidence.
     pub score: f64,
@@ -82,6 +93,7 @@ pub struct Candidate {
     pub ratio: f64,
     /// What candidates are ranked by.
     pub rank: f64,
+    /// Whether it passed every test and may be published.
     pub accepted: bool,
 }
 
@@ -103,7 +115,7 @@ pub struct Judgement {
 
 /// The streaming spotter: feed it skeletons (or body-frame points), get gestures.
 ///
-/// The [`Segmenter`] cuts the hand's path where a gesture may start or end. Every
+/// The segmenter cuts the hand's path where a gesture may start or end. Every
 /// stretch between two such breaks that is long and large enough to be a gesture is a
 /// candidate; it is accepted when the best gesture HMM beats the threshold model on its
 /// direction codes (Lee & Kim), the verifier network calls it a whole gesture, and the
@@ -128,6 +140,7 @@ pub struct Spotter {
 }
 
 impl Spotter {
+    /// A spotter over `model`'s spotting part, which it must have.
     pub fn new(model: Model, cfg: SpotterConfig) -> Result<Spotter, SpotError> {
         let sm = model.spotting.as_ref().ok_or(SpotError::NoSpottingModel)?;
         let lee_kim = LeeKim::new(sm);
@@ -160,10 +173,12 @@ impl Spotter {
         })
     }
 
+    /// The model it spots with.
     pub fn model(&self) -> &Model {
         &self.model
     }
 
+    /// Its settings.
     pub fn config(&self) -> &SpotterConfig {
         &self.cfg
     }

@@ -5,10 +5,14 @@ use crate::crf::Crf;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+/// CRF training settings.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct CrfTrainConfig {
+    /// Weight of the L2 penalty on the weights.
     pub l2: f64,
+    /// L-BFGS iterations.
     pub iterations: usize,
+    /// Parts of a sequence with weights of their own ([`Crf::time_bins`]).
     pub time_bins: usize,
 }
 

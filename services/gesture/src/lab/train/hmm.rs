@@ -8,10 +8,13 @@ use serde::{Deserialize, Serialize};
 /// Baum–Welch settings.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct HmmTrainConfig {
+    /// States of each model.
     pub states: usize,
+    /// Symbols it emits.
     pub symbols: usize,
     /// Allowed forward jumps: 1 = stay or move to the next state.
     pub band: usize,
+    /// Baum–Welch iterations after the uniform segmentation.
     pub iterations: usize,
     /// Dirichlet pseudo-count added to every emission of every state.
     pub emission_prior: f64,
@@ -52,8 +55,8 @@ impl DiscreteHmm {
         Self { pi, a, b }
     }
 
-    /// Baum–Welch re-estimation from many sequences, starting from `init` (or a banded
-    /// model initialized by segmenting every sequence uniformly over the states).
+    /// Baum–Welch re-estimation from many sequences, starting from a banded model
+    /// initialized by segmenting every sequence uniformly over the states.
     pub fn train(seqs: &[Vec<usize>], cfg: &HmmTrainConfig) -> Self {
         let mut hmm = Self::uniform_segmentation_init(seqs, cfg);
         for _ in 0..cfg.iterations {

@@ -8,14 +8,22 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+/// Network training settings.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct MlpTrainConfig {
+    /// Units of the hidden layer.
     pub hidden: usize,
+    /// Passes over the data.
     pub epochs: usize,
+    /// Samples a step.
     pub batch: usize,
+    /// The step size at the start (it falls to 0 on a cosine).
     pub learning_rate: f32,
+    /// SGD momentum.
     pub momentum: f32,
+    /// L2 decay of the weights a step.
     pub weight_decay: f32,
+    /// Initial weights and the order of the samples.
     pub seed: u64,
 }
 

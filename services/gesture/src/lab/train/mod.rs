@@ -42,12 +42,15 @@ use std::sync::OnceLock;
 pub enum ClassifierKind {
     /// The seed's pipeline.
     Hmm,
+    /// A linear-chain CRF over the seed's codes.
     Crf,
     /// The default.
     Mlp,
 }
 
 impl ClassifierKind {
+    /// The kind a name on the command line means (`hmm` or `seed`, `crf`, `mlp` or
+    /// `default`).
     pub fn parse(s: &str) -> Option<Self> {
         match s {
             "hmm" | "seed" => Some(Self::Hmm),
@@ -57,6 +60,7 @@ impl ClassifierKind {
         }
     }
 
+    /// Its name in model files.
     pub fn name(self) -> &'static str {
         match self {
             Self::Hmm => "hmm",
@@ -69,13 +73,19 @@ impl ClassifierKind {
 /// Everything `train` needs besides the samples.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TrainConfig {
+    /// What to train.
     pub classifier: ClassifierKind,
+    /// Bezier points of the seed's descriptor (`hmm`, `crf`).
     pub bezier_points: usize,
     /// Resting code for the Bezier codes (fraction of the diagonal; 0 = none).
     pub zero_frac: f64,
+    /// How the HMMs are trained…
     pub hmm: HmmTrainConfig,
+    /// …the CRF…
     pub crf: CrfTrainConfig,
+    /// …and each network.
     pub mlp: MlpTrainConfig,
+    /// What the networks see of a trajectory.
     pub features: FeatureConfig,
     /// Networks in the ensemble.
     pub ensemble: usize,
@@ -88,11 +98,14 @@ pub struct TrainConfig {
     pub stream_augment: f32,
     /// Add spotting HMMs.
     pub spotting: bool,
+    /// Chord step of the spotting HMMs' codes, a fraction of the gesture's larger side.
     pub spotting_step: f64,
+    /// States of each spotting HMM.
     pub spotting_states: usize,
     /// Networks in the spotting verifier, each trained on streams of its own.
     #[serde(default = "one")]
     pub verifiers: usize,
+    /// Every random draw of training follows from it.
     pub seed: u64,
     /// Data file names, recorded in the model.
     pub data: Vec<String>,
@@ -128,9 +141,9 @@ impl Default for TrainConfig {
 
 impl TrainConfig {
     /// Every size and count within [`crate::limits`], every rate a finite number in
-    /// range: checked before anything is allocated (`--hidden 4611686018427387904`
-    /// once overflowed a capacity and panicked, `--hidden 1000000000` asked for
-    /// 1.8 TB). The message names the setting as `airglyph train` spells it.
+    /// range: checked before anything is allocated, so that no size from a command line
+    /// overflows a capacity or asks for terabytes. The message names the setting as
+    /// `airglyph train` spells it.
     pub fn validate(&self) -> Result<(), String> {
         use crate::limits::*;
         within("--bezier-points", self.bezier_points, 2, MAX_BEZIER_POINTS)?;
@@ -175,18 +188,30 @@ impl TrainConfig {
 /// Why training failed.
 #[derive(Debug, thiserror::Error)]
 pub enum TrainError {
+    /// A setting out of its range ([`TrainConfig::validate`]).
     #[error("{0}")]
     Config(String),
+    /// Nothing to train on.
     #[error("no training samples")]
     NoSamples,
+    /// A vocabulary of one label.
     #[error("only one label ({0:?}); a classifier needs at least two")]
     OneLabel(String),
+    /// A label a gesture event cannot carry.
     #[error("label {label:?} is {bytes} bytes long; labels are at most {MAX_LABEL_BYTES} bytes (UTF-8), the size of a gesture event's label")]
-    LabelTooLong { label: String, bytes: usize },
+    LabelTooLong {
+        /// The label.
+        label: String,
+        /// Its length in UTF-8.
+        bytes: usize,
+    },
+    /// A model reused for data without one of its labels…
     #[error("its labels differ from the data's: {0:?} is in the model, not in the data")]
     OnlyInModel(String),
+    /// …or with a label it does not know.
     #[error("its labels differ from the data's: {0:?} is in the data, not in the model")]
     OnlyInData(String),
+    /// A model recalibrated that has no verifier whose bars could be calibrated.
     #[error("it has no spotting verifier to calibrate; train its spotting part first (`airglyph train --reuse-classifier`)")]
     NoVerifier,
 }

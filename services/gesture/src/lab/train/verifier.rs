@@ -42,12 +42,13 @@ const TIMING_POINTS: usize = 4;
 
 impl Verifier {
     /// Trains on the segments the spotter will judge: the samples are drawn in
-    /// synthetic continuous streams (see [`crate::stream`]), the [`Segmenter`] cuts
-    /// them, and every segment between two of its breaks is an example — a whole
-    /// gesture of its label when it covers a drawn gesture closely (intersection over
-    /// union ≥ 0.85), not a gesture when it does not (< 0.6: movement, part of a
-    /// gesture, a gesture with movement before or after it); those in between are
-    /// left out. `labels` are the model's labels.
+    /// synthetic continuous streams ([`crate::lab::build_stream`]), the spotter's
+    /// segmenter cuts them, and every segment between two of its breaks is an example —
+    /// a whole gesture of its label when it covers a drawn gesture closely
+    /// (intersection over union ≥ 0.85), not a gesture when it does not (< 0.6:
+    /// movement, part of a gesture, a gesture with movement before or after it); those
+    /// in between are left out. `classifier` gives the posterior the verifier sees, and
+    /// its labels.
     pub fn train(
         samples: &[Sample],
         classifier: &Model,
