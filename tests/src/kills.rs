@@ -19,7 +19,7 @@ use std::time::{Duration, Instant};
 
 /// Frames a session must go on after a symbol for it to count as drawn: the end of a
 /// stroke shows only in the movement after it (the spotter's context, 0.4 s at 30 fps:
-/// `airglyph_gesture::spot::CONTEXT_SECONDS`). A capture killed 3 frames after a
+/// `CONTEXT_SECONDS` in `services/gesture/src/model/verifier.rs`). A capture killed 3 frames after a
 /// symbol's last one left the spotter a stroke still going.
 pub const SEEN_AFTER: u64 = 12;
 
