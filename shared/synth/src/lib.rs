@@ -82,17 +82,18 @@ pub mod raster;
 pub mod room;
 pub mod sensor;
 
+pub use airglyph_core::gestures::GestureTruth;
 pub use body::{Affine, Body, ProceduralBody};
 pub use canon::{Bone, Pose, TposeSkeleton};
 pub use error::SynthError;
-pub use motion::{drawn_for, DrawSpec, GestureTruth, MotionSpec};
+pub use motion::{DrawSpec, MotionSpec};
 pub use poses::{Posture, ScriptedPose};
 pub use room::{Background, Chair, Prop, Table};
 
+use airglyph_core::gestures::write_gestures_csv;
 use airglyph_core::recording::{RecordingInfo, RecordingWriter};
 use airglyph_core::{DepthImage, DepthView, Intrinsics, Joint, Skeleton};
 use nalgebra::{Matrix3, Point3, Vector3};
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// Which body to render.
@@ -549,20 +550,6 @@ pub fn write_recording(
         frames: n,
         gestures,
     })
-}
-
-/// Writes `gestures.csv`: a header `label,start_frame,end_frame`, then one row a
-/// gesture (frames inclusive).
-pub fn write_gestures_csv(path: &Path, gestures: &[GestureTruth]) -> Result<(), SynthError> {
-    let mut f =
-        std::io::BufWriter::new(std::fs::File::create(path).map_err(|e| SynthError::io(path, e))?);
-    let mut text = String::from("label,start_frame,end_frame\n");
-    for g in gestures {
-        text.push_str(&format!("{},{},{}\n", g.label, g.start_frame, g.end_frame));
-    }
-    f.write_all(text.as_bytes())
-        .and_then(|_| f.flush())
-        .map_err(|e| SynthError::io(path, e))
 }
 
 fn describe(cfg: &SceneConfig) -> String {

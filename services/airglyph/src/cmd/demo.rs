@@ -5,8 +5,9 @@ use crate::cmd::gesture_json::GestureJson;
 use crate::cmd::run::{run_with, Args as RunArgs};
 use airglyph_capture::synthetic::{scene, DEMO_SYMBOLS};
 use airglyph_capture::SourceSpec;
+use airglyph_core::gestures::drawn_for;
 use airglyph_ipc::GestureEventMsg;
-use airglyph_synth::{drawn_for, Synthesizer};
+use airglyph_synth::Synthesizer;
 use anyhow::Context;
 use std::io::Write;
 
