@@ -179,6 +179,12 @@ pub enum MessageError {
     Chain,
     #[error("label is not UTF-8 or longer than {} bytes", LABEL_CAPACITY)]
     Label,
+    /// More Bezier points than a gesture event holds.
+    #[error("more than {} Bezier points", BEZIER_CAPACITY)]
+    Bezier,
+    /// A hand that is neither left (0) nor right (1).
+    #[error("hand {0} is neither left (0) nor right (1)")]
+    Hand(u8),
 }
 
 impl SkeletonMsg {
@@ -231,9 +237,14 @@ impl SkeletonMsg {
 /// Longest gesture label on the wire, in UTF-8 bytes.
 pub const LABEL_CAPACITY: usize = 32;
 
-/// A spotted and classified gesture.
+/// Most Bezier points a gesture event carries: more than a gesture descriptor uses
+/// (15 by default); a model asking for more is sent that many points of the same curve.
+pub const BEZIER_CAPACITY: usize = 64;
+
+/// A spotted and classified gesture, with the Bezier points of the path it was
+/// recognized from.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("airglyph.GestureEventMsg.v1")]
+#[type_name("airglyph.GestureEventMsg.v2")]
 #[repr(C)]
 pub struct GestureEventMsg {
     pub label: [u8; LABEL_CAPACITY],
@@ -248,15 +259,42 @@ pub struct GestureEventMsg {
     pub chain: LatencyChain,
     /// Which hand drew it ([`Hand`] as u8).
     pub hand: u8,
-    pub _reserved: [u8; 7],
+    pub _reserved: [u8; 3],
+    /// How many of `bezier` are the gesture's.
+    pub bezier_len: u32,
+    /// Points of the Bezier curve whose control points are the hand's path over the
+    /// gesture, as the gesture stage measured it (body frame: x to the person's right,
+    /// y down, shoulder widths), from its start to its end.
+    pub bezier: [[f32; 2]; BEZIER_CAPACITY],
 }
 
 /// The hand that drew a gesture.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[repr(u8)]
 pub enum Hand {
+    /// The person's left hand.
     Left = 0,
+    /// The person's right hand.
     Right = 1,
+}
+
+impl Hand {
+    /// The hand a message's `u8` names, if any.
+    pub fn from_u8(v: u8) -> Option<Self> {
+        match v {
+            0 => Some(Hand::Left),
+            1 => Some(Hand::Right),
+            _ => None,
+        }
+    }
+
+    /// `"left"` or `"right"`, as JSON and the page name it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Hand::Left => "left",
+            Hand::Right => "right",
+        }
+    }
 }
 
 impl Default for GestureEventMsg {
@@ -272,7 +310,9 @@ impl Default for GestureEventMsg {
             session: 0,
             chain: LatencyChain::default(),
             hand: Hand::Right as u8,
-            _reserved: [0; 7],
+            _reserved: [0; 3],
+            bezier_len: 0,
+            bezier: [[0.0; 2]; BEZIER_CAPACITY],
         }
     }
 }
@@ -298,9 +338,35 @@ impl GestureEventMsg {
         std::str::from_utf8(&self.label[..len]).map_err(|_| MessageError::Label)
     }
 
+    /// Sets the Bezier points; refuses more than [`BEZIER_CAPACITY`] or a coordinate
+    /// that is not finite.
+    pub fn set_bezier(&mut self, points: &[[f32; 2]]) -> Result<(), MessageError> {
+        if points.len() > BEZIER_CAPACITY {
+            return Err(MessageError::Bezier);
+        }
+        if !points.iter().flatten().all(|v| v.is_finite()) {
+            return Err(MessageError::NotFinite);
+        }
+        self.bezier = [[0.0; 2]; BEZIER_CAPACITY];
+        self.bezier[..points.len()].copy_from_slice(points);
+        self.bezier_len = points.len() as u32;
+        Ok(())
+    }
+
+    /// The Bezier points the gesture carries (as many as fit, whatever the length says).
+    pub fn bezier(&self) -> &[[f32; 2]] {
+        &self.bezier[..(self.bezier_len as usize).min(BEZIER_CAPACITY)]
+    }
+
     pub fn validate(&self) -> Result<(), MessageError> {
         self.label()?;
         if !self.score.is_finite() {
+            return Err(MessageError::NotFinite);
+        }
+        if self.bezier_len as usize > BEZIER_CAPACITY {
+            return Err(MessageError::Bezier);
+        }
+        if !self.bezier().iter().flatten().all(|v| v.is_finite()) {
             return Err(MessageError::NotFinite);
         }
         if !self.chain.is_ordered() {
@@ -311,26 +377,57 @@ impl GestureEventMsg {
 }
 
 /// The gesture stage's decision on one skeleton: sent for every frame it processes, so
-/// capture→decision latency can be profiled frame by frame, gesture or not.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend)]
-#[type_name("airglyph.DecisionMsg.v1")]
+/// capture→decision latency can be profiled frame by frame, gesture or not; and the
+/// drawing hand's point its recognizer took from that skeleton, so a viewer draws the
+/// path the gesture stage followed rather than one of its own.
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[type_name("airglyph.DecisionMsg.v2")]
 #[repr(C)]
 pub struct DecisionMsg {
     pub sequence: u64,
     pub session: u64,
     pub chain: LatencyChain,
+    /// The drawing hand in the body frame the gesture stage measures in: x to the
+    /// person's right, y down, shoulder widths from between the shoulders; meaningful
+    /// when `hand_found` is 1.
+    pub hand_point: [f32; 2],
     /// 1 when this frame closed a gesture (an event was published for it).
     pub gesture: u8,
-    pub _reserved: [u8; 7],
+    /// 1 when the skeleton gave the recognizer a hand point (a person, steady joints).
+    pub hand_found: u8,
+    /// Which hand `hand_point` is ([`Hand`] as u8).
+    pub hand: u8,
+    pub _reserved: [u8; 5],
 }
 
 impl DecisionMsg {
-    pub fn validate(&self) -> Result<(), MessageError> {
-        if self.chain.is_ordered() {
-            Ok(())
-        } else {
-            Err(MessageError::Chain)
+    /// Sets the hand point the recognizer took, or none.
+    pub fn set_hand_point(&mut self, point: Option<(Hand, [f32; 2])>) {
+        (self.hand_found, self.hand, self.hand_point) = match point {
+            Some((hand, at)) => (1, hand as u8, at),
+            None => (0, 0, [0.0; 2]),
+        };
+    }
+
+    /// The hand point the recognizer took from this frame's skeleton, if any.
+    pub fn hand_point(&self) -> Option<(Hand, [f32; 2])> {
+        if self.hand_found == 0 {
+            return None;
         }
+        Some((Hand::from_u8(self.hand)?, self.hand_point))
+    }
+
+    pub fn validate(&self) -> Result<(), MessageError> {
+        if !self.chain.is_ordered() {
+            return Err(MessageError::Chain);
+        }
+        if self.hand_found != 0 {
+            Hand::from_u8(self.hand).ok_or(MessageError::Hand(self.hand))?;
+            if !self.hand_point.iter().all(|v| v.is_finite()) {
+                return Err(MessageError::NotFinite);
+            }
+        }
+        Ok(())
     }
 }
 
@@ -456,6 +553,84 @@ mod tests {
         assert!(g.set_label(&"x".repeat(33)).is_err());
         g.label_len = 200;
         assert_eq!(g.label(), Err(MessageError::Label));
+    }
+
+    #[test]
+    fn gesture_events_carry_bounded_finite_bezier_points() {
+        let mut g = GestureEventMsg {
+            chain: LatencyChain {
+                capture_ns: 1,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let curve: Vec<[f32; 2]> = (0..15).map(|i| [i as f32 * 0.1, -0.5]).collect();
+        g.set_bezier(&curve).unwrap();
+        assert_eq!(g.bezier(), &curve[..]);
+        g.validate().unwrap();
+        assert_eq!(
+            g.set_bezier(&vec![[0.0; 2]; BEZIER_CAPACITY + 1]),
+            Err(MessageError::Bezier)
+        );
+        assert_eq!(
+            g.set_bezier(&[[f32::NAN, 0.0]]),
+            Err(MessageError::NotFinite)
+        );
+        // What another process wrote is checked, and never read past the array.
+        g.bezier_len = 1000;
+        assert_eq!(g.bezier().len(), BEZIER_CAPACITY);
+        assert_eq!(g.validate(), Err(MessageError::Bezier));
+        g.bezier_len = 2;
+        g.bezier[1][0] = f32::INFINITY;
+        assert_eq!(g.validate(), Err(MessageError::NotFinite));
+    }
+
+    #[test]
+    fn decisions_carry_the_recognizers_hand_point() {
+        let mut d = DecisionMsg {
+            chain: LatencyChain {
+                capture_ns: 1,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        assert_eq!(d.hand_point(), None);
+        d.set_hand_point(Some((Hand::Left, [0.25, -0.5])));
+        assert_eq!(d.hand_point(), Some((Hand::Left, [0.25, -0.5])));
+        d.validate().unwrap();
+        d.hand = 7;
+        assert_eq!(d.validate(), Err(MessageError::Hand(7)));
+        assert_eq!(d.hand_point(), None);
+        d.set_hand_point(Some((Hand::Right, [f32::NAN, 0.0])));
+        assert_eq!(d.validate(), Err(MessageError::NotFinite));
+        d.set_hand_point(None);
+        d.validate().unwrap();
+    }
+
+    /// The layouts other processes read: a change here is a change of the type's
+    /// version in its name (and of every process that speaks it).
+    #[test]
+    fn layouts_are_as_their_versions_say() {
+        use std::mem::{align_of, offset_of, size_of};
+        assert_eq!(size_of::<LatencyChain>(), 48);
+        assert_eq!(
+            (size_of::<DepthHeader>(), align_of::<DepthHeader>()),
+            (72, 8)
+        );
+        assert_eq!(size_of::<SkeletonMsg>(), 328);
+        assert_eq!(offset_of!(SkeletonMsg, visible), 322);
+        assert_eq!(size_of::<GestureEventMsg>(), 648);
+        assert_eq!(offset_of!(GestureEventMsg, chain), 80);
+        assert_eq!(offset_of!(GestureEventMsg, hand), 128);
+        assert_eq!(offset_of!(GestureEventMsg, bezier_len), 132);
+        assert_eq!(offset_of!(GestureEventMsg, bezier), 136);
+        assert_eq!(size_of::<DecisionMsg>(), 80);
+        assert_eq!(offset_of!(DecisionMsg, hand_point), 64);
+        assert_eq!(offset_of!(DecisionMsg, gesture), 72);
+        assert_eq!(offset_of!(DecisionMsg, hand_found), 73);
+        assert_eq!(offset_of!(DecisionMsg, hand), 74);
+        assert_eq!(size_of::<Percentiles>(), 40);
+        assert_eq!(size_of::<StageStatsMsg>(), 184);
     }
 
     #[test]
