@@ -6,7 +6,7 @@ use crate::scene::Scene;
 use airglyph_ipc::clock::monotonic_ns;
 use airglyph_ipc::port::DepthReceiver;
 use airglyph_ipc::{
-    GestureEventMsg, IpcError, Pipeline, Receiver, SkeletonMsg, Stage, StageStatsMsg,
+    DecisionMsg, GestureEventMsg, IpcError, Pipeline, Receiver, SkeletonMsg, Stage, StageStatsMsg,
 };
 use std::sync::Mutex;
 use std::time::Duration;
@@ -14,6 +14,7 @@ use std::time::Duration;
 pub struct Feed {
     depth: DepthReceiver,
     skeletons: Receiver<SkeletonMsg>,
+    decisions: Receiver<DecisionMsg>,
     gestures: Receiver<GestureEventMsg>,
     stats: Vec<(Stage, Receiver<StageStatsMsg>)>,
 }
@@ -23,6 +24,7 @@ pub struct Feed {
 pub struct Polled {
     pub frames: usize,
     pub skeletons: usize,
+    pub decisions: usize,
     pub gestures: usize,
 }
 
@@ -35,11 +37,13 @@ impl Feed {
             .map(|&s| Ok((s, pipeline.stats_receiver(s)?)))
             .collect::<Result<_, IpcError>>()?;
         let gestures = pipeline.gesture_receiver()?;
+        let decisions = pipeline.decision_receiver()?;
         let skeletons = pipeline.skeleton_receiver()?;
         let depth = pipeline.depth_receiver()?;
         Ok(Self {
             depth,
             skeletons,
+            decisions,
             gestures,
             stats,
         })
@@ -61,6 +65,10 @@ impl Feed {
         while let Some(r) = self.skeletons.try_recv()? {
             lock().push_skeleton(r.msg);
             polled.skeletons += 1;
+        }
+        while let Some(r) = self.decisions.try_recv()? {
+            lock().push_decision(r.msg);
+            polled.decisions += 1;
         }
         while let Some(r) = self.gestures.try_recv()? {
             lock().push_gesture(r.msg, monotonic_ns());
