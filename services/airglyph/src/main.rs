@@ -4,8 +4,8 @@
 
 mod cmd;
 mod interrupt;
+mod pipeline;
 mod stage;
-mod supervisor;
 
 use clap::{CommandFactory, Parser, Subcommand};
 
@@ -84,7 +84,7 @@ fn main() -> std::process::ExitCode {
         die_quietly_on_a_closed_pipe();
     }
     let name = match &cli.command {
-        Command::Stage(s) => stage::invocation(s.stage()),
+        Command::Stage(s) => airglyph::supervisor::invocation(s.stage()),
         _ => "airglyph".to_owned(),
     };
     airglyph_ipc::process::main(&name, || dispatch(cli))
