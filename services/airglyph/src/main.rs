@@ -21,7 +21,7 @@ const VERSION: &str = concat!(
 const ENVIRONMENT: &str = "\
 Environment:
   RUST_LOG          what is logged to stderr: a level or a filter (default info;
-                    e.g. RUST_LOG=debug, RUST_LOG=warn,airglyph::cmd::run=debug)
+                    e.g. RUST_LOG=debug, RUST_LOG=warn,airglyph::supervisor=debug)
   NO_COLOR          no colours in the logs (there are none off a terminal anyway)
   AIRGLYPH_MODEL    the gesture model when no --model is given (default: built in)
   AIRGLYPH_ASSETS   the MakeHuman body (default: ~/.cache/airglyph/assets, or
