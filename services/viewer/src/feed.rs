@@ -11,6 +11,7 @@ use airglyph_ipc::{
 use std::sync::Mutex;
 use std::time::Duration;
 
+/// The viewer's subscriptions to every service of a pipeline.
 pub struct Feed {
     depth: DepthReceiver,
     skeletons: Receiver<SkeletonMsg>,
@@ -22,9 +23,13 @@ pub struct Feed {
 /// What one [`Feed::poll`] brought in.
 #[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
 pub struct Polled {
+    /// Depth frames taken.
     pub frames: usize,
+    /// Skeletons taken.
     pub skeletons: usize,
+    /// Decisions taken.
     pub decisions: usize,
+    /// Gesture events taken.
     pub gestures: usize,
 }
 

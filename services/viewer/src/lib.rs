@@ -14,6 +14,8 @@
 //! answering through [`routes`] from [`pictures`]) and for `airglyph snapshot`.
 //! [`health`] tells a supervisor whether the page is still served.
 
+#![warn(missing_docs)]
+
 pub mod colormap;
 mod connections;
 pub mod draw;

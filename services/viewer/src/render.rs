@@ -10,12 +10,17 @@ use image::{Rgb, RgbImage};
 
 // Colours the depth map never takes (it spans turbo's blues, greens, yellows and reds),
 // so the overlay stands out on any depth, even after JPEG compression.
+/// A bone.
 pub const BONE: Rgb<u8> = Rgb([255, 255, 255]);
 /// A joint the pose stage is sure of (confidence ≥ [`SURE`]).
 pub const JOINT: Rgb<u8> = Rgb([255, 0, 255]);
+/// A joint the pose stage is unsure of.
 pub const JOINT_UNSURE: Rgb<u8> = Rgb([128, 128, 128]);
+/// The hand's path as the recognizer took it.
 pub const TRAIL: Rgb<u8> = Rgb([255, 255, 120]);
+/// The last gesture's Bezier points.
 pub const BEZIER: Rgb<u8> = Rgb([160, 0, 255]);
+/// Text.
 pub const TEXT: Rgb<u8> = Rgb([255, 255, 255]);
 const PANEL: Rgb<u8> = Rgb([0, 0, 0]);
 
@@ -25,7 +30,9 @@ pub const SURE: f32 = 0.5;
 /// A recognized gesture as the picture shows it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GestureLine {
+    /// The symbol.
     pub label: String,
+    /// The classifier's confidence, 0–1.
     pub score: f32,
     /// Seconds since it was recognized.
     pub age_s: f32,
@@ -43,6 +50,7 @@ pub struct Overlay {
     pub bezier: Vec<[f32; 2]>,
     /// Newest first.
     pub gestures: Vec<GestureLine>,
+    /// A line at the bottom: the frame, its size, whether a person was found.
     pub caption: String,
 }
 

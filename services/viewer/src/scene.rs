@@ -30,11 +30,14 @@ const SKELETON_SLACK: u64 = 3;
 /// A depth frame copied out of shared memory.
 #[derive(Debug, Clone)]
 pub struct Frame {
+    /// The frame's header, copied.
     pub header: DepthHeader,
+    /// Its pixels, copied.
     pub pixels: Vec<u16>,
 }
 
 impl Frame {
+    /// The frame as a depth image.
     pub fn view(&self) -> DepthView<'_> {
         DepthView::new(self.header.width, self.header.height, &self.pixels)
             .expect("a frame is only kept when its size matches its header")
@@ -60,8 +63,11 @@ struct Seen {
 
 /// What one picture shows.
 pub struct Picture {
+    /// The frame shown.
     pub frame: Frame,
+    /// Its camera's intrinsics.
     pub intrinsics: Intrinsics,
+    /// What is drawn over it.
     pub overlay: Overlay,
 }
 
@@ -71,6 +77,7 @@ struct Selection<'a> {
     skeleton: Option<(&'a SkeletonMsg, Skeleton)>,
 }
 
+/// What the viewer knows of the pipeline (see the module's documentation).
 pub struct Scene {
     frames: VecDeque<Frame>,
     /// Counts frames taken in: tells the page whether there is anything new.
@@ -95,6 +102,7 @@ impl Default for Scene {
 }
 
 impl Scene {
+    /// A scene with nothing in it yet.
     pub fn new() -> Self {
         Self {
             frames: VecDeque::with_capacity(FRAME_RING),
@@ -117,6 +125,7 @@ impl Scene {
         self.frames_in
     }
 
+    /// Frames lost before the viewer took them.
     pub fn frames_dropped(&self) -> u64 {
         self.frames_dropped
     }
@@ -126,6 +135,7 @@ impl Scene {
         self.select().is_some_and(|s| s.skeleton.is_some())
     }
 
+    /// Whether any frame is kept.
     pub fn has_frame(&self) -> bool {
         !self.frames.is_empty()
     }
@@ -189,11 +199,13 @@ impl Scene {
         }
     }
 
+    /// Takes a gesture event, received at `received_ns`.
     pub fn push_gesture(&mut self, msg: GestureEventMsg, received_ns: u64) {
         self.gestures.push_front(Seen { msg, received_ns });
         self.gestures.truncate(GESTURES);
     }
 
+    /// Takes a stage's telemetry report, keeping a minute of them.
     pub fn push_stats(&mut self, stage: Stage, msg: StageStatsMsg) {
         if let Some((_, h)) = self.stats.iter_mut().find(|(s, _)| *s == stage) {
             h.push_back(msg);

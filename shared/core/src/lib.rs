@@ -6,6 +6,8 @@
 //! Nothing here knows about processes or shared memory; `airglyph-ipc` builds the wire
 //! types on top of these.
 
+#![warn(missing_docs)]
+
 pub mod bezier;
 pub mod camera;
 pub mod depth;

@@ -21,14 +21,21 @@ pub struct DepthHeader {
     pub publish_ns: u64,
     /// The source's own timestamp (a recording's frames.csv time; else `capture_ns`).
     pub source_ns: u64,
+    /// Frame width, pixels.
     pub width: u32,
+    /// Frame height, pixels.
     pub height: u32,
+    /// Horizontal focal length, pixels.
     pub fx: f32,
+    /// Vertical focal length, pixels.
     pub fy: f32,
+    /// Principal point's column, pixels.
     pub cx: f32,
+    /// Principal point's row, pixels.
     pub cy: f32,
     /// Which kind of source produced the frame ([`SourceKind`] as u32).
     pub source_kind: u32,
+    /// Padding to 8 bytes, written as 0.
     pub _reserved: u32,
 }
 
@@ -36,23 +43,40 @@ pub struct DepthHeader {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[repr(u32)]
 pub enum SourceKind {
+    /// The synthetic person.
     Synthetic = 1,
+    /// A recording on disk.
     Recording = 2,
+    /// A V4L2 camera.
     V4l2 = 3,
+    /// An OpenNI2 camera or `.oni` file.
     OpenNi2 = 4,
 }
 
 /// Why a received depth header was dropped.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum HeaderError {
+    /// The header's size does not match the payload's length.
     #[error("header says {width}x{height} = {} pixels but the payload holds {len}", *width as u64 * *height as u64)]
-    SizeMismatch { width: u32, height: u32, len: usize },
+    SizeMismatch {
+        /// The width the header claims.
+        width: u32,
+        /// The height the header claims.
+        height: u32,
+        /// The payload's pixels.
+        len: usize,
+    },
+    /// The intrinsics cannot describe a camera.
     #[error("intrinsics: {0}")]
     Intrinsics(#[from] airglyph_core::camera::IntrinsicsError),
+    /// The timestamps are missing, out of order or in the future.
     #[error("timestamps out of order: capture {capture_ns} ns, publish {publish_ns} ns, received {now_ns} ns")]
     Timestamps {
+        /// When the frame entered the pipeline.
         capture_ns: u64,
+        /// When capture sent it.
         publish_ns: u64,
+        /// The receiver's clock.
         now_ns: u64,
     },
 }
@@ -72,10 +96,12 @@ fn check_times(capture_ns: u64, publish_ns: u64, now_ns: u64) -> Result<(), Head
 }
 
 impl DepthHeader {
+    /// The camera's intrinsics at the frame's size.
     pub fn intrinsics(&self) -> Intrinsics {
         Intrinsics::new(self.width, self.height, self.fx, self.fy, self.cx, self.cy)
     }
 
+    /// Sets the size and intrinsics fields from `k`.
     pub fn set_intrinsics(&mut self, k: &Intrinsics) {
         (self.width, self.height, self.fx, self.fy, self.cx, self.cy) =
             (k.width, k.height, k.fx, k.fy, k.cx, k.cy);
@@ -102,11 +128,17 @@ impl DepthHeader {
 #[type_name("airglyph.LatencyChain.v1")]
 #[repr(C)]
 pub struct LatencyChain {
+    /// When the frame entered the pipeline.
     pub capture_ns: u64,
+    /// When capture sent it.
     pub capture_publish_ns: u64,
+    /// When the pose stage took it.
     pub pose_receive_ns: u64,
+    /// When the pose stage sent its skeleton.
     pub pose_publish_ns: u64,
+    /// When the gesture stage took the skeleton.
     pub gesture_receive_ns: u64,
+    /// When the gesture stage sent its decision or event.
     pub gesture_publish_ns: u64,
 }
 
@@ -139,18 +171,24 @@ impl LatencyChain {
 #[type_name("airglyph.SkeletonMsg.v2")]
 #[repr(C)]
 pub struct SkeletonMsg {
+    /// The depth frame's sequence number in its capture session.
     pub sequence: u64,
+    /// The depth frame's capture session.
     pub session: u64,
+    /// The frame's latency chain up to the skeleton's publication.
     pub chain: LatencyChain,
     /// x, y, z in metres, camera frame, in [`Joint::ALL`] order.
     pub joints: [[f32; 3]; Joint::COUNT],
+    /// Each joint's confidence in [0, 1], in [`Joint::ALL`] order.
     pub confidence: [f32; Joint::COUNT],
     /// 1 when a person was found; the joints are meaningless otherwise.
     pub person_found: u8,
+    /// Padding, written as 0.
     pub _pad: u8,
     /// Bit `i` set: joint `i` ([`Joint::ALL`] order) is in the camera's view
     /// ([`Skeleton::visible`]).
     pub visible: u16,
+    /// Padding to 8 bytes, written as 0.
     pub _reserved: [u8; 4],
 }
 
@@ -173,10 +211,13 @@ impl Default for SkeletonMsg {
 /// Why a received message was dropped.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum MessageError {
+    /// A coordinate, confidence or score is not a finite number.
     #[error("a joint coordinate or confidence is not a finite number")]
     NotFinite,
+    /// The latency chain's timestamps are missing or out of order.
     #[error("the latency chain's timestamps are missing or out of order")]
     Chain,
+    /// The label is not UTF-8 or longer than [`LABEL_CAPACITY`].
     #[error("label is not UTF-8 or longer than {} bytes", LABEL_CAPACITY)]
     Label,
     /// More Bezier points than a gesture event holds.
@@ -188,6 +229,7 @@ pub enum MessageError {
 }
 
 impl SkeletonMsg {
+    /// The skeleton, or None when no person was found.
     pub fn skeleton(&self) -> Option<Skeleton> {
         (self.person_found != 0).then(|| Skeleton {
             joints: self.joints.map(|[x, y, z]| Point3::new(x, y, z)),
@@ -196,6 +238,7 @@ impl SkeletonMsg {
         })
     }
 
+    /// Sets the joints, confidences and visibility, or marks no person found.
     pub fn set_skeleton(&mut self, s: Option<&Skeleton>) {
         match s {
             Some(s) => {
@@ -217,6 +260,7 @@ impl SkeletonMsg {
         }
     }
 
+    /// Checks a received skeleton: finite joints and confidences, an ordered chain.
     pub fn validate(&self) -> Result<(), MessageError> {
         if !self
             .joints
@@ -247,18 +291,27 @@ pub const BEZIER_CAPACITY: usize = 64;
 #[type_name("airglyph.GestureEventMsg.v2")]
 #[repr(C)]
 pub struct GestureEventMsg {
+    /// The label's UTF-8 bytes, zero-padded.
     pub label: [u8; LABEL_CAPACITY],
+    /// How many of `label`'s bytes are the label.
     pub label_len: u32,
+    /// The classifier's confidence in [0, 1].
     pub score: f32,
+    /// Its first frame's sequence number.
     pub start_sequence: u64,
+    /// Its last frame's sequence number.
     pub end_sequence: u64,
+    /// Its first frame's capture time, CLOCK_MONOTONIC ns.
     pub start_ns: u64,
+    /// Its last frame's capture time, CLOCK_MONOTONIC ns.
     pub end_ns: u64,
+    /// The capture session its frames belong to.
     pub session: u64,
     /// The latency chain of the frame that closed the gesture.
     pub chain: LatencyChain,
     /// Which hand drew it ([`Hand`] as u8).
     pub hand: u8,
+    /// Padding, written as 0.
     pub _reserved: [u8; 3],
     /// How many of `bezier` are the gesture's.
     pub bezier_len: u32,
@@ -330,6 +383,7 @@ impl GestureEventMsg {
         Ok(())
     }
 
+    /// The label; an error when the bytes are not UTF-8 or claim more than fits.
     pub fn label(&self) -> Result<&str, MessageError> {
         let len = self.label_len as usize;
         if len > LABEL_CAPACITY {
@@ -358,6 +412,7 @@ impl GestureEventMsg {
         &self.bezier[..(self.bezier_len as usize).min(BEZIER_CAPACITY)]
     }
 
+    /// Checks a received event: its label, finite score and Bezier points, an ordered chain.
     pub fn validate(&self) -> Result<(), MessageError> {
         self.label()?;
         if !self.score.is_finite() {
@@ -384,8 +439,11 @@ impl GestureEventMsg {
 #[type_name("airglyph.DecisionMsg.v2")]
 #[repr(C)]
 pub struct DecisionMsg {
+    /// The frame's sequence number.
     pub sequence: u64,
+    /// The frame's capture session.
     pub session: u64,
+    /// The frame's latency chain up to the decision.
     pub chain: LatencyChain,
     /// The drawing hand in the body frame the gesture stage measures in: x to the
     /// person's right, y down, shoulder widths from between the shoulders; meaningful
@@ -397,6 +455,7 @@ pub struct DecisionMsg {
     pub hand_found: u8,
     /// Which hand `hand_point` is ([`Hand`] as u8).
     pub hand: u8,
+    /// Padding to 8 bytes, written as 0.
     pub _reserved: [u8; 5],
 }
 
@@ -417,6 +476,7 @@ impl DecisionMsg {
         Some((Hand::from_u8(self.hand)?, self.hand_point))
     }
 
+    /// Checks a received decision: an ordered chain, a known hand and a finite point.
     pub fn validate(&self) -> Result<(), MessageError> {
         if !self.chain.is_ordered() {
             return Err(MessageError::Chain);
@@ -436,10 +496,15 @@ impl DecisionMsg {
 #[type_name("airglyph.Percentiles.v1")]
 #[repr(C)]
 pub struct Percentiles {
+    /// How many values the window had.
     pub count: u64,
+    /// The median.
     pub p50: u64,
+    /// The 90th percentile.
     pub p90: u64,
+    /// The 99th percentile.
     pub p99: u64,
+    /// The largest.
     pub max: u64,
 }
 
@@ -450,6 +515,7 @@ pub struct Percentiles {
 pub struct StageStatsMsg {
     /// The stage ([`crate::Stage`] as u32).
     pub stage: u32,
+    /// The stage's process id.
     pub pid: u32,
     /// CLOCK_MONOTONIC ns when this report was made.
     pub time_ns: u64,
@@ -457,6 +523,7 @@ pub struct StageStatsMsg {
     pub window_ns: u64,
     /// Totals since the stage started.
     pub frames_in: u64,
+    /// Outputs published.
     pub frames_out: u64,
     /// Frames lost upstream of this stage, counted from sequence gaps.
     pub frames_dropped: u64,
@@ -464,6 +531,7 @@ pub struct StageStatsMsg {
     pub frames_rejected: u64,
     /// Output frames per second over the window.
     pub fps: f32,
+    /// Padding to 8 bytes, written as 0.
     pub _reserved: u32,
     /// Time from receiving an input to publishing the output.
     pub processing: Percentiles,

@@ -69,6 +69,8 @@
 //! (13,380 vertices, 26,756 triangles) at 640×480 on one thread runs at 700+ frames/s on
 //! a quiet machine (≈ 960 frames per CPU second); the rasterizer takes 80% of it.
 
+#![warn(missing_docs)]
+
 pub mod body;
 pub mod bvh;
 pub mod canon;
@@ -103,7 +105,10 @@ pub enum BodySpec {
     Procedural(ProceduralBody),
     /// The MakeHuman body; `assets` is the folder holding `mpfb2/` (None: see
     /// [`makehuman::default_assets_dir`]).
-    MakeHuman { assets: Option<PathBuf> },
+    MakeHuman {
+        /// The folder holding `mpfb2/`, or None for the default.
+        assets: Option<PathBuf>,
+    },
 }
 
 impl BodySpec {
@@ -159,18 +164,25 @@ impl Default for Placement {
 /// Everything that defines a synthetic scene.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SceneConfig {
+    /// Whose body is rendered.
     pub body: BodySpec,
+    /// How it moves.
     pub motion: MotionSpec,
+    /// The virtual camera.
     pub intrinsics: Intrinsics,
+    /// Frames a second.
     pub fps: f32,
     /// Apply the Kinect-like sensor model ([`sensor`]).
     pub sensor_noise: bool,
+    /// What is behind the person.
     pub background: Background,
     /// Furniture where the person starts.
     pub props: Vec<Prop>,
     /// Standing, or seated (on a chair, when `props` has one at the seat's height).
     pub posture: Posture,
+    /// Where the person stands before the camera.
     pub placement: Placement,
+    /// Seeds every random choice: the same seed renders the same frames.
     pub seed: u64,
 }
 
@@ -216,6 +228,7 @@ impl SceneConfig {
 /// The ground truth of one rendered frame.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FrameTruth {
+    /// The frame's index.
     pub index: usize,
     /// `index / fps` in nanoseconds.
     pub capture_ns: u64,
@@ -318,18 +331,22 @@ impl Synthesizer {
         })
     }
 
+    /// The scene it renders.
     pub fn config(&self) -> &SceneConfig {
         &self.cfg
     }
 
+    /// The virtual camera's intrinsics.
     pub fn intrinsics(&self) -> Intrinsics {
         self.cfg.intrinsics
     }
 
+    /// Frames a second.
     pub fn fps(&self) -> f32 {
         self.cfg.fps
     }
 
+    /// The body it renders.
     pub fn body(&self) -> &Body {
         &self.body
     }
@@ -511,7 +528,9 @@ pub fn camera_from_body(pl: &Placement) -> Affine {
 /// What [`write_recording`] wrote.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RecordingSummary {
+    /// Frames written.
     pub frames: usize,
+    /// The symbols drawn in them, as `gestures.csv` has them.
     pub gestures: Vec<GestureTruth>,
 }
 
