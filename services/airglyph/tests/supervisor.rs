@@ -77,6 +77,13 @@ fn gone(pid: &str) -> bool {
     unsafe { libc::kill(pid.trim().parse().unwrap(), 0) != 0 }
 }
 
+/// A capture stand-in that runs until stopped, and the file it writes its pid to.
+fn sleeper(p: &Isolated) -> (StagePlan, String) {
+    let pid_file = p.file("capture.pid");
+    let script = format!("echo $$ > {pid_file}; exec sleep 60");
+    (sh(Stage::Capture, &script), pid_file)
+}
+
 /// Done after `after`: the caller's reason to stop the pipeline.
 struct DoneAfter(Instant, Duration);
 
@@ -138,11 +145,8 @@ fn a_stage_that_died_is_restarted_and_one_that_finishes_ends_the_run() {
 #[test]
 fn a_viewer_that_keeps_dying_is_given_up_alone_and_the_others_are_stopped_at_the_end() {
     let p = Isolated::new("viewer");
-    let (viewer_runs, capture_pid) = (p.file("viewer"), p.file("capture.pid"));
-    let capture = sh(
-        Stage::Capture,
-        &format!("echo $$ > {capture_pid}; exec sleep 60"),
-    );
+    let viewer_runs = p.file("viewer");
+    let (capture, capture_pid) = sleeper(&p);
     let viewer = sh(Stage::Viewer, &format!("echo run >> {viewer_runs}; exit 1"));
     let t = Instant::now();
     let listening = supervise(&plan(vec![capture, viewer], 1), p.pipeline(), |_| {
@@ -160,11 +164,7 @@ fn a_viewer_that_keeps_dying_is_given_up_alone_and_the_others_are_stopped_at_the
 #[test]
 fn a_listener_that_fails_ends_the_run_with_its_own_error_and_stops_the_stages() {
     let p = Isolated::new("fail");
-    let pid_file = p.file("capture.pid");
-    let capture = sh(
-        Stage::Capture,
-        &format!("echo $$ > {pid_file}; exec sleep 60"),
-    );
+    let (capture, pid_file) = sleeper(&p);
     struct Fails;
     impl Listener for Fails {
         fn poll(&mut self, timeout: Duration) -> Result<Poll, ListenerError> {

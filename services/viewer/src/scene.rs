@@ -470,15 +470,10 @@ mod tests {
 
     /// The gesture stage's decision on frame `seq`, its recognizer's hand at (x, y).
     fn decision(seq: u64, at: Option<(Hand, [f32; 2])>) -> DecisionMsg {
-        let mut d = DecisionMsg {
-            sequence: seq,
-            session: SESSION,
-            chain: LatencyChain {
-                capture_ns: header(seq).capture_ns,
-                ..Default::default()
-            },
-            ..Default::default()
-        };
+        // The frame's own numbers, as the skeleton it was decided on carried them.
+        let frame = skeleton(seq);
+        let mut d = DecisionMsg::default();
+        (d.sequence, d.session, d.chain) = (frame.sequence, frame.session, frame.chain);
         d.set_hand_point(at);
         d
     }

@@ -623,13 +623,18 @@ mod tests {
         assert_eq!(g.label(), Err(MessageError::Label));
     }
 
+    /// The chain of a frame that has only been captured.
+    fn captured() -> LatencyChain {
+        LatencyChain {
+            capture_ns: 1,
+            ..Default::default()
+        }
+    }
+
     #[test]
     fn gesture_events_carry_bounded_finite_bezier_points() {
         let mut g = GestureEventMsg {
-            chain: LatencyChain {
-                capture_ns: 1,
-                ..Default::default()
-            },
+            chain: captured(),
             ..Default::default()
         };
         let curve: Vec<[f32; 2]> = (0..15).map(|i| [i as f32 * 0.1, -0.5]).collect();
@@ -656,10 +661,7 @@ mod tests {
     #[test]
     fn decisions_carry_the_recognizers_hand_point() {
         let mut d = DecisionMsg {
-            chain: LatencyChain {
-                capture_ns: 1,
-                ..Default::default()
-            },
+            chain: captured(),
             ..Default::default()
         };
         assert_eq!(d.hand_point(), None);
