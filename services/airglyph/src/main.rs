@@ -1,6 +1,9 @@
 //! `airglyph`: the front door. Starts and supervises the three stages, and carries the
-//! offline tools. Each subcommand lives in its own module under `cmd/`; the stages'
-//! processes, which `airglyph run` starts as `airglyph stage NAME`, under `stage/`.
+//! offline tools. Each subcommand lives in its own module under `cmd/`, which parses its
+//! arguments and calls the libraries; no command imports another. The supervisor that
+//! `run`, `demo` and `collect` share is this package's library (`lib.rs`), the options of
+//! the pipeline they start are in `pipeline.rs`, and the stages' processes, which the
+//! supervisor starts as `airglyph stage NAME`, are under `stage/`.
 
 mod cmd;
 mod interrupt;
