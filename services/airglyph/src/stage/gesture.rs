@@ -95,6 +95,7 @@ impl Reported {
     }
 }
 
+/// The wire's name for the gesture library's hand.
 fn wire_hand(hand: Hand) -> WireHand {
     match hand {
         Hand::Left => WireHand::Left,
@@ -141,9 +142,10 @@ fn publish(
     event
         .set_label(&g.label)
         .with_context(|| format!("label {:?}", g.label))?;
-    event
-        .set_bezier(&bezier_of(g, bezier))
-        .context("the gesture's Bezier points")?;
+    if let Err(e) = event.set_bezier(&bezier_of(g, bezier)) {
+        // The gesture matters more than its picture: it goes out without the points.
+        tracing::warn!(label = %g.label, error = %e, "the gesture's Bezier points are not sent");
+    }
     // Sent first, remembered after: a kill in between repeats the event (which a
     // consumer can tell by its session and frames) rather than losing it.
     events.send(event)?;
