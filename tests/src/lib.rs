@@ -341,14 +341,14 @@ pub fn stop(mut child: Child) -> std::process::ExitStatus {
 /// What the synthetic person draws for `script` (`draw:SYMBOLS`, as capture's
 /// `--source synthetic:draw:SYMBOLS` plays it): each symbol with its first and last
 /// frame, which are capture's frame numbers counted from each start of capture.
-pub fn drawn_symbols(script: &str) -> Vec<airglyph_synth::GestureTruth> {
+pub fn drawn_symbols(script: &str) -> Vec<airglyph_core::gestures::GestureTruth> {
     let scene = airglyph_capture::synthetic::scene(Some(script), false).expect("a script");
     airglyph_synth::Synthesizer::new(scene)
         .expect("a synthetic scene")
         .gestures()
 }
 
-pub use airglyph_synth::drawn_for;
+pub use airglyph_core::gestures::drawn_for;
 
 /// Waits for a line of a probe's skeleton stream at frame `sequence` or later; its
 /// session. Panics after `within`.

@@ -3,7 +3,7 @@
 //! not slow capture, and a viewer that cannot start while the pipeline runs on.
 
 use airglyph_system_tests::{
-    json_lines, one_at_a_time, shut_down, stage_children, succeed, top, Isolated,
+    json_lines, one_at_a_time, shut_down, stage_children, start_probe, stop, succeed, top, Isolated,
 };
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
@@ -281,6 +281,35 @@ fn the_page_shows_the_skeleton_and_a_recognized_gesture() {
         std::thread::sleep(Duration::from_millis(100));
     };
     assert_eq!(seen["gestures"][0]["label"], label.as_str(), "{seen}");
+    assert_eq!(
+        seen["gestures"][0]["bezier_points"], 15,
+        "the gesture event carries the model's Bezier points: {seen}"
+    );
+
+    // The trail is the gesture stage's: the newest hand point the viewer shows is, bit
+    // for bit, the one the gesture stage's decision on that frame carried, as another
+    // subscriber saw it (the viewer follows no hand of its own).
+    let (probe, decisions) = start_probe(&p, &["--stream", "decision", "--idle", "30"]);
+    let mut sent = std::collections::HashMap::new();
+    let deadline = Instant::now() + Duration::from_secs(15);
+    let (shown, point) = loop {
+        while let Ok(d) = decisions.try_recv() {
+            if !d["hand_point"].is_null() {
+                sent.insert(d["sequence"].as_u64().unwrap(), d["hand_point"].clone());
+            }
+        }
+        let newest = state_soon(addr)["recognizer"]["newest"].clone();
+        if let Some(point) = newest["sequence"].as_u64().and_then(|s| sent.get(&s)) {
+            break (newest, point.clone());
+        }
+        assert!(
+            Instant::now() < deadline,
+            "the viewer never showed a hand point the gesture stage sent: {newest}"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    stop(probe);
+    assert_eq!(shown["at"], point, "{shown}");
 
     // The page as a browser renders it: its script filled in the panels from the viewer.
     let browser = Browser::start(&chromium, &chromedriver);

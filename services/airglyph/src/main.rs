@@ -1,11 +1,14 @@
 //! `airglyph`: the front door. Starts and supervises the three stages, and carries the
-//! offline tools. Each subcommand lives in its own module under `cmd/`; the stages'
-//! processes, which `airglyph run` starts as `airglyph stage NAME`, under `stage/`.
+//! offline tools. Each subcommand lives in its own module under `cmd/`, which parses its
+//! arguments and calls the libraries; no command imports another. The supervisor that
+//! `run`, `demo` and `collect` share is this package's library (`lib.rs`), the options of
+//! the pipeline they start are in `pipeline.rs`, and the stages' processes, which the
+//! supervisor starts as `airglyph stage NAME`, are under `stage/`.
 
 mod cmd;
 mod interrupt;
+mod pipeline;
 mod stage;
-mod supervisor;
 
 use clap::{CommandFactory, Parser, Subcommand};
 
@@ -21,7 +24,7 @@ const VERSION: &str = concat!(
 const ENVIRONMENT: &str = "\
 Environment:
   RUST_LOG          what is logged to stderr: a level or a filter (default info;
-                    e.g. RUST_LOG=debug, RUST_LOG=warn,airglyph::cmd::run=debug)
+                    e.g. RUST_LOG=debug, RUST_LOG=warn,airglyph::supervisor=debug)
   NO_COLOR          no colours in the logs (there are none off a terminal anyway)
   AIRGLYPH_MODEL    the gesture model when no --model is given (default: built in)
   AIRGLYPH_ASSETS   the MakeHuman body (default: ~/.cache/airglyph/assets, or
@@ -89,7 +92,7 @@ fn main() -> std::process::ExitCode {
         die_quietly_on_a_closed_pipe();
     }
     let name = match &cli.command {
-        Command::Stage(s) => stage::invocation(s.stage()),
+        Command::Stage(s) => airglyph::supervisor::invocation(s.stage()),
         _ => "airglyph".to_owned(),
     };
     airglyph_ipc::process::main(&name, || dispatch(cli))

@@ -12,6 +12,7 @@ pub struct BackendListing {
     /// Why listing failed or was not possible, if it was not.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub note: Option<String>,
+    /// The devices found.
     pub devices: Vec<DeviceEntry>,
 }
 
@@ -20,19 +21,25 @@ pub struct BackendListing {
 pub struct DeviceEntry {
     /// What to give `--source`: `v4l2:/dev/video2`, `openni2:1d27/0601@2/3`.
     pub source: String,
+    /// Its name, as the driver or device reports it.
     pub name: String,
+    /// Its depth modes.
     pub modes: Vec<ModeEntry>,
     /// Non-depth formats of the node (V4L2), for telling a colour node from a depth one.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub other_formats: Vec<String>,
 }
 
+/// A depth mode: size, rates and pixel format.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ModeEntry {
+    /// Width, pixels.
     pub width: u32,
+    /// Height, pixels.
     pub height: u32,
     /// Frame rates; several for V4L2 sizes.
     pub fps: Vec<f32>,
+    /// The pixel format's name.
     pub format: String,
 }
 

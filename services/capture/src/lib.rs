@@ -1,6 +1,8 @@
 //! The capture stage's logic: depth sources behind one trait, so the process can write
 //! each frame once, straight into a loaned shared-memory sample.
 
+#![warn(missing_docs)]
+
 pub mod devices;
 pub mod onifile;
 #[cfg(feature = "openni2")]

@@ -32,8 +32,10 @@ const SEEK_ENTRY: usize = 20;
 /// Why a file is not an `.oni` we can read.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum OniFileError {
+    /// The file does not start as an `.oni` does.
     #[error("not an OpenNI recording (no NI10 header)")]
     NotOni,
+    /// A record is cut short or inconsistent at this byte offset.
     #[error("damaged record at byte {0}")]
     Damaged(usize),
 }
@@ -116,11 +118,13 @@ fn string_at(b: &[u8], at: usize) -> Option<(&[u8], usize)> {
 /// What a depth node of the file says about itself.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct DepthNode {
+    /// The node's id in the file.
     pub node: u32,
     /// Frames as the node-added record counts them (0 if the recorder never finished).
     pub frames: u32,
     /// Frames actually present (new-data records of this node).
     pub data_records: u32,
+    /// Whether the file records the node's cropping, without which OpenNI2 plays nothing.
     pub has_cropping: bool,
 }
 

@@ -110,8 +110,11 @@ fn c_str(chars: &[std::os::raw::c_char]) -> String {
 /// A depth mode a device offers.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 pub struct DepthMode {
+    /// Width, pixels.
     pub width: u32,
+    /// Height, pixels.
     pub height: u32,
+    /// Frames a second.
     pub fps: u32,
     /// `DEPTH_1_MM`, `DEPTH_100_UM`, or the raw shift formats we cannot use.
     pub format: &'static str,
@@ -134,11 +137,17 @@ fn usable(f: OniPixelFormat) -> bool {
 /// An OpenNI2 device as `airglyph devices` lists it.
 #[derive(Debug, Clone, Serialize)]
 pub struct DeviceListing {
+    /// What to open it by (`openni2:URI`).
     pub uri: String,
+    /// Its maker, as the driver reports it.
     pub vendor: String,
+    /// Its name, as the driver reports it.
     pub name: String,
+    /// USB vendor id.
     pub usb_vendor_id: u16,
+    /// USB product id.
     pub usb_product_id: u16,
+    /// The depth modes it offers.
     pub depth_modes: Vec<DepthMode>,
 }
 

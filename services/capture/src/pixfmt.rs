@@ -22,6 +22,7 @@ pub enum DepthFormat {
 }
 
 impl DepthFormat {
+    /// Every format this build converts.
     pub const ALL: [DepthFormat; 3] = [DepthFormat::Z16, DepthFormat::Y16, DepthFormat::KinectY10B];
 
     /// The V4L2 four-character code.
@@ -33,6 +34,7 @@ impl DepthFormat {
         }
     }
 
+    /// The format of a V4L2 four-character code, if it is a depth format we convert.
     pub fn from_fourcc(code: &[u8; 4]) -> Option<Self> {
         Self::ALL.into_iter().find(|f| &f.fourcc() == code)
     }
@@ -46,6 +48,7 @@ impl DepthFormat {
         }
     }
 
+    /// The format named `name` in `format=` (`Z16`, `Y16`, `Y10B`), if any.
     pub fn from_name(name: &str) -> Option<Self> {
         Self::ALL
             .into_iter()
@@ -73,7 +76,9 @@ impl DepthFormat {
 /// Where the pixels are in a driver's buffer.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Layout {
+    /// Width, pixels.
     pub width: u32,
+    /// Height, pixels.
     pub height: u32,
     /// Bytes from the start of one row to the next (`bytesperline`); 0 means packed rows.
     pub stride: usize,
@@ -85,22 +90,40 @@ pub enum PixError {
     #[error(
         "{format:?} rows of {width} pixels need {need} bytes but the driver's stride is {stride}"
     )]
+    /// A row of the buffer is shorter than a row of pixels.
     Stride {
+        /// The pixel format.
         format: DepthFormat,
+        /// The frame's width.
         width: u32,
+        /// The driver's stride, bytes.
         stride: usize,
+        /// The bytes a row needs.
         need: usize,
     },
+    /// The buffer holds less than a frame.
     #[error("the driver delivered {got} bytes, a {width}x{height} {format:?} frame needs {need}")]
     Short {
+        /// The pixel format.
         format: DepthFormat,
+        /// The frame's width.
         width: u32,
+        /// The frame's height.
         height: u32,
+        /// Bytes delivered.
         got: usize,
+        /// Bytes a frame needs.
         need: usize,
     },
+    /// The output buffer is not the frame's size.
     #[error("the output buffer holds {got} pixels, the frame has {need}")]
-    Output { got: usize, need: usize },
+    Output {
+        /// Pixels the output holds.
+        got: usize,
+        /// Pixels the frame has.
+        need: usize,
+    },
+    /// The depth scale cannot convert.
     #[error("depth scale {0} must be finite and positive")]
     Scale(f32),
 }

@@ -8,6 +8,7 @@ use airglyph_ipc::wire::SourceKind;
 use std::path::Path;
 use std::time::Duration;
 
+/// Frames from a recording on disk (`recording:DIR`), paced by its own times.
 pub struct RecordingSource {
     recording: Recording,
     opts: SourceOptions,
@@ -19,6 +20,7 @@ pub struct RecordingSource {
 }
 
 impl RecordingSource {
+    /// Opens the recording in `dir`.
     pub fn open(dir: &Path, opts: &SourceOptions) -> Result<Self, SourceError> {
         let recording = Recording::open(dir).map_err(|e| SourceError::Fatal(e.to_string()))?;
         if recording.is_empty() {
@@ -36,10 +38,12 @@ impl RecordingSource {
         })
     }
 
+    /// Frames in the recording.
     pub fn len(&self) -> usize {
         self.recording.len()
     }
 
+    /// Whether it has no frame.
     pub fn is_empty(&self) -> bool {
         self.recording.is_empty()
     }

@@ -35,6 +35,7 @@ pub trait DepthSource {
     fn intrinsics(&self) -> Intrinsics;
     /// Nominal frame rate.
     fn fps(&self) -> f32;
+    /// Which kind of source it is, as the depth header carries it.
     fn kind(&self) -> SourceKind;
     /// Where frames come from, for logs and `recording.toml`.
     fn describe(&self) -> String;
@@ -60,6 +61,7 @@ pub enum Pacing {
 /// Options that apply to every source.
 #[derive(Debug, Clone, Default)]
 pub struct SourceOptions {
+    /// How frames are paced: in real time, or as fast as they come.
     pub pacing: Pacing,
     /// Start again at the first frame at the end.
     pub looping: bool,
@@ -85,24 +87,33 @@ pub enum SourceSpec {
 /// frame N: OpenNI2 cannot seek, so the file is read from the start and N frames skipped).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct CameraOptions {
+    /// Width asked for (`mode=WxH`).
     pub width: Option<u32>,
+    /// Height asked for.
     pub height: Option<u32>,
+    /// Frame rate asked for (`mode=@FPS`).
     pub fps: Option<u32>,
+    /// Pixel format asked for (`format=`, V4L2).
     pub format: Option<crate::pixfmt::DepthFormat>,
+    /// Intrinsics given (`intrinsics=`).
     pub intrinsics: Option<IntrinsicsChoice>,
+    /// The device's depth unit in millimetres (`scale=`).
     pub scale: Option<f32>,
+    /// The `.oni` frame to play from (`start=`).
     pub start: Option<u64>,
 }
 
 /// Where a camera's intrinsics come from when the user names them.
 #[derive(Debug, Clone, PartialEq)]
 pub enum IntrinsicsChoice {
+    /// A known camera's intrinsics.
     Preset(airglyph_core::camera::Preset),
     /// fx, fy, cx, cy in pixels at the capture resolution.
     Explicit([f32; 4]),
 }
 
 impl CameraOptions {
+    /// Whether no option was given.
     pub fn is_empty(&self) -> bool {
         *self == Self::default()
     }

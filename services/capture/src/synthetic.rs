@@ -37,6 +37,7 @@ pub fn scene(script: Option<&str>, looping: bool) -> Result<SceneConfig, SourceE
     })
 }
 
+/// The synthetic person rendered live (`synthetic[:…]`), with its exact skeleton.
 pub struct SyntheticSource {
     synth: Synthesizer,
     script: String,
@@ -47,6 +48,7 @@ pub struct SyntheticSource {
 }
 
 impl SyntheticSource {
+    /// The scene `script` names (the moving person by default).
     pub fn open(script: Option<&str>, opts: &SourceOptions) -> Result<Self, SourceError> {
         let cfg = scene(script, opts.looping)?;
         let synth = Synthesizer::new(cfg).map_err(|e| SourceError::Fatal(e.to_string()))?;

@@ -27,8 +27,11 @@ fn fatal(msg: impl Into<String>) -> SourceError {
 /// One depth format of a device with its sizes and rates.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct V4l2Mode {
+    /// The pixel format.
     pub format: DepthFormat,
+    /// Width, pixels.
     pub width: u32,
+    /// Height, pixels.
     pub height: u32,
     /// Frame rates (frames per second) the driver lists for this size.
     pub fps: Vec<f32>,
@@ -37,9 +40,13 @@ pub struct V4l2Mode {
 /// A V4L2 device as `airglyph devices` lists it.
 #[derive(Debug, Clone, Serialize)]
 pub struct V4l2Listing {
+    /// The device node.
     pub path: PathBuf,
+    /// The card's name, as the driver reports it.
     pub card: String,
+    /// The driver's name.
     pub driver: String,
+    /// Its depth formats with their sizes and rates.
     pub depth_modes: Vec<V4l2Mode>,
     /// Four-character codes of its other (non-depth) formats.
     pub other_formats: Vec<String>,
@@ -273,6 +280,8 @@ pub struct V4l2Source {
 }
 
 impl V4l2Source {
+    /// Opens the depth node at `path` with the camera options; fails saying what to add
+    /// when the intrinsics are unknown.
     pub fn open(path: &Path, cam: &CameraOptions) -> Result<Self, SourceError> {
         let mut fatal_msg = None;
         let r = guarded(path, || {

@@ -6,14 +6,16 @@ use crate::scene::Scene;
 use airglyph_ipc::clock::monotonic_ns;
 use airglyph_ipc::port::DepthReceiver;
 use airglyph_ipc::{
-    GestureEventMsg, IpcError, Pipeline, Receiver, SkeletonMsg, Stage, StageStatsMsg,
+    DecisionMsg, GestureEventMsg, IpcError, Pipeline, Receiver, SkeletonMsg, Stage, StageStatsMsg,
 };
 use std::sync::Mutex;
 use std::time::Duration;
 
+/// The viewer's subscriptions to every service of a pipeline.
 pub struct Feed {
     depth: DepthReceiver,
     skeletons: Receiver<SkeletonMsg>,
+    decisions: Receiver<DecisionMsg>,
     gestures: Receiver<GestureEventMsg>,
     stats: Vec<(Stage, Receiver<StageStatsMsg>)>,
 }
@@ -21,8 +23,13 @@ pub struct Feed {
 /// What one [`Feed::poll`] brought in.
 #[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
 pub struct Polled {
+    /// Depth frames taken.
     pub frames: usize,
+    /// Skeletons taken.
     pub skeletons: usize,
+    /// Decisions taken.
+    pub decisions: usize,
+    /// Gesture events taken.
     pub gestures: usize,
 }
 
@@ -35,11 +42,13 @@ impl Feed {
             .map(|&s| Ok((s, pipeline.stats_receiver(s)?)))
             .collect::<Result<_, IpcError>>()?;
         let gestures = pipeline.gesture_receiver()?;
+        let decisions = pipeline.decision_receiver()?;
         let skeletons = pipeline.skeleton_receiver()?;
         let depth = pipeline.depth_receiver()?;
         Ok(Self {
             depth,
             skeletons,
+            decisions,
             gestures,
             stats,
         })
@@ -61,6 +70,10 @@ impl Feed {
         while let Some(r) = self.skeletons.try_recv()? {
             lock().push_skeleton(r.msg);
             polled.skeletons += 1;
+        }
+        while let Some(r) = self.decisions.try_recv()? {
+            lock().push_decision(r.msg);
+            polled.decisions += 1;
         }
         while let Some(r) = self.gestures.try_recv()? {
             lock().push_gesture(r.msg, monotonic_ns());

@@ -17,7 +17,9 @@ use std::time::{Duration, Instant};
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("the viewer at {addr} does not answer its health check: {reason}")]
 pub struct HealthError {
+    /// The address asked.
     pub addr: SocketAddr,
+    /// What went wrong.
     pub reason: String,
 }
 
@@ -77,7 +79,9 @@ pub fn probe(addr: SocketAddr, timeout: Duration) -> Result<(), HealthError> {
 /// and how many failures in a row mean the server stopped (one slow answer on a loaded
 /// machine is not that).
 pub const EVERY: Duration = Duration::from_secs(2);
+/// How long one probe waits for an answer.
 pub const TIMEOUT: Duration = Duration::from_secs(2);
+/// Probes failed in a row after which the viewer has stopped serving.
 pub const FAILURES: u32 = 3;
 
 /// Probes the viewer's own server from a thread of its own.

@@ -1,16 +1,20 @@
 //! The viewer stage as a library: what the pipeline looks like, drawn for a person.
 //!
 //! ```text
-//!  airglyph/depth, /skeleton, /gesture, /stats/* ──Feed──▶ Scene ──render──▶ picture
-//!                                                            └──state──▶ page panels (JSON)
+//!  airglyph/depth, /skeleton, /decision, /gesture, /stats/* ──Feed──▶ Scene ──render──▶ picture
+//!                                                                      └──state──▶ page panels (JSON)
 //! ```
 //!
 //! [`feed`] subscribes like any stage and copies what arrives into a [`Scene`]; the scene
-//! picks the frame to show with the skeleton estimated from it, follows the drawing hand
-//! (airglyph-gesture's [`airglyph_gesture::HandTracker`]) and keeps the last gestures and
-//! a minute of telemetry; [`render()`] draws the picture, the same for the web page
-//! ([`server`], answering through [`routes`] from [`pictures`]) and for `airglyph
-//! snapshot`. [`health`] tells a supervisor whether the page is still served.
+//! picks the frame to show with the skeleton estimated from it, keeps the drawing hand's
+//! path as the gesture stage's recognizer took it (the hand point of each of its
+//! decisions) with the last gestures' Bezier points, the last gestures and a minute of
+//! telemetry. It computes none of these itself: the picture shows what the recognizer
+//! saw. [`render()`] draws the picture, the same for the web page ([`server`],
+//! answering through [`routes`] from [`pictures`]) and for `airglyph snapshot`.
+//! [`health`] tells a supervisor whether the page is still served.
+
+#![warn(missing_docs)]
 
 pub mod colormap;
 mod connections;

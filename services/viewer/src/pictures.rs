@@ -54,6 +54,7 @@ fn relock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
 }
 
 impl Shared {
+    /// Shared state for a server with `config`, its scene empty.
     pub fn new(config: ServeConfig) -> Self {
         Self {
             scene: Mutex::new(Scene::new()),
@@ -67,6 +68,7 @@ impl Shared {
         }
     }
 
+    /// The scene the feed fills and the routes read.
     pub fn scene(&self) -> &Mutex<Scene> {
         &self.scene
     }

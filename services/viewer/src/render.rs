@@ -1,6 +1,7 @@
 //! The picture, drawn in one place for the page and for `airglyph snapshot`: the depth
-//! image colour-mapped, the skeleton over it, the drawing hand's trail with its Bezier
-//! points, the last gestures with their scores and a caption.
+//! image colour-mapped, the skeleton over it, the recognizer's view of the drawing hand
+//! (its path and the last gesture's Bezier points, in the body frame the gesture stage
+//! measures in), the last gestures with their scores and a caption.
 
 use crate::colormap::colourize;
 use crate::draw::{disc, line, rect, text, text_height, text_width};
@@ -9,12 +10,17 @@ use image::{Rgb, RgbImage};
 
 // Colours the depth map never takes (it spans turbo's blues, greens, yellows and reds),
 // so the overlay stands out on any depth, even after JPEG compression.
+/// A bone.
 pub const BONE: Rgb<u8> = Rgb([255, 255, 255]);
 /// A joint the pose stage is sure of (confidence ≥ [`SURE`]).
 pub const JOINT: Rgb<u8> = Rgb([255, 0, 255]);
+/// A joint the pose stage is unsure of.
 pub const JOINT_UNSURE: Rgb<u8> = Rgb([128, 128, 128]);
+/// The hand's path as the recognizer took it.
 pub const TRAIL: Rgb<u8> = Rgb([255, 255, 120]);
+/// The last gesture's Bezier points.
 pub const BEZIER: Rgb<u8> = Rgb([160, 0, 255]);
+/// Text.
 pub const TEXT: Rgb<u8> = Rgb([255, 255, 255]);
 const PANEL: Rgb<u8> = Rgb([0, 0, 0]);
 
@@ -24,22 +30,27 @@ pub const SURE: f32 = 0.5;
 /// A recognized gesture as the picture shows it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GestureLine {
+    /// The symbol.
     pub label: String,
+    /// The classifier's confidence, 0–1.
     pub score: f32,
     /// Seconds since it was recognized.
     pub age_s: f32,
 }
 
-/// Everything drawn over the depth image. Points are pixels (u right, v down).
+/// Everything drawn over the depth image.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Overlay {
+    /// The skeleton estimated from the frame (camera frame, drawn where it projects).
     pub skeleton: Option<Skeleton>,
-    /// The drawing hand's recent positions, oldest first.
+    /// The drawing hand's recent path as the gesture stage's recognizer took it, oldest
+    /// first: body frame (x to the person's right, y down, shoulder widths).
     pub trail: Vec<[f32; 2]>,
-    /// Points of the Bezier curve whose control points are the trail.
+    /// The last gesture's Bezier points, in the same frame.
     pub bezier: Vec<[f32; 2]>,
     /// Newest first.
     pub gestures: Vec<GestureLine>,
+    /// A line at the bottom: the frame, its size, whether a person was found.
     pub caption: String,
 }
 
@@ -59,15 +70,7 @@ pub fn render(depth: DepthView<'_>, k: &Intrinsics, o: &Overlay) -> RgbImage {
     if let Some(sk) = &o.skeleton {
         skeleton(&mut img, sk, k, sf);
     }
-    trail(&mut img, &o.trail, sf);
-    for pair in o.bezier.windows(2) {
-        line(&mut img, pair[0], pair[1], sf, BEZIER, 0.8);
-    }
-    for p in &o.bezier {
-        // A white rim keeps the points visible over the trail and over dark depth.
-        disc(&mut img, p[0], p[1], 3.0 * sf + 1.0, BONE, 1.0);
-        disc(&mut img, p[0], p[1], 3.0 * sf, BEZIER, 1.0);
-    }
+    recognizer(&mut img, &o.trail, &o.bezier, s);
     gestures(&mut img, &o.gestures, s);
     caption(&mut img, &o.caption, s);
     img
@@ -121,12 +124,79 @@ fn skeleton(img: &mut RgbImage, sk: &Skeleton, k: &Intrinsics, sf: f32) {
     }
 }
 
-/// The trail fades in from its oldest point, so the direction of drawing shows.
-fn trail(img: &mut RgbImage, points: &[[f32; 2]], sf: f32) {
+/// The path fades in from its oldest point, so the direction of drawing shows.
+fn path(img: &mut RgbImage, points: &[[f32; 2]], sf: f32) {
     let n = points.len().max(2) as f32;
     for (i, pair) in points.windows(2).enumerate() {
         let alpha = 0.25 + 0.75 * (i + 1) as f32 / (n - 1.0);
         line(img, pair[0], pair[1], 2.0 * sf, TRAIL, alpha.min(1.0));
+    }
+}
+
+/// Smallest extent the recognizer's panel shows, in shoulder widths: a resting hand's
+/// jitter is not blown up to fill the panel.
+const MIN_EXTENT: f32 = 1.0;
+
+/// The recognizer's view in a square panel in the top-right corner: the hand's path in
+/// the body frame the gesture stage measures it in (x to the person's right, y down, so
+/// a symbol reads as drawn), fading into the past, and the last gesture's Bezier points
+/// in the same frame; scaled to fit what is shown.
+fn recognizer(img: &mut RgbImage, trail: &[[f32; 2]], bezier: &[[f32; 2]], s: u32) {
+    let Some(fit) = Fit::of(trail.iter().chain(bezier)) else {
+        return;
+    };
+    let sf = s as f32;
+    let pad = 4 * s as i64;
+    let side = (img.height() / 3) as i64;
+    let (x0, y0) = (img.width() as i64 - side - pad, pad);
+    rect(img, x0, y0, side, side, PANEL, 0.55);
+    text(img, x0 + pad, y0 + pad, "recognizer", s, TEXT);
+    let inner = side as f32 - 2.0 * (pad as f32 + text_height(s) as f32);
+    let centre = [x0 as f32 + side as f32 / 2.0, y0 as f32 + side as f32 / 2.0];
+    let at = |p: &[f32; 2]| fit.place(p, centre, inner);
+    let trail: Vec<[f32; 2]> = trail.iter().map(at).collect();
+    path(img, &trail, sf);
+    let bezier: Vec<[f32; 2]> = bezier.iter().map(at).collect();
+    for pair in bezier.windows(2) {
+        line(img, pair[0], pair[1], sf, BEZIER, 0.8);
+    }
+    for p in &bezier {
+        // A white rim keeps the points visible over the trail and over the panel.
+        disc(img, p[0], p[1], 2.0 * sf + 1.0, BONE, 1.0);
+        disc(img, p[0], p[1], 2.0 * sf, BEZIER, 1.0);
+    }
+}
+
+/// Where body-frame points go in the recognizer's panel: their bounding box's centre at
+/// the panel's, its larger side (at least [`MIN_EXTENT`]) across the panel.
+struct Fit {
+    centre: [f32; 2],
+    extent: f32,
+}
+
+impl Fit {
+    fn of<'a>(points: impl Iterator<Item = &'a [f32; 2]>) -> Option<Self> {
+        let (mut lo, mut hi) = ([f32::MAX; 2], [f32::MIN; 2]);
+        let mut any = false;
+        for p in points.filter(|p| p.iter().all(|v| v.is_finite())) {
+            any = true;
+            for k in 0..2 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        any.then(|| Self {
+            centre: [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0],
+            extent: (hi[0] - lo[0]).max(hi[1] - lo[1]).max(MIN_EXTENT),
+        })
+    }
+
+    fn place(&self, p: &[f32; 2], centre: [f32; 2], side: f32) -> [f32; 2] {
+        let k = side / self.extent;
+        [
+            centre[0] + (p[0] - self.centre[0]) * k,
+            centre[1] + (p[1] - self.centre[1]) * k,
+        ]
     }
 }
 
@@ -203,9 +273,34 @@ fn caption(img: &mut RgbImage, caption: &str, s: u32) {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
-    use airglyph_gesture::skeleton_with_hand;
+    use nalgebra::Point3;
+
+    /// A person facing the camera `z` metres away, the right hand raised: every joint in
+    /// a place of its own.
+    pub(crate) fn person(z: f32) -> Skeleton {
+        // x, y in metres, in `Joint::ALL` order.
+        const AT: [[f32; 2]; Joint::COUNT] = [
+            [0.0, -0.55], // head
+            [0.0, -0.35], // neck
+            [0.0, -0.1],  // torso
+            [0.0, 0.2],   // pelvis
+            [0.18, -0.3], // left shoulder, elbow, hand
+            [0.28, -0.05],
+            [0.3, 0.2],
+            [-0.18, -0.3], // right shoulder, elbow, hand
+            [-0.3, -0.45],
+            [-0.32, -0.62],
+            [0.1, 0.22], // left hip, knee, foot
+            [0.1, 0.65],
+            [0.1, 1.05],
+            [-0.1, 0.22], // right hip, knee, foot
+            [-0.1, 0.65],
+            [-0.1, 1.05],
+        ];
+        Skeleton::new(AT.map(|[x, y]| Point3::new(x, y, z)))
+    }
 
     fn wall(k: &Intrinsics, mm: u16) -> Vec<u16> {
         vec![mm; (k.width * k.height) as usize]
@@ -223,7 +318,7 @@ mod tests {
         px[..(k.width * 20) as usize].fill(1500);
         let depth = DepthView::new(k.width, k.height, &px).unwrap();
         // At 3 m the whole body is in view.
-        let mut sk = skeleton_with_hand(0.3, -0.6, 3.0);
+        let mut sk = person(3.0);
         sk.confidence[Joint::LeftFoot.index()] = 0.1;
         let overlay = Overlay {
             skeleton: Some(sk),
@@ -272,14 +367,15 @@ mod tests {
     }
 
     #[test]
-    fn trail_bezier_and_gestures_are_drawn() {
+    fn the_recognizers_path_and_bezier_points_are_drawn_in_their_panel() {
         let k = Intrinsics::default();
         let px = wall(&k, 2000);
         let depth = DepthView::new(k.width, k.height, &px).unwrap();
-        let trail: Vec<[f32; 2]> = (0..30).map(|i| [300.0 + i as f32 * 5.0, 300.0]).collect();
+        // A stroke to the person's right, 2 shoulder widths long, in the body frame.
+        let trail: Vec<[f32; 2]> = (0..30).map(|i| [i as f32 / 14.5 - 1.0, 0.5]).collect();
         let overlay = Overlay {
-            trail: trail.clone(),
-            bezier: vec![[300.0, 300.0], [372.0, 300.0], [445.0, 300.0]],
+            trail,
+            bezier: vec![[-1.0, 0.5], [0.0, 0.5], [1.0, 0.5]],
             gestures: vec![GestureLine {
                 label: "7".into(),
                 score: 0.83,
@@ -289,16 +385,29 @@ mod tests {
             ..Overlay::default()
         };
         let img = render(depth, &k, &overlay);
-        assert_eq!(*img.get_pixel(372, 300), BEZIER);
-        // Beside the Bezier polyline (1 px each side) but on the trail (2 px each side).
-        let newest = img.get_pixel(430, 302);
-        assert!(
-            (0..3).all(|c| newest[c].abs_diff(TRAIL[c]) < 16),
-            "the newest trail is nearly opaque: {newest:?}"
+        // The panel: 160 px square in the top-right corner, 8 px from the edges; the
+        // stroke across its middle row, left to right as the person drew it.
+        let (x0, side) = (k.width - 160 - 8, 160);
+        let mid = 8 + side / 2;
+        assert_eq!(
+            *img.get_pixel(x0 + side / 2, mid),
+            BEZIER,
+            "the middle point"
         );
-        let oldest = img.get_pixel(302, 302);
+        let newest = img.get_pixel(x0 + 120, mid + 2);
+        assert!(
+            (0..3).all(|c| newest[c].abs_diff(TRAIL[c]) < 40),
+            "the newest path is nearly opaque: {newest:?}"
+        );
+        let oldest = img.get_pixel(x0 + 32, mid + 2);
         assert!(oldest[1] < newest[1] - 50, "the oldest fades: {oldest:?}");
-        assert_eq!(*img.get_pixel(400, 320), *img.get_pixel(600, 200));
+        // Outside the panel the picture is untouched by the path.
+        assert_eq!(*img.get_pixel(400, 320), *img.get_pixel(300, 320));
+        let outside = (0..k.height)
+            .flat_map(|y| (0..x0).map(move |x| (x, y)))
+            .filter(|&(x, y)| *img.get_pixel(x, y) == TRAIL)
+            .count();
+        assert_eq!(outside, 0, "the path stays in its panel");
         // The label "7" at four times 8×8 in the top-left panel, its caption at the bottom.
         let panel_text = (0..60u32)
             .flat_map(|y| (0..60u32).map(move |x| (x, y)))
@@ -310,13 +419,16 @@ mod tests {
             .filter(|&(x, y)| *img.get_pixel(x, y) == TEXT)
             .count();
         assert!(bottom_text > 20, "{bottom_text} caption pixels");
+        // Nothing to show: no panel.
+        let bare = render(depth, &k, &Overlay::default());
+        assert_eq!(bare.get_pixel(x0 + 10, 20), bare.get_pixel(10, 300));
     }
 
     #[test]
     fn a_small_frame_and_a_skeleton_behind_the_camera_do_not_panic() {
         let k = Intrinsics::default().scaled_to(80, 60);
         let px = vec![0u16; 80 * 60];
-        let mut sk = skeleton_with_hand(0.0, 0.0, 2.0);
+        let mut sk = person(2.0);
         sk.joints[Joint::Head.index()].z = -1.0;
         let overlay = Overlay {
             skeleton: Some(sk),

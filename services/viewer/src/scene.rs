@@ -1,13 +1,13 @@
 //! What the viewer knows of the pipeline, built from its messages: the last depth
-//! frames, the newest skeleton, the drawing hand's path, the last gestures and a
-//! minute of each stage's telemetry. It picks what one picture shows ([`Scene::picture`])
+//! frames, the newest skeleton, the drawing hand's path as the gesture stage took it
+//! (its decisions), the last gestures with their Bezier points and a minute of each
+//! stage's telemetry. It picks what one picture shows ([`Scene::picture`])
 //! and what the page's panels show ([`Scene::state`]), from the same selection.
 
 use crate::render::{project_joints, GestureLine, Overlay};
 use airglyph_core::{DepthView, Intrinsics, Joint, Skeleton};
-use airglyph_gesture::{bezier_points, Hand, HandTracker, SpotterConfig};
-use airglyph_ipc::{DepthHeader, GestureEventMsg, SkeletonMsg, Stage, StageStatsMsg};
-use nalgebra::Point3;
+use airglyph_ipc::wire::Hand;
+use airglyph_ipc::{DecisionMsg, DepthHeader, GestureEventMsg, SkeletonMsg, Stage, StageStatsMsg};
 use serde_json::{json, Value};
 use std::collections::VecDeque;
 
@@ -16,13 +16,13 @@ use std::collections::VecDeque;
 const FRAME_RING: usize = 12;
 /// Hand positions kept for the trail.
 const TRAIL_NS: u64 = 3_000_000_000;
+/// How long the last gesture's Bezier points are shown after it came: it is decided
+/// seconds after it was drawn, so its own frames may have left the trail by then.
+const BEZIER_NS: u64 = 3_000_000_000;
 /// Gestures listed.
 const GESTURES: usize = 8;
 /// Telemetry kept per stage.
 pub const HISTORY_NS: u64 = 60_000_000_000;
-/// Points of the trail's Bezier curve: the gesture descriptor's default N
-/// (`TrainConfig::default().bezier_points` in `services/gesture/src/train.rs`).
-pub const BEZIER_POINTS: usize = 15;
 /// A skeleton is drawn over the newest frame only when no frame of its own is kept and it
 /// is at most this many frames older (a stopped pose stage must not leave a stale body).
 const SKELETON_SLACK: u64 = 3;
@@ -30,24 +30,28 @@ const SKELETON_SLACK: u64 = 3;
 /// A depth frame copied out of shared memory.
 #[derive(Debug, Clone)]
 pub struct Frame {
+    /// The frame's header, copied.
     pub header: DepthHeader,
+    /// Its pixels, copied.
     pub pixels: Vec<u16>,
 }
 
 impl Frame {
+    /// The frame as a depth image.
     pub fn view(&self) -> DepthView<'_> {
         DepthView::new(self.header.width, self.header.height, &self.pixels)
             .expect("a frame is only kept when its size matches its header")
     }
 }
 
-/// One position of the drawing hand (camera frame, metres).
+/// One point of the drawing hand's path as the gesture stage's recognizer took it: body
+/// frame, x to the person's right, y down, in shoulder widths.
 #[derive(Debug, Clone, Copy)]
 struct HandSample {
     sequence: u64,
     capture_ns: u64,
     hand: Hand,
-    at: Point3<f32>,
+    at: [f32; 2],
 }
 
 /// A gesture event and when the viewer received it.
@@ -59,8 +63,11 @@ struct Seen {
 
 /// What one picture shows.
 pub struct Picture {
+    /// The frame shown.
     pub frame: Frame,
+    /// Its camera's intrinsics.
     pub intrinsics: Intrinsics,
+    /// What is drawn over it.
     pub overlay: Overlay,
 }
 
@@ -70,6 +77,7 @@ struct Selection<'a> {
     skeleton: Option<(&'a SkeletonMsg, Skeleton)>,
 }
 
+/// What the viewer knows of the pipeline (see the module's documentation).
 pub struct Scene {
     frames: VecDeque<Frame>,
     /// Counts frames taken in: tells the page whether there is anything new.
@@ -77,9 +85,12 @@ pub struct Scene {
     /// Frames lost before the viewer took them (it only ever wants the newest).
     frames_dropped: u64,
     skeleton: Option<SkeletonMsg>,
-    tracker: HandTracker,
+    /// The capture session of the path, which a new one starts afresh.
     session: Option<u64>,
-    hand: VecDeque<HandSample>,
+    /// The sequence of the newest decision taken.
+    decided: Option<u64>,
+    /// The recognizer's path, oldest first.
+    path: VecDeque<HandSample>,
     gestures: VecDeque<Seen>,
     stats: Vec<(Stage, VecDeque<StageStatsMsg>)>,
 }
@@ -91,16 +102,16 @@ impl Default for Scene {
 }
 
 impl Scene {
+    /// A scene with nothing in it yet.
     pub fn new() -> Self {
         Self {
             frames: VecDeque::with_capacity(FRAME_RING),
             frames_in: 0,
             frames_dropped: 0,
             skeleton: None,
-            // The gesture stage's own settings, so the viewer follows the same hand.
-            tracker: HandTracker::new(SpotterConfig::default().tracker),
             session: None,
-            hand: VecDeque::new(),
+            decided: None,
+            path: VecDeque::new(),
             gestures: VecDeque::new(),
             stats: Stage::PIPELINE
                 .iter()
@@ -114,6 +125,7 @@ impl Scene {
         self.frames_in
     }
 
+    /// Frames lost before the viewer took them.
     pub fn frames_dropped(&self) -> u64 {
         self.frames_dropped
     }
@@ -123,6 +135,7 @@ impl Scene {
         self.select().is_some_and(|s| s.skeleton.is_some())
     }
 
+    /// Whether any frame is kept.
     pub fn has_frame(&self) -> bool {
         !self.frames.is_empty()
     }
@@ -152,42 +165,47 @@ impl Scene {
         self.frames_dropped += dropped;
     }
 
-    /// Takes the newest skeleton and follows the drawing hand through it.
+    /// Takes the newest skeleton.
     pub fn push_skeleton(&mut self, msg: SkeletonMsg) {
-        if self.session.replace(msg.session) != Some(msg.session) {
-            // A restarted capture stage: the old path means nothing in the new session.
-            self.hand.clear();
-            self.tracker.reset();
-        }
-        if let Some(s) = msg.skeleton() {
-            if let Some(p) = self.tracker.update(&s, msg.chain.capture_ns) {
-                let joint = match p.hand {
-                    Hand::Left => Joint::LeftHand,
-                    Hand::Right => Joint::RightHand,
-                };
-                self.hand.push_back(HandSample {
-                    sequence: msg.sequence,
-                    capture_ns: msg.chain.capture_ns,
-                    hand: p.hand,
-                    at: s[joint],
-                });
-            }
-        }
-        while self
-            .hand
-            .front()
-            .is_some_and(|h| h.capture_ns + TRAIL_NS < msg.chain.capture_ns)
-        {
-            self.hand.pop_front();
-        }
         self.skeleton = Some(msg);
     }
 
+    /// Takes the gesture stage's decision on one frame: the hand point its recognizer
+    /// used, which extends the trail.
+    pub fn push_decision(&mut self, msg: DecisionMsg) {
+        if self.session.replace(msg.session) != Some(msg.session) {
+            // A restarted capture stage: the old path means nothing in the new session.
+            self.path.clear();
+        }
+        self.decided = Some(msg.sequence);
+        if let Some((hand, at)) = msg.hand_point() {
+            if self.path.back().is_some_and(|h| h.hand != hand) {
+                // The recognizer starts the other hand's path afresh.
+                self.path.clear();
+            }
+            self.path.push_back(HandSample {
+                sequence: msg.sequence,
+                capture_ns: msg.chain.capture_ns,
+                hand,
+                at,
+            });
+        }
+        while self
+            .path
+            .front()
+            .is_some_and(|h| h.capture_ns + TRAIL_NS < msg.chain.capture_ns)
+        {
+            self.path.pop_front();
+        }
+    }
+
+    /// Takes a gesture event, received at `received_ns`.
     pub fn push_gesture(&mut self, msg: GestureEventMsg, received_ns: u64) {
         self.gestures.push_front(Seen { msg, received_ns });
         self.gestures.truncate(GESTURES);
     }
 
+    /// Takes a stage's telemetry report, keeping a minute of them.
     pub fn push_stats(&mut self, stage: Stage, msg: StageStatsMsg) {
         if let Some((_, h)) = self.stats.iter_mut().find(|(s, _)| *s == stage) {
             h.push_back(msg);
@@ -236,25 +254,34 @@ impl Scene {
         })
     }
 
-    /// The drawing hand's positions up to the shown frame, in pixels, oldest first.
+    /// The drawing hand's path up to the shown frame as the recognizer took it (body
+    /// frame), oldest first, and which hand it is.
     fn trail(&self, sel: &Selection<'_>) -> (Vec<[f32; 2]>, Option<Hand>) {
-        let k = sel.frame.header.intrinsics();
         let end = sel.frame.header.capture_ns;
-        let last_hand = self.hand.back().map(|h| h.hand);
+        let last_hand = self.path.back().map(|h| h.hand);
         let points = self
-            .hand
+            .path
             .iter()
             .filter(|h| {
                 sel.frame.header.session == self.session.unwrap_or(0)
-                    && Some(h.hand) == last_hand
                     && h.capture_ns <= end
-                    // A pose stage that stopped must not leave its last trail on new frames.
+                    // A gesture stage that stopped must not leave its last trail on new frames.
                     && h.capture_ns + TRAIL_NS >= end
                     && h.sequence <= sel.frame.header.sequence
             })
-            .filter_map(|h| k.project(&h.at).map(|(u, v)| [u, v]))
+            .map(|h| h.at)
             .collect();
         (points, last_hand)
+    }
+
+    /// The Bezier points of the newest gesture, while it is recent: the curve the
+    /// gesture stage described the symbol by (body frame).
+    fn bezier(&self, now_ns: u64) -> Vec<[f32; 2]> {
+        self.gestures
+            .front()
+            .filter(|g| g.received_ns + BEZIER_NS >= now_ns)
+            .map(|g| g.msg.bezier().to_vec())
+            .unwrap_or_default()
     }
 
     fn gesture_lines(&self, now_ns: u64) -> Vec<GestureLine> {
@@ -273,7 +300,7 @@ impl Scene {
     pub fn picture(&self, now_ns: u64) -> Option<Picture> {
         let sel = self.select()?;
         let (trail, _) = self.trail(&sel);
-        let bezier = bezier_of(&trail);
+        let bezier = self.bezier(now_ns);
         let h = &sel.frame.header;
         let caption = format!(
             "frame {}  {}x{}  {}",
@@ -308,14 +335,19 @@ impl Scene {
             json!({"sequence": h.sequence, "width": h.width, "height": h.height,
                    "age_ms": now_ns.saturating_sub(h.capture_ns) as f64 * 1e-6})
         });
-        let (skeleton, trail, bezier) = match &sel {
+        let (skeleton, trail) = match &sel {
             Some(s) => {
                 let (trail, hand) = self.trail(s);
-                let bezier = bezier_of(&trail);
-                (skeleton_json(s, hand), trail, bezier)
+                (skeleton_json(s, hand), trail)
             }
-            None => (json!({"person_found": false}), Vec::new(), Vec::new()),
+            None => (json!({"person_found": false}), Vec::new()),
         };
+        let newest = self.path.back();
+        let recognizer = json!({
+            "sequence": self.decided,
+            "hand": newest.map(|h| h.hand.name()),
+            "newest": newest.map(|h| json!({"sequence": h.sequence, "at": h.at})),
+        });
         let gestures: Vec<Value> = self
             .gestures
             .iter()
@@ -326,7 +358,8 @@ impl Scene {
                     "score": m.score,
                     "start_sequence": m.start_sequence,
                     "end_sequence": m.end_sequence,
-                    "hand": if m.hand == airglyph_ipc::wire::Hand::Left as u8 { "left" } else { "right" },
+                    "hand": Hand::from_u8(m.hand).map(Hand::name),
+                    "bezier_points": m.bezier().len(),
                     "age_s": now_ns.saturating_sub(g.received_ns) as f64 * 1e-9,
                     "latency_ms": m.chain.gesture_publish_ns.saturating_sub(m.chain.capture_ns) as f64 * 1e-6,
                 })
@@ -341,23 +374,13 @@ impl Scene {
             "frame": frame,
             "skeleton": skeleton,
             "trail": trail,
-            "bezier": bezier,
+            "bezier": self.bezier(now_ns),
+            "recognizer": recognizer,
             "gestures": gestures,
             "stages": stages,
             "viewer": {"frames_in": self.frames_in, "frames_dropped": self.frames_dropped},
         })
     }
-}
-
-/// The Bezier points of a trail (none for fewer than three positions).
-fn bezier_of(trail: &[[f32; 2]]) -> Vec<[f32; 2]> {
-    if trail.len() < 3 {
-        return Vec::new();
-    }
-    bezier_points(trail, BEZIER_POINTS)
-        .into_iter()
-        .map(|[u, v]| [u as f32, v as f32])
-        .collect()
 }
 
 fn skeleton_json(sel: &Selection<'_>, hand: Option<Hand>) -> Value {
@@ -414,7 +437,7 @@ fn stats_json(h: &VecDeque<StageStatsMsg>, now_ns: u64) -> Value {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use airglyph_gesture::skeleton_with_hand;
+    use crate::render::tests::person;
     use airglyph_ipc::LatencyChain;
 
     const SESSION: u64 = 77;
@@ -431,7 +454,7 @@ mod tests {
         h
     }
 
-    fn skeleton(seq: u64, x: f32) -> SkeletonMsg {
+    fn skeleton(seq: u64) -> SkeletonMsg {
         let mut m = SkeletonMsg {
             sequence: seq,
             session: SESSION,
@@ -441,8 +464,18 @@ mod tests {
             },
             ..Default::default()
         };
-        m.set_skeleton(Some(&skeleton_with_hand(x, -0.5, 2.0)));
+        m.set_skeleton(Some(&person(2.0)));
         m
+    }
+
+    /// The gesture stage's decision on frame `seq`, its recognizer's hand at (x, y).
+    fn decision(seq: u64, at: Option<(Hand, [f32; 2])>) -> DecisionMsg {
+        // The frame's own numbers, as the skeleton it was decided on carried them.
+        let frame = skeleton(seq);
+        let mut d = DecisionMsg::default();
+        (d.sequence, d.session, d.chain) = (frame.sequence, frame.session, frame.chain);
+        d.set_hand_point(at);
+        d
     }
 
     fn pixels(seq: u64) -> Vec<u16> {
@@ -455,7 +488,7 @@ mod tests {
         for seq in 0..5 {
             scene.push_depth(header(seq), &pixels(seq), 0);
         }
-        scene.push_skeleton(skeleton(2, 0.0));
+        scene.push_skeleton(skeleton(2));
         let p = scene.picture(0).unwrap();
         assert_eq!(p.frame.header.sequence, 2);
         assert_eq!(p.frame.pixels, pixels(2));
@@ -470,7 +503,7 @@ mod tests {
     #[test]
     fn a_stale_skeleton_is_not_drawn_over_a_new_frame() {
         let mut scene = Scene::new();
-        scene.push_skeleton(skeleton(1, 0.0));
+        scene.push_skeleton(skeleton(1));
         for seq in 0..30 {
             scene.push_depth(header(seq), &pixels(seq), 0);
         }
@@ -482,36 +515,69 @@ mod tests {
     }
 
     #[test]
-    fn the_trail_follows_the_drawing_hand_and_has_bezier_points() {
+    fn the_trail_is_the_recognizers_path_and_the_bezier_points_its_gestures() {
         let mut scene = Scene::new();
+        let at = |seq: u64| [seq as f32 * 0.05, -0.5];
         for seq in 0..20 {
             scene.push_depth(header(seq), &pixels(seq), 0);
-            scene.push_skeleton(skeleton(seq, seq as f32 * 0.05));
+            scene.push_skeleton(skeleton(seq));
+            // The recognizer had no hand point on frame 7 (an unsteady skeleton).
+            let point = (seq != 7).then(|| (Hand::Right, at(seq)));
+            scene.push_decision(decision(seq, point));
         }
         let p = scene.picture(0).unwrap();
-        let trail = &p.overlay.trail;
-        assert_eq!(trail.len(), 20, "one point a skeleton");
-        // The person's right hand moves to their right: the camera's left (u falls).
-        assert!(trail[19][0] < trail[0][0] - 3.0, "{trail:?}");
-        let k = p.intrinsics;
-        let s = skeleton_with_hand(19.0 * 0.05, -0.5, 2.0);
-        let (u, v) = k.project(&s[Joint::RightHand]).unwrap();
-        assert!((trail[19][0] - u).abs() < 1e-3 && (trail[19][1] - v).abs() < 1e-3);
-        assert_eq!(p.overlay.bezier.len(), BEZIER_POINTS);
         assert_eq!(
-            p.overlay.bezier[0], trail[0],
-            "a Bezier curve starts at its first control point"
+            p.overlay.trail.len(),
+            19,
+            "one point a decision with a hand point"
         );
+        assert_eq!(p.overlay.trail[0], at(0));
+        assert_eq!(
+            p.overlay.trail[18],
+            at(19),
+            "exactly as the gesture stage sent it"
+        );
+        assert!(p.overlay.bezier.is_empty(), "no gesture yet");
+        let state = scene.state(0);
+        assert_eq!(state["recognizer"]["sequence"], 19);
+        assert_eq!(state["recognizer"]["hand"], "right");
+        assert_eq!(state["recognizer"]["newest"]["sequence"], 19);
+        assert_eq!(state["skeleton"]["hand"], "right");
+
+        // A gesture's Bezier points are shown while it is recent.
+        let mut g = GestureEventMsg::default();
+        g.set_label("7").unwrap();
+        let curve = [[0.0, -0.5], [0.4, -0.5], [0.9, -0.5]];
+        g.set_bezier(&curve).unwrap();
+        scene.push_gesture(g, 10);
+        assert_eq!(scene.picture(10).unwrap().overlay.bezier, curve);
+        assert_eq!(scene.state(10)["gestures"][0]["bezier_points"], 3);
+        assert!(scene
+            .picture(10 + BEZIER_NS + 1)
+            .unwrap()
+            .overlay
+            .bezier
+            .is_empty());
+
+        // The other hand starts a path of its own.
+        scene.push_decision(decision(20, Some((Hand::Left, [-1.0, 0.0]))));
+        scene.push_depth(header(20), &pixels(20), 0);
+        scene.push_skeleton(skeleton(20));
+        assert_eq!(scene.picture(0).unwrap().overlay.trail, [[-1.0, 0.0]]);
+
         // A new capture session starts a new trail.
         let mut h = header(0);
         h.session = SESSION + 1;
         scene.push_depth(h, &pixels(0), 0);
-        let mut m = skeleton(0, 0.0);
+        let mut m = skeleton(0);
         m.session = SESSION + 1;
         scene.push_skeleton(m);
+        let mut d = decision(0, Some((Hand::Right, at(0))));
+        d.session = SESSION + 1;
+        scene.push_decision(d);
         assert_eq!(scene.picture(0).unwrap().overlay.trail.len(), 1);
-        // Frames long after the last skeleton (pose stopped) carry no trail, once the
-        // skeleton's own frame has left the ring.
+        // Frames long after the last decision (gesture stage stopped) carry no trail,
+        // once the skeleton's own frame has left the ring.
         for seq in 200..200 + FRAME_RING as u64 {
             let mut late = header(seq);
             late.session = SESSION + 1;

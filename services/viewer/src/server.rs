@@ -174,6 +174,7 @@ impl Server {
         }
     }
 
+    /// Stops serving and waits for the server's thread.
     pub fn stop(mut self) {
         drop(self.watchdog.take());
         if let Some(stop) = self.stop.take() {

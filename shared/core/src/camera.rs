@@ -11,11 +11,17 @@ pub const MAX_SIDE: u32 = 8192;
 /// Pinhole intrinsics of a depth camera, in pixels, for one resolution.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Intrinsics {
+    /// Image width, pixels.
     pub width: u32,
+    /// Image height, pixels.
     pub height: u32,
+    /// Horizontal focal length, pixels.
     pub fx: f32,
+    /// Vertical focal length, pixels.
     pub fy: f32,
+    /// Principal point's column, pixels.
     pub cx: f32,
+    /// Principal point's row, pixels.
     pub cy: f32,
 }
 
@@ -31,12 +37,14 @@ pub enum Preset {
 }
 
 impl Preset {
+    /// Every preset, in the order `--help` lists them.
     pub const ALL: [Preset; 3] = [
         Preset::KinectV1Vga,
         Preset::KinectV1Qvga,
         Preset::RealSenseD435,
     ];
 
+    /// The preset's name on the command line (`intrinsics=NAME`).
     pub fn name(self) -> &'static str {
         match self {
             Preset::KinectV1Vga => "kinect-v1-640x480",
@@ -45,10 +53,12 @@ impl Preset {
         }
     }
 
+    /// The preset a command-line name names, if any.
     pub fn from_name(name: &str) -> Option<Preset> {
         Self::ALL.into_iter().find(|p| p.name() == name)
     }
 
+    /// The camera's intrinsics at the preset's resolution.
     pub fn intrinsics(self) -> Intrinsics {
         match self {
             Preset::KinectV1Vga => Intrinsics::new(640, 480, 575.8, 575.8, 319.5, 239.5),
@@ -61,20 +71,38 @@ impl Preset {
 /// Why a set of intrinsics cannot describe a real camera.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum IntrinsicsError {
+    /// The image is empty or beyond the largest size accepted.
     #[error("image size {width}x{height} is empty or larger than 8192x8192")]
-    Size { width: u32, height: u32 },
+    Size {
+        /// The width given.
+        width: u32,
+        /// The height given.
+        height: u32,
+    },
+    /// A focal length is not finite or out of the accepted range.
     #[error("focal length fx={fx}, fy={fy} must be finite and between 1 and 100000 px")]
-    Focal { fx: f32, fy: f32 },
+    Focal {
+        /// The horizontal focal length given.
+        fx: f32,
+        /// The vertical focal length given.
+        fy: f32,
+    },
+    /// The principal point lies outside the image.
     #[error("principal point ({cx}, {cy}) lies outside the {width}x{height} image")]
     Principal {
+        /// Its column.
         cx: f32,
+        /// Its row.
         cy: f32,
+        /// The image's width.
         width: u32,
+        /// The image's height.
         height: u32,
     },
 }
 
 impl Intrinsics {
+    /// Intrinsics from their six numbers, unchecked (see [`Intrinsics::validate`]).
     pub const fn new(width: u32, height: u32, fx: f32, fy: f32, cx: f32, cy: f32) -> Self {
         Self {
             width,

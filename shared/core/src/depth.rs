@@ -7,8 +7,11 @@ use nalgebra::Point3;
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error("a {width}x{height} depth image needs {} pixels, got {len}", *width as usize * *height as usize)]
 pub struct SizeMismatch {
+    /// The width claimed.
     pub width: u32,
+    /// The height claimed.
     pub height: u32,
+    /// The pixels there are.
     pub len: usize,
 }
 
@@ -37,6 +40,7 @@ fn check(width: u32, height: u32, len: usize) -> Result<(), SizeMismatch> {
 }
 
 impl<'a> DepthView<'a> {
+    /// A view of `pixels` as a `width × height` image; refuses a slice of another length.
     pub fn new(width: u32, height: u32, pixels: &'a [u16]) -> Result<Self, SizeMismatch> {
         check(width, height, pixels.len())?;
         Ok(Self {
@@ -46,14 +50,17 @@ impl<'a> DepthView<'a> {
         })
     }
 
+    /// Width, pixels.
     pub fn width(&self) -> u32 {
         self.width
     }
 
+    /// Height, pixels.
     pub fn height(&self) -> u32 {
         self.height
     }
 
+    /// The pixels, row-major, millimetres, 0 = no data.
     pub fn pixels(&self) -> &'a [u16] {
         self.pixels
     }
@@ -64,6 +71,7 @@ impl<'a> DepthView<'a> {
         self.pixels[(v * self.width + u) as usize]
     }
 
+    /// A copy that owns its pixels.
     pub fn to_owned(&self) -> DepthImage {
         DepthImage {
             width: self.width,
@@ -94,6 +102,7 @@ impl<'a> DepthView<'a> {
 }
 
 impl DepthImage {
+    /// An image of `pixels`; refuses a vector of another length than `width × height`.
     pub fn new(width: u32, height: u32, pixels: Vec<u16>) -> Result<Self, SizeMismatch> {
         check(width, height, pixels.len())?;
         Ok(Self {
@@ -112,26 +121,32 @@ impl DepthImage {
         }
     }
 
+    /// Width, pixels.
     pub fn width(&self) -> u32 {
         self.width
     }
 
+    /// Height, pixels.
     pub fn height(&self) -> u32 {
         self.height
     }
 
+    /// The pixels, row-major, millimetres, 0 = no data.
     pub fn pixels(&self) -> &[u16] {
         &self.pixels
     }
 
+    /// The pixels, to write into.
     pub fn pixels_mut(&mut self) -> &mut [u16] {
         &mut self.pixels
     }
 
+    /// The pixels, giving the image up (to reuse its buffer).
     pub fn into_pixels(self) -> Vec<u16> {
         self.pixels
     }
 
+    /// A borrowed view of the image.
     pub fn view(&self) -> DepthView<'_> {
         DepthView {
             width: self.width,
@@ -140,11 +155,13 @@ impl DepthImage {
         }
     }
 
+    /// The depth at pixel (u, v), millimetres; panics outside the image.
     #[inline]
     pub fn get(&self, u: u32, v: u32) -> u16 {
         self.view().get(u, v)
     }
 
+    /// Sets the depth at pixel (u, v); panics outside the image.
     #[inline]
     pub fn set(&mut self, u: u32, v: u32, mm: u16) {
         self.pixels[(v * self.width + u) as usize] = mm;
@@ -155,12 +172,16 @@ impl DepthImage {
 /// without data hold the origin (z = 0), which no real surface can be at.
 #[derive(Debug, Clone)]
 pub struct PointCloud {
+    /// Width of the image the cloud came from.
     pub width: u32,
+    /// Height of the image the cloud came from.
     pub height: u32,
+    /// One point a pixel, row-major, camera frame, metres.
     pub points: Vec<Point3<f32>>,
 }
 
 impl PointCloud {
+    /// The point pixel (u, v) saw, or None where it had no depth.
     #[inline]
     pub fn at(&self, u: u32, v: u32) -> Option<&Point3<f32>> {
         let p = &self.points[(v * self.width + u) as usize];

@@ -30,6 +30,8 @@ fn alpha(cutoff: f64, dt: f64) -> f64 {
 }
 
 impl<const N: usize> OneEuroPoint<N> {
+    /// A filter with the One Euro parameters: the cut-off at rest (Hz), how fast it rises
+    /// with speed, and the cut-off of the speed's own filter (Hz).
     pub fn new(min_cutoff: f64, beta: f64, d_cutoff: f64) -> Self {
         Self {
             min_cutoff,
@@ -76,6 +78,7 @@ impl<const N: usize> OneEuroPoint<N> {
 pub struct OneEuro(OneEuroPoint<1>);
 
 impl OneEuro {
+    /// A filter with the One Euro parameters (see [`OneEuroPoint::new`]).
     pub fn new(min_cutoff: f64, beta: f64, d_cutoff: f64) -> Self {
         Self(OneEuroPoint::new(min_cutoff, beta, d_cutoff))
     }

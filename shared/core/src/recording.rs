@@ -28,23 +28,40 @@ pub const FORMAT_VERSION: u32 = 1;
 /// What went wrong with a recording, and where.
 #[derive(Debug, thiserror::Error)]
 pub enum RecordingError {
+    /// A file could not be read or written.
     #[error("{}: {source}", path.display())]
     Io {
+        /// The file.
         path: PathBuf,
+        /// What the system said.
         source: std::io::Error,
     },
+    /// `recording.toml` is missing a value, has a wrong one, or another version.
     #[error("{}: {reason}", path.display())]
-    Manifest { path: PathBuf, reason: String },
-    #[error("{}: frame {frame}: {reason}", path.display())]
-    Frame {
+    Manifest {
+        /// The manifest.
         path: PathBuf,
-        frame: usize,
+        /// What is wrong with it.
         reason: String,
     },
+    /// A frame's PNG cannot be used.
+    #[error("{}: frame {frame}: {reason}", path.display())]
+    Frame {
+        /// The PNG.
+        path: PathBuf,
+        /// Its frame index.
+        frame: usize,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// A line of a CSV file is wrong.
     #[error("{}:{line}: {reason}", path.display())]
     Csv {
+        /// The CSV file.
         path: PathBuf,
+        /// The line, from 1.
         line: usize,
+        /// What is wrong with it.
         reason: String,
     },
 }
@@ -61,27 +78,37 @@ impl RecordingError {
 /// `recording.toml`: everything needed to interpret the frames.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RecordingInfo {
+    /// [`FORMAT_VERSION`] when written; another is refused.
     pub format_version: u32,
+    /// Frame width, pixels.
     pub width: u32,
+    /// Frame height, pixels.
     pub height: u32,
+    /// Nominal frame rate (`frames.csv` has each frame's own time).
     pub fps: f32,
     /// Millimetres per depth unit in the PNGs; airglyph writes 1.0.
     pub depth_unit_mm: f32,
     /// Where the frames came from, e.g. `synthetic`, `openni2:Dummy`.
     pub source: String,
+    /// The camera's focal lengths and principal point.
     pub intrinsics: PinholeToml,
 }
 
 /// The focal lengths and principal point, as stored in `recording.toml`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct PinholeToml {
+    /// Horizontal focal length, pixels.
     pub fx: f32,
+    /// Vertical focal length, pixels.
     pub fy: f32,
+    /// Principal point's column, pixels.
     pub cx: f32,
+    /// Principal point's row, pixels.
     pub cy: f32,
 }
 
 impl RecordingInfo {
+    /// The manifest of frames from a camera with intrinsics `k` at `fps`, in millimetres.
     pub fn new(k: Intrinsics, fps: f32, source: impl Into<String>) -> Self {
         Self {
             format_version: FORMAT_VERSION,
@@ -99,6 +126,7 @@ impl RecordingInfo {
         }
     }
 
+    /// The intrinsics at the recording's size.
     pub fn intrinsics(&self) -> Intrinsics {
         let PinholeToml { fx, fy, cx, cy } = self.intrinsics;
         Intrinsics::new(self.width, self.height, fx, fy, cx, cy)
@@ -143,6 +171,8 @@ pub struct Recording {
 }
 
 impl Recording {
+    /// Opens the recording in `dir`: reads and checks the manifest, `frames.csv` and
+    /// `joints.csv` if there is one; the frames are read when asked for.
     pub fn open(dir: impl AsRef<Path>) -> Result<Self, RecordingError> {
         let dir = dir.as_ref().to_owned();
         if !dir.is_dir() {
@@ -197,22 +227,27 @@ impl Recording {
         })
     }
 
+    /// The recording's directory.
     pub fn dir(&self) -> &Path {
         &self.dir
     }
 
+    /// Its manifest.
     pub fn info(&self) -> &RecordingInfo {
         &self.info
     }
 
+    /// The camera's intrinsics.
     pub fn intrinsics(&self) -> Intrinsics {
         self.info.intrinsics()
     }
 
+    /// How many frames it has.
     pub fn len(&self) -> usize {
         self.capture_ns.len()
     }
 
+    /// Whether it has no frame.
     pub fn is_empty(&self) -> bool {
         self.capture_ns.is_empty()
     }
@@ -227,6 +262,7 @@ impl Recording {
         self.joints.as_ref().map(|j| &j[index])
     }
 
+    /// Whether it has ground-truth joints (`joints.csv`).
     pub fn has_joints(&self) -> bool {
         self.joints.is_some()
     }
@@ -498,10 +534,12 @@ impl RecordingWriter {
         })
     }
 
+    /// The recording's directory.
     pub fn dir(&self) -> &Path {
         &self.dir
     }
 
+    /// Frames written so far.
     pub fn frames_written(&self) -> usize {
         self.written
     }

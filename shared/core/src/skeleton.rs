@@ -12,27 +12,45 @@ use serde::{Deserialize, Serialize};
 #[serde(rename_all = "snake_case")]
 #[repr(u8)]
 pub enum Joint {
+    /// Centre of the skull.
     Head,
+    /// Base of the neck.
     Neck,
+    /// Mid-chest on the spine.
     Torso,
+    /// Between the hips.
     Pelvis,
+    /// The person's left shoulder.
     LeftShoulder,
+    /// The person's left elbow.
     LeftElbow,
+    /// Centre of the person's left palm.
     LeftHand,
+    /// The person's right shoulder.
     RightShoulder,
+    /// The person's right elbow.
     RightElbow,
+    /// Centre of the person's right palm.
     RightHand,
+    /// The person's left hip.
     LeftHip,
+    /// The person's left knee.
     LeftKnee,
+    /// The person's left ankle.
     LeftFoot,
+    /// The person's right hip.
     RightHip,
+    /// The person's right knee.
     RightKnee,
+    /// The person's right ankle.
     RightFoot,
 }
 
 impl Joint {
+    /// How many joints a skeleton has.
     pub const COUNT: usize = 16;
 
+    /// Every joint in index order, the order of every array, message and file.
     pub const ALL: [Joint; Joint::COUNT] = [
         Joint::Head,
         Joint::Neck,
@@ -71,6 +89,7 @@ impl Joint {
         (Joint::RightKnee, Joint::RightFoot),
     ];
 
+    /// The joint's index in [`Joint::ALL`] and in every array.
     #[inline]
     pub fn index(self) -> usize {
         self as usize
@@ -98,6 +117,7 @@ impl Joint {
         }
     }
 
+    /// The joint named `name` (snake_case, as [`Joint::name`] gives), if any.
     pub fn from_name(name: &str) -> Option<Joint> {
         Self::ALL.into_iter().find(|j| j.name() == name)
     }
@@ -107,7 +127,9 @@ impl Joint {
 /// [0, 1] and a visibility each.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Skeleton {
+    /// Each joint's position, camera frame, metres, in [`Joint::ALL`] order.
     pub joints: [Point3<f32>; Joint::COUNT],
+    /// Each joint's confidence in [0, 1]; 0 for a joint out of view.
     pub confidence: [f32; Joint::COUNT],
     /// Whether each joint is in the camera's view: inside the image and not behind
     /// something that is not the person (a table, the image's border). A joint out of
@@ -126,11 +148,13 @@ impl Skeleton {
         }
     }
 
+    /// A joint's position.
     #[inline]
     pub fn get(&self, j: Joint) -> Point3<f32> {
         self.joints[j.index()]
     }
 
+    /// Moves a joint.
     #[inline]
     pub fn set(&mut self, j: Joint, p: Point3<f32>) {
         self.joints[j.index()] = p;

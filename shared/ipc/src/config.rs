@@ -19,16 +19,23 @@ use iceoryx2::prelude::*;
 use serde::Deserialize;
 use std::path::PathBuf;
 
+/// Names the pipeline's root folder, beside [`DEFAULT_ROOT`].
 pub const ENV_ROOT: &str = "AIRGLYPH_IPC_ROOT";
+/// Names the pipeline's file prefix in `/dev/shm`, beside [`DEFAULT_PREFIX`].
 pub const ENV_PREFIX: &str = "AIRGLYPH_IPC_PREFIX";
+/// Names a TOML file with `[ipc] root` and `prefix`.
 pub const ENV_CONFIG: &str = "AIRGLYPH_CONFIG";
+/// The root folder when nothing names one.
 pub const DEFAULT_ROOT: &str = "/tmp/airglyph/";
+/// The file prefix when nothing names one.
 pub const DEFAULT_PREFIX: &str = "airglyph_";
 
 /// The iceoryx2 root path and file prefix of one pipeline.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct IpcConfig {
+    /// The folder of the pipeline's iceoryx2 files (ending in `/`).
     pub root: String,
+    /// The prefix of its files in `/dev/shm`: pipelines with other prefixes never meet.
     pub prefix: String,
 }
 

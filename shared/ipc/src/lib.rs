@@ -12,6 +12,8 @@
 //! publisher wakes its subscribers, so a stage blocks in a [`Receiver`] with a deadline
 //! instead of polling.
 
+#![warn(missing_docs)]
+
 pub mod clock;
 pub mod config;
 mod error;

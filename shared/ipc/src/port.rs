@@ -24,9 +24,13 @@ type Ipc = ipc::Service;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[repr(u32)]
 pub enum Stage {
+    /// Depth frames from a camera, a recording or the synthetic person.
     Capture = 1,
+    /// Depth frame to skeleton.
     Pose = 2,
+    /// Skeletons to gestures.
     Gesture = 3,
+    /// The web page of what the pipeline sees.
     Viewer = 4,
 }
 
@@ -36,6 +40,7 @@ impl Stage {
     /// Every stage: the pipeline's, then the viewer (`airglyph run --view`).
     pub const ALL: [Stage; 4] = [Stage::Capture, Stage::Pose, Stage::Gesture, Stage::Viewer];
 
+    /// The stage's name in service names, commands and logs.
     pub fn name(self) -> &'static str {
         match self {
             Stage::Capture => "capture",
@@ -45,10 +50,12 @@ impl Stage {
         }
     }
 
+    /// The stage named `name`, if any.
     pub fn from_name(name: &str) -> Option<Stage> {
         Stage::ALL.into_iter().find(|s| s.name() == name)
     }
 
+    /// The stage a stats message's `stage` field names, if any.
     pub fn from_u32(v: u32) -> Option<Stage> {
         Stage::ALL.into_iter().find(|s| *s as u32 == v)
     }
@@ -203,6 +210,7 @@ impl Pipeline {
         self.node.as_ref().expect("the node lives until drop")
     }
 
+    /// Which pipeline this process joined.
     pub fn config(&self) -> &IpcConfig {
         &self.config
     }
@@ -418,10 +426,12 @@ impl Pipeline {
         Ok(service.dynamic_config().number_of_subscribers())
     }
 
+    /// The publisher of skeletons (one a pipeline: the pose stage, or capture with truth).
     pub fn skeleton_publisher(&self) -> Result<Publisher<SkeletonMsg>, IpcError> {
         self.publisher(&SKELETON, SKELETON.name)
     }
 
+    /// A subscriber to skeletons, from the next one published on.
     pub fn skeleton_receiver(&self) -> Result<Receiver<SkeletonMsg>, IpcError> {
         self.receiver(&SKELETON, SKELETON.name, SKELETON.buffer, 0)
     }
@@ -436,26 +446,32 @@ impl Pipeline {
         self.receiver(&SKELETON, SKELETON.name, SKELETON_HISTORY, SKELETON_HISTORY)
     }
 
+    /// The publisher of gesture events (the gesture stage).
     pub fn gesture_publisher(&self) -> Result<Publisher<GestureEventMsg>, IpcError> {
         self.publisher(&GESTURE, GESTURE.name)
     }
 
+    /// A subscriber to gesture events.
     pub fn gesture_receiver(&self) -> Result<Receiver<GestureEventMsg>, IpcError> {
         self.receiver(&GESTURE, GESTURE.name, GESTURE.buffer, 0)
     }
 
+    /// The publisher of the gesture stage's decisions, one a frame.
     pub fn decision_publisher(&self) -> Result<Publisher<DecisionMsg>, IpcError> {
         self.publisher(&DECISION, DECISION.name)
     }
 
+    /// A subscriber to the gesture stage's decisions.
     pub fn decision_receiver(&self) -> Result<Receiver<DecisionMsg>, IpcError> {
         self.receiver(&DECISION, DECISION.name, DECISION.buffer, 0)
     }
 
+    /// The publisher of `stage`'s telemetry.
     pub fn stats_publisher(&self, stage: Stage) -> Result<Publisher<StageStatsMsg>, IpcError> {
         self.publisher(&STATS, &format!("{}/{}", STATS.name, stage.name()))
     }
 
+    /// A subscriber to `stage`'s telemetry.
     pub fn stats_receiver(&self, stage: Stage) -> Result<Receiver<StageStatsMsg>, IpcError> {
         self.receiver(
             &STATS,
@@ -472,6 +488,7 @@ pub trait Message: Debug + Copy + Default + ZeroCopySend + 'static {
     /// The capture session and frame sequence this message belongs to, if it follows
     /// frames one to one (stats and gesture events do not).
     fn frame(&self) -> Option<(u64, u64)>;
+    /// Whether the message, written by another process, is sound enough to use.
     fn check(&self) -> Result<(), MessageError>;
 }
 
@@ -524,13 +541,16 @@ pub struct DepthPublisher {
 /// Why a frame was not published.
 #[derive(Debug, thiserror::Error)]
 pub enum PublishError<E> {
+    /// The source failed to give a frame.
     #[error("{0}")]
     Source(E),
+    /// The shared memory refused the frame.
     #[error("shared memory: {0}")]
     Transport(String),
 }
 
 impl DepthPublisher {
+    /// The capture session this publisher's frames belong to (its start time).
     pub fn session(&self) -> u64 {
         self.session
     }
@@ -651,6 +671,7 @@ pub struct Publisher<T: Message> {
 }
 
 impl<T: Message> Publisher<T> {
+    /// Sends `msg` and wakes the subscribers.
     pub fn send(&self, msg: T) -> Result<(), IpcError> {
         self.publisher
             .send_copy(msg)
@@ -712,6 +733,7 @@ trait Inbox {
 /// What a receiver hands out: a validated message and how many were lost before it.
 #[derive(Debug)]
 pub struct Received<T> {
+    /// The message, checked.
     pub msg: T,
     /// Frames lost since the previous message of the same session (sequence gaps).
     pub dropped: u64,
@@ -798,6 +820,7 @@ pub struct DepthFrame {
     len: usize,
     /// Frames lost since the previous one of this capture session.
     pub dropped: u64,
+    /// When this process took the frame out of shared memory.
     pub receive_ns: u64,
 }
 
@@ -816,6 +839,7 @@ impl DepthFrame {
         unsafe { std::slice::from_raw_parts(self.pixels, self.len) }
     }
 
+    /// The frame as a depth image, in shared memory.
     pub fn view(&self) -> airglyph_core::DepthView<'_> {
         airglyph_core::DepthView::new(self.header.width, self.header.height, self.pixels())
             .expect("the copied header's width x height was checked against this length")
@@ -835,7 +859,9 @@ pub struct DepthReceiver {
 /// A refused depth frame, for logs.
 #[derive(Debug)]
 pub struct Rejected {
+    /// The frame's sequence number, as its header claims.
     pub sequence: u64,
+    /// Why it was refused.
     pub error: HeaderError,
 }
 

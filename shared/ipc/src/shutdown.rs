@@ -37,6 +37,7 @@ pub fn request() {
 #[derive(Debug, thiserror::Error)]
 #[error("interrupted by {}: {kept}", signal_name(*.signal))]
 pub struct Interrupted {
+    /// The signal (SIGINT, SIGTERM).
     pub signal: i32,
     /// What of the work is there: written, printed, or nothing.
     pub kept: String,
@@ -52,6 +53,7 @@ impl Interrupted {
         }
     }
 
+    /// The exit code of a command a signal ended: 128 + the signal.
     pub fn exit_code(&self) -> u8 {
         (128 + self.signal).clamp(0, 255) as u8
     }

@@ -89,6 +89,7 @@ pub struct Telemetry {
 }
 
 impl Telemetry {
+    /// Telemetry of `stage`, published on its stats service once a second.
     pub fn new(pipeline: &Pipeline, stage: Stage) -> Result<Self, IpcError> {
         Ok(Self {
             stage,

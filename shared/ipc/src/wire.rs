@@ -21,14 +21,21 @@ pub struct DepthHeader {
     pub publish_ns: u64,
     /// The source's own timestamp (a recording's frames.csv time; else `capture_ns`).
     pub source_ns: u64,
+    /// Frame width, pixels.
     pub width: u32,
+    /// Frame height, pixels.
     pub height: u32,
+    /// Horizontal focal length, pixels.
     pub fx: f32,
+    /// Vertical focal length, pixels.
     pub fy: f32,
+    /// Principal point's column, pixels.
     pub cx: f32,
+    /// Principal point's row, pixels.
     pub cy: f32,
     /// Which kind of source produced the frame ([`SourceKind`] as u32).
     pub source_kind: u32,
+    /// Padding to 8 bytes, written as 0.
     pub _reserved: u32,
 }
 
@@ -36,23 +43,40 @@ pub struct DepthHeader {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[repr(u32)]
 pub enum SourceKind {
+    /// The synthetic person.
     Synthetic = 1,
+    /// A recording on disk.
     Recording = 2,
+    /// A V4L2 camera.
     V4l2 = 3,
+    /// An OpenNI2 camera or `.oni` file.
     OpenNi2 = 4,
 }
 
 /// Why a received depth header was dropped.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum HeaderError {
+    /// The header's size does not match the payload's length.
     #[error("header says {width}x{height} = {} pixels but the payload holds {len}", *width as u64 * *height as u64)]
-    SizeMismatch { width: u32, height: u32, len: usize },
+    SizeMismatch {
+        /// The width the header claims.
+        width: u32,
+        /// The height the header claims.
+        height: u32,
+        /// The payload's pixels.
+        len: usize,
+    },
+    /// The intrinsics cannot describe a camera.
     #[error("intrinsics: {0}")]
     Intrinsics(#[from] airglyph_core::camera::IntrinsicsError),
+    /// The timestamps are missing, out of order or in the future.
     #[error("timestamps out of order: capture {capture_ns} ns, publish {publish_ns} ns, received {now_ns} ns")]
     Timestamps {
+        /// When the frame entered the pipeline.
         capture_ns: u64,
+        /// When capture sent it.
         publish_ns: u64,
+        /// The receiver's clock.
         now_ns: u64,
     },
 }
@@ -72,10 +96,12 @@ fn check_times(capture_ns: u64, publish_ns: u64, now_ns: u64) -> Result<(), Head
 }
 
 impl DepthHeader {
+    /// The camera's intrinsics at the frame's size.
     pub fn intrinsics(&self) -> Intrinsics {
         Intrinsics::new(self.width, self.height, self.fx, self.fy, self.cx, self.cy)
     }
 
+    /// Sets the size and intrinsics fields from `k`.
     pub fn set_intrinsics(&mut self, k: &Intrinsics) {
         (self.width, self.height, self.fx, self.fy, self.cx, self.cy) =
             (k.width, k.height, k.fx, k.fy, k.cx, k.cy);
@@ -102,11 +128,17 @@ impl DepthHeader {
 #[type_name("airglyph.LatencyChain.v1")]
 #[repr(C)]
 pub struct LatencyChain {
+    /// When the frame entered the pipeline.
     pub capture_ns: u64,
+    /// When capture sent it.
     pub capture_publish_ns: u64,
+    /// When the pose stage took it.
     pub pose_receive_ns: u64,
+    /// When the pose stage sent its skeleton.
     pub pose_publish_ns: u64,
+    /// When the gesture stage took the skeleton.
     pub gesture_receive_ns: u64,
+    /// When the gesture stage sent its decision or event.
     pub gesture_publish_ns: u64,
 }
 
@@ -139,18 +171,24 @@ impl LatencyChain {
 #[type_name("airglyph.SkeletonMsg.v2")]
 #[repr(C)]
 pub struct SkeletonMsg {
+    /// The depth frame's sequence number in its capture session.
     pub sequence: u64,
+    /// The depth frame's capture session.
     pub session: u64,
+    /// The frame's latency chain up to the skeleton's publication.
     pub chain: LatencyChain,
     /// x, y, z in metres, camera frame, in [`Joint::ALL`] order.
     pub joints: [[f32; 3]; Joint::COUNT],
+    /// Each joint's confidence in [0, 1], in [`Joint::ALL`] order.
     pub confidence: [f32; Joint::COUNT],
     /// 1 when a person was found; the joints are meaningless otherwise.
     pub person_found: u8,
+    /// Padding, written as 0.
     pub _pad: u8,
     /// Bit `i` set: joint `i` ([`Joint::ALL`] order) is in the camera's view
     /// ([`Skeleton::visible`]).
     pub visible: u16,
+    /// Padding to 8 bytes, written as 0.
     pub _reserved: [u8; 4],
 }
 
@@ -173,15 +211,25 @@ impl Default for SkeletonMsg {
 /// Why a received message was dropped.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum MessageError {
+    /// A coordinate, confidence or score is not a finite number.
     #[error("a joint coordinate or confidence is not a finite number")]
     NotFinite,
+    /// The latency chain's timestamps are missing or out of order.
     #[error("the latency chain's timestamps are missing or out of order")]
     Chain,
+    /// The label is not UTF-8 or longer than [`LABEL_CAPACITY`].
     #[error("label is not UTF-8 or longer than {} bytes", LABEL_CAPACITY)]
     Label,
+    /// More Bezier points than a gesture event holds.
+    #[error("more than {} Bezier points", BEZIER_CAPACITY)]
+    Bezier,
+    /// A hand that is neither left (0) nor right (1).
+    #[error("hand {0} is neither left (0) nor right (1)")]
+    Hand(u8),
 }
 
 impl SkeletonMsg {
+    /// The skeleton, or None when no person was found.
     pub fn skeleton(&self) -> Option<Skeleton> {
         (self.person_found != 0).then(|| Skeleton {
             joints: self.joints.map(|[x, y, z]| Point3::new(x, y, z)),
@@ -190,6 +238,7 @@ impl SkeletonMsg {
         })
     }
 
+    /// Sets the joints, confidences and visibility, or marks no person found.
     pub fn set_skeleton(&mut self, s: Option<&Skeleton>) {
         match s {
             Some(s) => {
@@ -211,6 +260,7 @@ impl SkeletonMsg {
         }
     }
 
+    /// Checks a received skeleton: finite joints and confidences, an ordered chain.
     pub fn validate(&self) -> Result<(), MessageError> {
         if !self
             .joints
@@ -231,32 +281,73 @@ impl SkeletonMsg {
 /// Longest gesture label on the wire, in UTF-8 bytes.
 pub const LABEL_CAPACITY: usize = 32;
 
-/// A spotted and classified gesture.
+/// Most Bezier points a gesture event carries: more than a gesture descriptor uses
+/// (15 by default); a model asking for more is sent that many points of the same curve.
+pub const BEZIER_CAPACITY: usize = 64;
+
+/// A spotted and classified gesture, with the Bezier points of the path it was
+/// recognized from.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("airglyph.GestureEventMsg.v1")]
+#[type_name("airglyph.GestureEventMsg.v2")]
 #[repr(C)]
 pub struct GestureEventMsg {
+    /// The label's UTF-8 bytes, zero-padded.
     pub label: [u8; LABEL_CAPACITY],
+    /// How many of `label`'s bytes are the label.
     pub label_len: u32,
+    /// The classifier's confidence in [0, 1].
     pub score: f32,
+    /// Its first frame's sequence number.
     pub start_sequence: u64,
+    /// Its last frame's sequence number.
     pub end_sequence: u64,
+    /// Its first frame's capture time, CLOCK_MONOTONIC ns.
     pub start_ns: u64,
+    /// Its last frame's capture time, CLOCK_MONOTONIC ns.
     pub end_ns: u64,
+    /// The capture session its frames belong to.
     pub session: u64,
     /// The latency chain of the frame that closed the gesture.
     pub chain: LatencyChain,
     /// Which hand drew it ([`Hand`] as u8).
     pub hand: u8,
-    pub _reserved: [u8; 7],
+    /// Padding, written as 0.
+    pub _reserved: [u8; 3],
+    /// How many of `bezier` are the gesture's.
+    pub bezier_len: u32,
+    /// Points of the Bezier curve whose control points are the hand's path over the
+    /// gesture, as the gesture stage measured it (body frame: x to the person's right,
+    /// y down, shoulder widths), from its start to its end.
+    pub bezier: [[f32; 2]; BEZIER_CAPACITY],
 }
 
 /// The hand that drew a gesture.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[repr(u8)]
 pub enum Hand {
+    /// The person's left hand.
     Left = 0,
+    /// The person's right hand.
     Right = 1,
+}
+
+impl Hand {
+    /// The hand a message's `u8` names, if any.
+    pub fn from_u8(v: u8) -> Option<Self> {
+        match v {
+            0 => Some(Hand::Left),
+            1 => Some(Hand::Right),
+            _ => None,
+        }
+    }
+
+    /// `"left"` or `"right"`, as JSON and the page name it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Hand::Left => "left",
+            Hand::Right => "right",
+        }
+    }
 }
 
 impl Default for GestureEventMsg {
@@ -272,7 +363,9 @@ impl Default for GestureEventMsg {
             session: 0,
             chain: LatencyChain::default(),
             hand: Hand::Right as u8,
-            _reserved: [0; 7],
+            _reserved: [0; 3],
+            bezier_len: 0,
+            bezier: [[0.0; 2]; BEZIER_CAPACITY],
         }
     }
 }
@@ -290,6 +383,7 @@ impl GestureEventMsg {
         Ok(())
     }
 
+    /// The label; an error when the bytes are not UTF-8 or claim more than fits.
     pub fn label(&self) -> Result<&str, MessageError> {
         let len = self.label_len as usize;
         if len > LABEL_CAPACITY {
@@ -298,9 +392,36 @@ impl GestureEventMsg {
         std::str::from_utf8(&self.label[..len]).map_err(|_| MessageError::Label)
     }
 
+    /// Sets the Bezier points; refuses more than [`BEZIER_CAPACITY`] or a coordinate
+    /// that is not finite.
+    pub fn set_bezier(&mut self, points: &[[f32; 2]]) -> Result<(), MessageError> {
+        if points.len() > BEZIER_CAPACITY {
+            return Err(MessageError::Bezier);
+        }
+        if !points.iter().flatten().all(|v| v.is_finite()) {
+            return Err(MessageError::NotFinite);
+        }
+        self.bezier = [[0.0; 2]; BEZIER_CAPACITY];
+        self.bezier[..points.len()].copy_from_slice(points);
+        self.bezier_len = points.len() as u32;
+        Ok(())
+    }
+
+    /// The Bezier points the gesture carries (as many as fit, whatever the length says).
+    pub fn bezier(&self) -> &[[f32; 2]] {
+        &self.bezier[..(self.bezier_len as usize).min(BEZIER_CAPACITY)]
+    }
+
+    /// Checks a received event: its label, finite score and Bezier points, an ordered chain.
     pub fn validate(&self) -> Result<(), MessageError> {
         self.label()?;
         if !self.score.is_finite() {
+            return Err(MessageError::NotFinite);
+        }
+        if self.bezier_len as usize > BEZIER_CAPACITY {
+            return Err(MessageError::Bezier);
+        }
+        if !self.bezier().iter().flatten().all(|v| v.is_finite()) {
             return Err(MessageError::NotFinite);
         }
         if !self.chain.is_ordered() {
@@ -311,26 +432,62 @@ impl GestureEventMsg {
 }
 
 /// The gesture stage's decision on one skeleton: sent for every frame it processes, so
-/// capture→decision latency can be profiled frame by frame, gesture or not.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend)]
-#[type_name("airglyph.DecisionMsg.v1")]
+/// capture→decision latency can be profiled frame by frame, gesture or not; and the
+/// drawing hand's point its recognizer took from that skeleton, so a viewer draws the
+/// path the gesture stage followed rather than one of its own.
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[type_name("airglyph.DecisionMsg.v2")]
 #[repr(C)]
 pub struct DecisionMsg {
+    /// The frame's sequence number.
     pub sequence: u64,
+    /// The frame's capture session.
     pub session: u64,
+    /// The frame's latency chain up to the decision.
     pub chain: LatencyChain,
+    /// The drawing hand in the body frame the gesture stage measures in: x to the
+    /// person's right, y down, shoulder widths from between the shoulders; meaningful
+    /// when `hand_found` is 1.
+    pub hand_point: [f32; 2],
     /// 1 when this frame closed a gesture (an event was published for it).
     pub gesture: u8,
-    pub _reserved: [u8; 7],
+    /// 1 when the skeleton gave the recognizer a hand point (a person, steady joints).
+    pub hand_found: u8,
+    /// Which hand `hand_point` is ([`Hand`] as u8).
+    pub hand: u8,
+    /// Padding to 8 bytes, written as 0.
+    pub _reserved: [u8; 5],
 }
 
 impl DecisionMsg {
-    pub fn validate(&self) -> Result<(), MessageError> {
-        if self.chain.is_ordered() {
-            Ok(())
-        } else {
-            Err(MessageError::Chain)
+    /// Sets the hand point the recognizer took, or none.
+    pub fn set_hand_point(&mut self, point: Option<(Hand, [f32; 2])>) {
+        (self.hand_found, self.hand, self.hand_point) = match point {
+            Some((hand, at)) => (1, hand as u8, at),
+            None => (0, 0, [0.0; 2]),
+        };
+    }
+
+    /// The hand point the recognizer took from this frame's skeleton, if any.
+    pub fn hand_point(&self) -> Option<(Hand, [f32; 2])> {
+        if self.hand_found == 0 {
+            return None;
         }
+        Some((Hand::from_u8(self.hand)?, self.hand_point))
+    }
+
+    /// Checks a received decision: an ordered chain, a known hand and a finite point.
+    pub fn validate(&self) -> Result<(), MessageError> {
+        if !self.chain.is_ordered() {
+            return Err(MessageError::Chain);
+        }
+        if self.hand_found != 0 {
+            Hand::from_u8(self.hand).ok_or(MessageError::Hand(self.hand))?;
+            if !self.hand_point.iter().all(|v| v.is_finite()) {
+                return Err(MessageError::NotFinite);
+            }
+        }
+        Ok(())
     }
 }
 
@@ -339,10 +496,15 @@ impl DecisionMsg {
 #[type_name("airglyph.Percentiles.v1")]
 #[repr(C)]
 pub struct Percentiles {
+    /// How many values the window had.
     pub count: u64,
+    /// The median.
     pub p50: u64,
+    /// The 90th percentile.
     pub p90: u64,
+    /// The 99th percentile.
     pub p99: u64,
+    /// The largest.
     pub max: u64,
 }
 
@@ -353,6 +515,7 @@ pub struct Percentiles {
 pub struct StageStatsMsg {
     /// The stage ([`crate::Stage`] as u32).
     pub stage: u32,
+    /// The stage's process id.
     pub pid: u32,
     /// CLOCK_MONOTONIC ns when this report was made.
     pub time_ns: u64,
@@ -360,6 +523,7 @@ pub struct StageStatsMsg {
     pub window_ns: u64,
     /// Totals since the stage started.
     pub frames_in: u64,
+    /// Outputs published.
     pub frames_out: u64,
     /// Frames lost upstream of this stage, counted from sequence gaps.
     pub frames_dropped: u64,
@@ -367,6 +531,7 @@ pub struct StageStatsMsg {
     pub frames_rejected: u64,
     /// Output frames per second over the window.
     pub fps: f32,
+    /// Padding to 8 bytes, written as 0.
     pub _reserved: u32,
     /// Time from receiving an input to publishing the output.
     pub processing: Percentiles,
@@ -456,6 +621,86 @@ mod tests {
         assert!(g.set_label(&"x".repeat(33)).is_err());
         g.label_len = 200;
         assert_eq!(g.label(), Err(MessageError::Label));
+    }
+
+    /// The chain of a frame that has only been captured.
+    fn captured() -> LatencyChain {
+        LatencyChain {
+            capture_ns: 1,
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn gesture_events_carry_bounded_finite_bezier_points() {
+        let mut g = GestureEventMsg {
+            chain: captured(),
+            ..Default::default()
+        };
+        let curve: Vec<[f32; 2]> = (0..15).map(|i| [i as f32 * 0.1, -0.5]).collect();
+        g.set_bezier(&curve).unwrap();
+        assert_eq!(g.bezier(), &curve[..]);
+        g.validate().unwrap();
+        assert_eq!(
+            g.set_bezier(&vec![[0.0; 2]; BEZIER_CAPACITY + 1]),
+            Err(MessageError::Bezier)
+        );
+        assert_eq!(
+            g.set_bezier(&[[f32::NAN, 0.0]]),
+            Err(MessageError::NotFinite)
+        );
+        // What another process wrote is checked, and never read past the array.
+        g.bezier_len = 1000;
+        assert_eq!(g.bezier().len(), BEZIER_CAPACITY);
+        assert_eq!(g.validate(), Err(MessageError::Bezier));
+        g.bezier_len = 2;
+        g.bezier[1][0] = f32::INFINITY;
+        assert_eq!(g.validate(), Err(MessageError::NotFinite));
+    }
+
+    #[test]
+    fn decisions_carry_the_recognizers_hand_point() {
+        let mut d = DecisionMsg {
+            chain: captured(),
+            ..Default::default()
+        };
+        assert_eq!(d.hand_point(), None);
+        d.set_hand_point(Some((Hand::Left, [0.25, -0.5])));
+        assert_eq!(d.hand_point(), Some((Hand::Left, [0.25, -0.5])));
+        d.validate().unwrap();
+        d.hand = 7;
+        assert_eq!(d.validate(), Err(MessageError::Hand(7)));
+        assert_eq!(d.hand_point(), None);
+        d.set_hand_point(Some((Hand::Right, [f32::NAN, 0.0])));
+        assert_eq!(d.validate(), Err(MessageError::NotFinite));
+        d.set_hand_point(None);
+        d.validate().unwrap();
+    }
+
+    /// The layouts other processes read: a change here is a change of the type's
+    /// version in its name (and of every process that speaks it).
+    #[test]
+    fn layouts_are_as_their_versions_say() {
+        use std::mem::{align_of, offset_of, size_of};
+        assert_eq!(size_of::<LatencyChain>(), 48);
+        assert_eq!(
+            (size_of::<DepthHeader>(), align_of::<DepthHeader>()),
+            (72, 8)
+        );
+        assert_eq!(size_of::<SkeletonMsg>(), 328);
+        assert_eq!(offset_of!(SkeletonMsg, visible), 322);
+        assert_eq!(size_of::<GestureEventMsg>(), 648);
+        assert_eq!(offset_of!(GestureEventMsg, chain), 80);
+        assert_eq!(offset_of!(GestureEventMsg, hand), 128);
+        assert_eq!(offset_of!(GestureEventMsg, bezier_len), 132);
+        assert_eq!(offset_of!(GestureEventMsg, bezier), 136);
+        assert_eq!(size_of::<DecisionMsg>(), 80);
+        assert_eq!(offset_of!(DecisionMsg, hand_point), 64);
+        assert_eq!(offset_of!(DecisionMsg, gesture), 72);
+        assert_eq!(offset_of!(DecisionMsg, hand_found), 73);
+        assert_eq!(offset_of!(DecisionMsg, hand), 74);
+        assert_eq!(size_of::<Percentiles>(), 40);
+        assert_eq!(size_of::<StageStatsMsg>(), 184);
     }
 
     #[test]

@@ -19,6 +19,8 @@
 //! # Ok::<(), airglyph_plot::PlotError>(())
 //! ```
 
+#![warn(missing_docs)]
+
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
@@ -33,7 +35,9 @@ pub type DrawResult = Result<(), Box<dyn std::error::Error + Send + Sync>>;
 #[derive(Debug, thiserror::Error)]
 #[error("cannot draw {}: {reason}", path.display())]
 pub struct PlotError {
+    /// The picture's file.
     pub path: PathBuf,
+    /// What plotters or the file system said.
     pub reason: String,
 }
 

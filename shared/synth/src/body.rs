@@ -30,10 +30,13 @@ impl Default for ProceduralBody {
 /// One bone of a body's own rig. Rest positions are in the body frame (see `canon.rs`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct RigBone {
+    /// The bone's name in the rig's file.
     pub name: String,
     /// Index of the parent; parents always come before their children.
     pub parent: Option<usize>,
+    /// Where the bone starts at rest.
     pub head: Point3<f32>,
+    /// Where the bone ends at rest.
     pub tail: Point3<f32>,
     /// The canonical bone that drives this one; `None` follows its parent rigidly.
     pub canon: Option<Bone>,
@@ -44,16 +47,20 @@ pub struct RigBone {
 /// An affine bone transform: x ↦ m·x + t.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Affine {
+    /// The linear part.
     pub m: Matrix3<f32>,
+    /// The translation.
     pub t: Vector3<f32>,
 }
 
 impl Affine {
+    /// The transform that moves nothing.
     pub const IDENTITY: Affine = Affine {
         m: Matrix3::new(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0),
         t: Vector3::new(0.0, 0.0, 0.0),
     };
 
+    /// `m·p + t`.
     #[inline]
     pub fn apply(&self, p: &Point3<f32>) -> Point3<f32> {
         Point3::from(self.m * p.coords + self.t)
@@ -85,18 +92,22 @@ pub struct Body {
 }
 
 impl Body {
+    /// The body's name, as scenes and recordings name it.
     pub fn name(&self) -> &str {
         &self.name
     }
 
+    /// Vertices of its mesh.
     pub fn vertex_count(&self) -> usize {
         self.verts.len()
     }
 
+    /// Triangles of its mesh.
     pub fn triangle_count(&self) -> usize {
         self.tris.len()
     }
 
+    /// Its rig, parents before children.
     pub fn bones(&self) -> &[RigBone] {
         &self.bones
     }

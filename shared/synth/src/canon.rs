@@ -11,29 +11,50 @@ use nalgebra::{Matrix3, Point3, Rotation3, UnitQuaternion, Vector3};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 #[repr(u8)]
 pub enum Bone {
+    /// The pelvis, root of the hierarchy.
     Hips,
+    /// The lower spine.
     Spine,
+    /// The upper spine.
     Chest,
+    /// The neck.
     Neck,
+    /// The head.
     Head,
+    /// The left clavicle.
     LeftCollar,
+    /// The left upper arm.
     LeftUpperArm,
+    /// The left forearm.
     LeftForearm,
+    /// The left hand.
     LeftHand,
+    /// The right clavicle.
     RightCollar,
+    /// The right upper arm.
     RightUpperArm,
+    /// The right forearm.
     RightForearm,
+    /// The right hand.
     RightHand,
+    /// The left thigh.
     LeftThigh,
+    /// The left shin.
     LeftShin,
+    /// The left foot.
     LeftFoot,
+    /// The right thigh.
     RightThigh,
+    /// The right shin.
     RightShin,
+    /// The right foot.
     RightFoot,
 }
 
 impl Bone {
+    /// How many canonical bones there are.
     pub const COUNT: usize = 19;
+    /// Every bone, parents before children.
     pub const ALL: [Bone; Bone::COUNT] = [
         Bone::Hips,
         Bone::Spine,
@@ -56,11 +77,13 @@ impl Bone {
         Bone::RightFoot,
     ];
 
+    /// The bone's index in [`Bone::ALL`] and in every per-bone array.
     #[inline]
     pub fn index(self) -> usize {
         self as usize
     }
 
+    /// The bone it hangs from; None for the hips.
     pub fn parent(self) -> Option<Bone> {
         use Bone::*;
         Some(match self {
@@ -140,6 +163,7 @@ impl Bone {
         }
     }
 
+    /// The bone's name in scripts and logs.
     pub fn name(self) -> &'static str {
         use Bone::*;
         match self {
@@ -173,7 +197,9 @@ impl Bone {
 /// `root` is where the hips joint (the head of [`Bone::Hips`]) is, in the body frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Pose {
+    /// Where the hips joint is, body frame, metres.
     pub root: Point3<f32>,
+    /// Each bone's rotation from the T-pose, body frame, in [`Bone::ALL`] order.
     pub rot: [UnitQuaternion<f32>; Bone::COUNT],
 }
 
@@ -186,11 +212,13 @@ impl Pose {
         }
     }
 
+    /// A bone's rotation.
     #[inline]
     pub fn get(&self, b: Bone) -> UnitQuaternion<f32> {
         self.rot[b.index()]
     }
 
+    /// Sets a bone's rotation.
     #[inline]
     pub fn set(&mut self, b: Bone, q: UnitQuaternion<f32>) {
         self.rot[b.index()] = q;
@@ -238,21 +266,26 @@ impl Pose {
 /// the same script fits a short or a tall body.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TposeSkeleton {
+    /// Where each bone starts, in [`Bone::ALL`] order.
     pub head: [Point3<f32>; Bone::COUNT],
+    /// Where each bone ends, in [`Bone::ALL`] order.
     pub tail: [Point3<f32>; Bone::COUNT],
     /// Ground-truth joints (airglyph-core's [`airglyph_core::Joint`] order) in the T-pose.
     pub joints: [Point3<f32>; airglyph_core::Joint::COUNT],
 }
 
 impl TposeSkeleton {
+    /// Where bone `b` starts.
     pub fn head(&self, b: Bone) -> Point3<f32> {
         self.head[b.index()]
     }
 
+    /// Where bone `b` ends.
     pub fn tail(&self, b: Bone) -> Point3<f32> {
         self.tail[b.index()]
     }
 
+    /// Where ground-truth joint `j` is in the T-pose.
     pub fn joint(&self, j: airglyph_core::Joint) -> Point3<f32> {
         self.joints[j.index()]
     }

@@ -10,8 +10,9 @@
 use crate::canon::{Bone, Pose, TposeSkeleton};
 use crate::error::SynthError;
 use crate::glyphs::{self, Glyph};
-use crate::motion::{DrawSpec, GestureTruth, Setting};
+use crate::motion::{DrawSpec, Setting};
 use crate::poses::{self, Side};
+use airglyph_core::gestures::GestureTruth;
 use airglyph_core::Joint;
 use nalgebra::{Point2, Point3, Vector3};
 use rand::{Rng, SeedableRng};

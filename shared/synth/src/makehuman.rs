@@ -21,7 +21,9 @@ use std::path::{Path, PathBuf};
 
 /// The files of the cache, relative to the assets folder.
 pub const OBJ: &str = "mpfb2/3dobjs/base.obj";
+/// The CMU-compatible rig, under the asset folder.
 pub const RIG: &str = "mpfb2/rigs/standard/rig.cmu_mb.json";
+/// The rig's skinning weights, under the asset folder.
 pub const WEIGHTS: &str = "mpfb2/rigs/standard/weights.cmu_mb.json";
 
 /// Where the asset cache is: `$AIRGLYPH_ASSETS` when set, else `airglyph/assets` in
@@ -77,6 +79,7 @@ fn canon_of(name: &str) -> Option<Bone> {
 /// A triangle mesh read from an OBJ file: vertices and the triangles of one group.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ObjMesh {
+    /// Its vertices.
     pub verts: Vec<Point3<f32>>,
     /// Triangles (quads and polygons fanned) over `verts`, 0-based.
     pub tris: Vec<[u32; 3]>,

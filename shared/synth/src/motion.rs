@@ -4,6 +4,7 @@ use crate::canon::Pose;
 use crate::canon::TposeSkeleton;
 use crate::error::SynthError;
 use crate::poses::{Posture, ScriptedPose};
+use airglyph_core::gestures::GestureTruth;
 use std::path::PathBuf;
 
 /// What the person does.
@@ -148,30 +149,6 @@ impl Sway {
         p.root.z += 0.01 * w(2);
         p.rotate_all(crate::poses::yaw(turn));
     }
-}
-
-/// A label and its frames, inclusive.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct GestureTruth {
-    pub label: String,
-    pub start_frame: usize,
-    pub end_frame: usize,
-}
-
-/// Of the drawn symbols `truth`, the one a gesture reported over frames `start..=end`
-/// overlaps most, if any: how a recognized gesture is matched to what was drawn.
-pub fn drawn_for(truth: &[GestureTruth], start: u64, end: u64) -> Option<usize> {
-    truth
-        .iter()
-        .enumerate()
-        .map(|(i, t)| {
-            let lo = start.max(t.start_frame as u64);
-            let hi = end.min(t.end_frame as u64);
-            (i, hi.saturating_sub(lo))
-        })
-        .filter(|&(_, overlap)| overlap > 0)
-        .max_by_key(|&(_, overlap)| overlap)
-        .map(|(i, _)| i)
 }
 
 pub(crate) enum Motion {

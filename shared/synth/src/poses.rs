@@ -63,6 +63,7 @@ impl ScriptedPose {
         ScriptedPose::ArmsCrossed,
     ];
 
+    /// Every scripted pose, in the order `--help` lists them.
     pub const ALL: [ScriptedPose; 13] = [
         ScriptedPose::Neutral,
         ScriptedPose::TPose,
@@ -79,6 +80,7 @@ impl ScriptedPose {
         ScriptedPose::ArmsCrossed,
     ];
 
+    /// The pose's name on the command line.
     pub fn name(self) -> &'static str {
         match self {
             ScriptedPose::Neutral => "neutral",
@@ -97,6 +99,7 @@ impl ScriptedPose {
         }
     }
 
+    /// The pose named `name`, if any.
     pub fn from_name(name: &str) -> Option<Self> {
         Self::ALL.into_iter().find(|p| p.name() == name)
     }
@@ -257,7 +260,10 @@ pub enum Posture {
     Standing,
     /// Sitting upright on a seat this high above the floor (metres): thighs forward,
     /// shins down, feet on the floor; the upper body moves as the motion has it.
-    Seated { seat_height_m: f32 },
+    Seated {
+        /// The seat's height above the floor, metres.
+        seat_height_m: f32,
+    },
 }
 
 impl Posture {
@@ -292,7 +298,9 @@ impl Posture {
 /// Which arm.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Side {
+    /// The person's left arm.
     Left,
+    /// The person's right arm.
     Right,
 }
 

@@ -24,6 +24,7 @@ pub struct Raster {
 }
 
 impl Raster {
+    /// A rasterizer with no buffer yet (it grows to the first frame's size).
     pub fn new() -> Self {
         Self::default()
     }

@@ -166,5 +166,9 @@ fn a_drawing_recording_has_gestures_csv() {
             g.start_frame, g.end_frame
         )
     );
+    assert_eq!(
+        airglyph_core::gestures::read_gestures_csv(&dir.join("gestures.csv")).unwrap(),
+        s.gestures
+    );
     assert!(dir.join("joints.csv").exists());
 }

@@ -69,7 +69,7 @@ fn main() -> anyhow::Result<()> {
                 serde_json::json!({
                     "label": m.label().unwrap_or("?"), "score": m.score, "start_sequence": m.start_sequence,
                     "end_sequence": m.end_sequence, "capture_ns": m.chain.capture_ns,
-                    "gesture_publish_ns": m.chain.gesture_publish_ns,
+                    "gesture_publish_ns": m.chain.gesture_publish_ns, "bezier": m.bezier(),
                 })
             },
         ),
@@ -77,6 +77,8 @@ fn main() -> anyhow::Result<()> {
             serde_json::json!({
                 "sequence": m.sequence, "session": m.session,
                 "gesture_publish_ns": m.chain.gesture_publish_ns,
+                "hand": m.hand_point().map(|(h, _)| h.name()),
+                "hand_point": m.hand_point().map(|(_, at)| at),
             })
         }),
         other => {

@@ -1,12 +1,13 @@
 //! `airglyph collect`: records a person drawing one gesture again and again, for a
 //! vocabulary of one's own; every repetition becomes a line of trajectory JSONL.
 
-use crate::cmd::run::{run_listening, Args as RunArgs, Listener, Poll};
 use crate::interrupt::Interrupted;
+use crate::pipeline::PipelineArgs;
+use airglyph::supervisor::{supervise, Listener, ListenerError, Poll, NODE};
 use airglyph_capture::SourceSpec;
 use airglyph_gesture::lab::{RepetitionConfig, RepetitionSegmenter};
 use airglyph_gesture::model::MAX_LABEL_BYTES;
-use airglyph_ipc::{options, Receiver, SkeletonMsg};
+use airglyph_ipc::{options, Pipeline, Receiver, SkeletonMsg};
 use anyhow::{bail, Context};
 use std::fs::File;
 use std::io::Write;
@@ -104,7 +105,7 @@ impl Writer {
 }
 
 impl Listener for Collector<'_> {
-    fn poll(&mut self, timeout: Duration) -> anyhow::Result<Poll> {
+    fn poll(&mut self, timeout: Duration) -> Result<Poll, ListenerError> {
         let Some(r) = self.rx.recv(timeout)? else {
             return Ok(Poll::Idle);
         };
@@ -162,11 +163,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         args.label,
         args.out.display()
     );
-    let run_args = RunArgs {
+    let plan = PipelineArgs {
         stages: vec!["capture".into(), "pose".into()],
         truth: args.truth,
-        ..RunArgs::with_source(source.clone())
-    };
+        ..PipelineArgs::with_source(source.clone())
+    }
+    .plan()?;
     let mut c = Writer {
         seg: RepetitionSegmenter::new(RepetitionConfig::default()),
         file,
@@ -176,7 +178,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         count: args.count,
         written: 0,
     };
-    run_listening(run_args, |pipeline| {
+    supervise(&plan, Pipeline::join(NODE)?, |pipeline| {
         Ok(Collector {
             rx: pipeline.skeleton_receiver()?,
             w: &mut c,

@@ -2,11 +2,13 @@
 //! full three-process pipeline names them.
 
 use crate::cmd::gesture_json::GestureJson;
-use crate::cmd::run::{run_with, Args as RunArgs};
+use crate::pipeline::PipelineArgs;
+use airglyph::supervisor::{supervise_gestures, NODE};
 use airglyph_capture::synthetic::{scene, DEMO_SYMBOLS};
 use airglyph_capture::SourceSpec;
-use airglyph_ipc::GestureEventMsg;
-use airglyph_synth::{drawn_for, Synthesizer};
+use airglyph_core::gestures::drawn_for;
+use airglyph_ipc::{GestureEventMsg, Pipeline};
+use airglyph_synth::Synthesizer;
 use anyhow::Context;
 use std::io::Write;
 
@@ -84,17 +86,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         Ok(())
     };
-    run_with(
-        RunArgs {
-            json: args.json,
-            model: args.model,
-            view: args.view,
-            listen: args.listen,
-            truth: args.truth,
-            ..RunArgs::with_source(SourceSpec::Synthetic(Some(script)))
-        },
-        &mut on_event,
-    )?;
+    let plan = PipelineArgs {
+        model: args.model,
+        view: args.view,
+        listen: args.listen,
+        truth: args.truth,
+        ..PipelineArgs::with_source(SourceSpec::Synthetic(Some(script)))
+    }
+    .plan()?;
+    supervise_gestures(&plan, Pipeline::join(NODE)?, &mut on_event)?;
     let correct = truth
         .iter()
         .zip(&recognized)

@@ -95,7 +95,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     let mut pipeline_child = match &args.source {
         Some(source) => Some(
-            crate::stage::own_executable()
+            airglyph::supervisor::own_executable()
                 .args(["run", "--source", &source.to_string(), "--loop"])
                 .stdout(std::process::Stdio::null())
                 .spawn()

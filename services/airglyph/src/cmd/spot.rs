@@ -2,13 +2,12 @@
 
 use crate::cmd::gesture_json::GestureJson;
 use crate::interrupt::Interrupted;
+use airglyph_core::gestures::{drawn_for, read_gestures_csv};
 use airglyph_core::recording::Recording;
 use airglyph_core::{Joint, Skeleton};
 use airglyph_gesture::{Model, ModelSource, Spotter, SpotterConfig};
 use airglyph_ipc::shutdown;
 use airglyph_pose::{PoseConfig, PoseEstimator};
-use airglyph_synth::drawn_for;
-use airglyph_synth::GestureTruth;
 use anyhow::Context;
 use std::path::{Path, PathBuf};
 
@@ -46,30 +45,6 @@ pub struct Args {
     /// spotting errors from classification errors.
     #[arg(long)]
     alone: bool,
-}
-
-fn read_gestures_csv(path: &Path) -> anyhow::Result<Vec<GestureTruth>> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("{}", path.display()))?;
-    let mut out = Vec::new();
-    for (i, line) in text.lines().enumerate().skip(1) {
-        let f: Vec<&str> = line.split(',').collect();
-        let bad = || {
-            anyhow::anyhow!(
-                "{}:{}: expected label,start_frame,end_frame",
-                path.display(),
-                i + 1
-            )
-        };
-        if f.len() != 3 {
-            return Err(bad());
-        }
-        out.push(GestureTruth {
-            label: f[0].to_owned(),
-            start_frame: f[1].trim().parse().map_err(|_| bad())?,
-            end_frame: f[2].trim().parse().map_err(|_| bad())?,
-        });
-    }
-    Ok(out)
 }
 
 /// The skeletons of `airglyph pose DIR --json` (None where no person was found).

@@ -3,11 +3,12 @@
 
 use crate::interrupt::Interrupted;
 use airglyph_core::camera::Preset;
+use airglyph_core::gestures::write_gestures_csv;
 use airglyph_core::Intrinsics;
 use airglyph_ipc::shutdown;
 use airglyph_synth::{
-    write_gestures_csv, Background, BodySpec, Chair, GestureTruth, MotionSpec, Placement, Posture,
-    ProceduralBody, Prop, SceneConfig, ScriptedPose, SynthError, Table,
+    Background, BodySpec, Chair, GestureTruth, MotionSpec, Placement, Posture, ProceduralBody,
+    Prop, SceneConfig, ScriptedPose, SynthError, Table,
 };
 use anyhow::{bail, Context};
 use indicatif::{ProgressBar, ProgressStyle};

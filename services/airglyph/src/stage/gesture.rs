@@ -1,10 +1,13 @@
 //! `airglyph stage gesture`: the gesture stage process. Follows the drawing hand through the
-//! skeleton stream, spots and classifies gestures, publishes each as an event.
+//! skeleton stream, spots and classifies gestures, publishes each as an event with the
+//! Bezier points of its path, and every frame's decision with the hand point the
+//! recognizer took from it (what the viewer draws).
 
+use airglyph_core::bezier::bezier_points;
 use airglyph_gesture::{Hand, ModelSource, SpottedGesture, Spotter, SpotterConfig};
 use airglyph_ipc::clock::monotonic_ns;
 use airglyph_ipc::stats::Telemetry;
-use airglyph_ipc::wire::Hand as WireHand;
+use airglyph_ipc::wire::{Hand as WireHand, BEZIER_CAPACITY};
 use airglyph_ipc::{
     shutdown, DecisionMsg, GestureEventMsg, LatencyChain, Pipeline, Received, Receiver,
     SkeletonMsg, Stage,
@@ -92,12 +95,30 @@ impl Reported {
     }
 }
 
-/// Sends one gesture event, unless it was reported before this stage's start; `chain`
-/// is the latency chain of the frame that closed it.
+/// The wire's name for the gesture library's hand.
+fn wire_hand(hand: Hand) -> WireHand {
+    match hand {
+        Hand::Left => WireHand::Left,
+        Hand::Right => WireHand::Right,
+    }
+}
+
+/// `n` points (at most the wire's capacity) of the Bezier curve of a spotted gesture's
+/// path: the gesture descriptor's curve, for others to draw.
+fn bezier_of(g: &SpottedGesture, n: usize) -> Vec<[f32; 2]> {
+    bezier_points(&g.points, n.min(BEZIER_CAPACITY))
+        .into_iter()
+        .map(|p| p.map(|v| v as f32))
+        .collect()
+}
+
+/// Sends one gesture event with `bezier` points of its path, unless it was reported
+/// before this stage's start; `chain` is the latency chain of the frame that closed it.
 fn publish(
     events: &airglyph_ipc::Publisher<GestureEventMsg>,
     reported: &mut Reported,
     g: &SpottedGesture,
+    bezier: usize,
     session: u64,
     chain: LatencyChain,
 ) -> anyhow::Result<()> {
@@ -112,10 +133,7 @@ fn publish(
         start_ns: g.start_ns,
         end_ns: g.end_ns,
         session,
-        hand: match g.hand {
-            Hand::Left => WireHand::Left as u8,
-            Hand::Right => WireHand::Right as u8,
-        },
+        hand: wire_hand(g.hand) as u8,
         chain,
         ..GestureEventMsg::default()
     };
@@ -124,6 +142,10 @@ fn publish(
     event
         .set_label(&g.label)
         .with_context(|| format!("label {:?}", g.label))?;
+    if let Err(e) = event.set_bezier(&bezier_of(g, bezier)) {
+        // The gesture matters more than its picture: it goes out without the points.
+        tracing::warn!(label = %g.label, error = %e, "the gesture's Bezier points are not sent");
+    }
     // Sent first, remembered after: a kill in between repeats the event (which a
     // consumer can tell by its session and frames) rather than losing it.
     events.send(event)?;
@@ -216,6 +238,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         format!("cannot load the gesture model {source} (train one with `airglyph train`, or pass --model)")
     })?;
     let mut spotter = Spotter::new(model, SpotterConfig::default())?;
+    // As many as the model's descriptor takes.
+    let bezier = spotter.model().training.bezier_points;
     let pipeline = Pipeline::join("gesture")?;
     let started_ns = monotonic_ns();
     let mut reported = Reported::load(&pipeline);
@@ -240,7 +264,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 if at.elapsed() >= QUIET {
                     last_seen = None;
                     for g in spotter.finish() {
-                        publish(&events, &mut reported, &g, session, chain)?;
+                        publish(&events, &mut reported, &g, bezier, session, chain)?;
                     }
                 }
             }
@@ -260,7 +284,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 // pending is decided as when the skeletons stop.
                 if let Some((_, chain)) = last_seen {
                     for g in spotter.finish() {
-                        publish(&events, &mut reported, &g, session, chain)?;
+                        publish(&events, &mut reported, &g, bezier, session, chain)?;
                     }
                 }
                 spotter.reset();
@@ -280,11 +304,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let mut chain = msg.chain;
         chain.gesture_receive_ns = r.receive_ns;
         last_seen = Some((Instant::now(), chain));
-        let spotted = msg
-            .skeleton()
-            .and_then(|s| spotter.push(&s, msg.sequence, msg.chain.capture_ns));
+        let (point, spotted) = match msg.skeleton() {
+            Some(s) => spotter.push_tracked(&s, msg.sequence, msg.chain.capture_ns),
+            None => (None, None),
+        };
         if let Some(g) = &spotted {
-            publish(&events, &mut reported, g, msg.session, chain)?;
+            publish(&events, &mut reported, g, bezier, msg.session, chain)?;
         }
         if replayed {
             continue;
@@ -297,6 +322,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             gesture: spotted.is_some() as u8,
             ..DecisionMsg::default()
         };
+        decision.set_hand_point(
+            point
+                .filter(|p| p.x.is_finite() && p.y.is_finite())
+                .map(|p| (wire_hand(p.hand), [p.x, p.y])),
+        );
         decision.chain.gesture_publish_ns = decided_ns;
         decisions.send(decision)?;
         telemetry.output(decided_ns - r.receive_ns, decided_ns - msg.chain.capture_ns);

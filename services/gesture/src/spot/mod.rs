@@ -60,6 +60,10 @@ pub struct SpottedGesture {
     pub end_ns: u64,
     /// The hand that drew it.
     pub hand: Hand,
+    /// The hand's path over the gesture as the spotter classified it: body frame, x to
+    /// the person's right, y down, shoulder widths.
+    #[serde(skip)]
+    pub points: Vec<[f32; 2]>,
 }
 
 /// Why a spotter cannot be built.
@@ -218,8 +222,22 @@ impl Spotter {
     /// Feeds one skeleton (frame `seq`, capture time `time_ns`). Unusable skeletons
     /// (no person, non-finite joints) are skipped.
     pub fn push(&mut self, skeleton: &Skeleton, seq: u64, time_ns: u64) -> Option<SpottedGesture> {
-        let p = self.tracker.update(skeleton, time_ns)?;
-        self.push_point(p, seq, time_ns)
+        self.push_tracked(skeleton, seq, time_ns).1
+    }
+
+    /// Feeds one skeleton like [`Spotter::push`], and tells the body-frame hand point
+    /// the tracker made of it, the one the spotter went on (None for an unusable
+    /// skeleton): what the gesture stage publishes for others to draw.
+    pub fn push_tracked(
+        &mut self,
+        skeleton: &Skeleton,
+        seq: u64,
+        time_ns: u64,
+    ) -> (Option<HandPoint>, Option<SpottedGesture>) {
+        let Some(p) = self.tracker.update(skeleton, time_ns) else {
+            return (None, None);
+        };
+        (Some(p), self.push_point(p, seq, time_ns))
     }
 
     /// Feeds one body-frame hand point (shoulder widths, x right, y down).
@@ -393,6 +411,9 @@ impl Spotter {
     fn publish(&mut self, c: Candidate) -> Option<SpottedGesture> {
         self.barrier = self.barrier.max(c.end);
         let (a, b) = (self.seg.point(c.start)?, self.seg.point(c.end)?);
+        // Back from gesture sizes, the segmenter's unit, to shoulder widths.
+        let size = self.cfg.gesture_size.max(1e-3);
+        let points = self.seg.points(c.start, c.end)?;
         Some(SpottedGesture {
             label: self.model.labels[c.class].clone(),
             class: c.class,
@@ -402,6 +423,7 @@ impl Spotter {
             start_ns: a.2,
             end_ns: b.2,
             hand: self.hand,
+            points: points.iter().map(|p| p.map(|v| v * size)).collect(),
         })
     }
 

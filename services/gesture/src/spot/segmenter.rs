@@ -155,6 +155,12 @@ impl Segmenter {
         self.pts.get(i.checked_sub(self.base)?).copied()
     }
 
+    /// The points s..=e (gesture-size units), while they are kept.
+    pub fn points(&self, s: usize, e: usize) -> Option<Vec<[f32; 2]>> {
+        let (a, b) = (s.checked_sub(self.base)?, e.checked_sub(self.base)?);
+        (a <= b && b < self.pts.len()).then(|| self.pts[a..=b].iter().map(|p| p.0).collect())
+    }
+
     /// The verifier's input for the segment s..=e: its points, and the hand's path just
     /// before and after it ([`VerifierInput::cut`]; as far as kept).
     pub fn input(&self, s: usize, e: usize, fps: f64) -> Option<VerifierInput> {

@@ -29,9 +29,11 @@ pub struct BvhJoint {
     pub name: String,
     /// Always an earlier joint.
     pub parent: Option<usize>,
+    /// From the parent's head to this joint's, at rest, in the file's units.
     pub offset: Vector3<f32>,
     /// Channel kinds in file order; `channel_start` indexes a frame's values.
     pub channels: Vec<Channel>,
+    /// Where this joint's channels start among a frame's values.
     pub channel_start: usize,
     /// `End Site` offsets under this joint.
     pub end_sites: Vec<Vector3<f32>>,
@@ -42,22 +44,32 @@ pub struct BvhJoint {
 /// What one channel of a joint moves.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Channel {
+    /// Translation along x.
     Xposition,
+    /// Translation along y.
     Yposition,
+    /// Translation along z.
     Zposition,
+    /// Rotation about x, degrees.
     Xrotation,
+    /// Rotation about y, degrees.
     Yrotation,
+    /// Rotation about z, degrees.
     Zrotation,
 }
 
 /// A parsed BVH clip.
 #[derive(Debug, Clone)]
 pub struct BvhClip {
+    /// The file it was read from.
     pub path: PathBuf,
+    /// The hierarchy, parents before children.
     pub joints: Vec<BvhJoint>,
+    /// Seconds a frame.
     pub frame_time: f32,
     /// Channel values of every frame, one after the other, `channels` a frame.
     values: Vec<f32>,
+    /// Values a frame.
     pub channels: usize,
     /// BVH joint index driving each canonical bone (`None`: it follows its parent;
     /// the hips, both upper arms and both forearms are always driven).

@@ -1,0 +1,281 @@
+//! The pipeline the commands start (`run`, `demo`, `collect`): which stages, each with
+//! which arguments, checked by the stage's own parser before anything starts, as a
+//! [`Plan`] for the supervisor.
+
+use crate::stage::{self, StageArgs};
+use airglyph::supervisor::{CrashRule, Plan, StagePlan};
+use airglyph_capture::SourceSpec;
+use airglyph_ipc::Stage;
+use anyhow::bail;
+use std::ffi::OsString;
+use std::path::PathBuf;
+use std::time::Duration;
+
+/// The options of a supervised pipeline, as `airglyph run` takes them.
+#[derive(clap::Args, Debug, Clone)]
+pub struct PipelineArgs {
+    /// Where frames come from: synthetic, recording:DIR, v4l2:/dev/videoN, openni2 (the first device) or openni2:URI.
+    #[arg(long, default_value = "synthetic")]
+    pub source: SourceSpec,
+    /// The stages to start, comma-separated (e.g. `capture,pose` to profile pose alone).
+    #[arg(long, value_delimiter = ',', default_value = "capture,pose,gesture")]
+    pub stages: Vec<String>,
+    /// Replay a recording as fast as possible.
+    #[arg(long)]
+    pub fast: bool,
+    /// Replay a recording again and again.
+    #[arg(long = "loop")]
+    pub looping: bool,
+    /// Stop capture after this many frames.
+    #[arg(long)]
+    pub frames: Option<u64>,
+    /// The gesture model (from `airglyph train`; default: $AIRGLYPH_MODEL, else the
+    /// built-in 36-symbol model).
+    #[arg(long, value_name = "FILE")]
+    pub model: Option<PathBuf>,
+    /// Extra arguments for one stage, as STAGE=ARGS, split as a shell splits them
+    /// (`--stage-args "gesture=--model 'my model.json'"`); repeat it for more stages.
+    /// The stages: capture, pose, gesture, viewer; `airglyph stage NAME --help` lists
+    /// each one's arguments, which are checked before the pipeline starts.
+    #[arg(long = "stage-args", value_name = "STAGE=ARGS")]
+    pub stage_args: Vec<StageArgs>,
+    /// Restarts of one stage within --crash-window after which it is in a crash loop and
+    /// the pipeline gives up (its deaths count whenever they come, not only soon after
+    /// a start).
+    #[arg(long, default_value_t = CrashRule::default().max_restarts, value_parser = airglyph_ipc::options::within(0usize, 1000), allow_negative_numbers = true)]
+    pub max_restarts: usize,
+    /// The sliding window of --max-restarts, in seconds.
+    #[arg(long, value_name = "SECONDS", default_value_t = CrashRule::default().window.as_secs_f64(), value_parser = airglyph_ipc::options::seconds(airglyph_ipc::options::MAX_SECONDS), allow_negative_numbers = true)]
+    pub crash_window: f64,
+    /// Also start the viewer: the live depth image, skeleton, hand trail, gestures and
+    /// latencies as a web page.
+    #[arg(long)]
+    pub view: bool,
+    /// With --view: the viewer's address, e.g. 0.0.0.0:8080 to watch from another
+    /// computer (default 127.0.0.1:8080, this machine only).
+    #[arg(long, value_name = "ADDR", requires = "view")]
+    pub listen: Option<std::net::SocketAddr>,
+    /// Skip pose estimation: the capture stage publishes the ground-truth skeletons of
+    /// a synthetic source or of a recording with joints.csv (to tell pose errors from
+    /// gesture errors).
+    #[arg(long)]
+    pub truth: bool,
+}
+
+impl PipelineArgs {
+    /// The pipeline from `source` with every other option at its command-line default,
+    /// for the commands that run the pipeline themselves (demo, collect).
+    pub fn with_source(source: SourceSpec) -> Self {
+        #[derive(clap::Parser)]
+        struct Run {
+            #[command(flatten)]
+            args: PipelineArgs,
+        }
+        let mut args = <Run as clap::Parser>::parse_from(["run"]).args;
+        args.source = source;
+        args
+    }
+
+    /// When a stage that keeps dying is given up.
+    fn crash_rule(&self) -> CrashRule {
+        CrashRule {
+            max_restarts: self.max_restarts,
+            window: Duration::from_secs_f64(self.crash_window),
+        }
+    }
+
+    /// The stages to start, each with its arguments checked by its own parser: a bad
+    /// one is refused here, not by a stage dying again and again.
+    pub fn plan(&self) -> anyhow::Result<Plan> {
+        let mut names: Vec<Stage> = Vec::new();
+        for name in &self.stages {
+            let stage = Stage::from_name(name)
+                .filter(|s| Stage::PIPELINE.contains(s))
+                .ok_or_else(|| {
+                    anyhow::anyhow!("unknown stage {name:?}: expected capture, pose or gesture (the viewer comes with --view)")
+                })?;
+            if self.truth && stage == Stage::Pose {
+                // Capture publishes the skeletons itself.
+                continue;
+            }
+            names.push(stage);
+        }
+        if self.view {
+            names.push(Stage::Viewer);
+        }
+        for extra in &self.stage_args {
+            if !names.contains(&extra.stage) {
+                bail!(
+                    "--stage-args {}=…: the {} stage does not run here{}",
+                    extra.stage.name(),
+                    extra.stage.name(),
+                    match extra.stage {
+                        Stage::Viewer => " (add --view)",
+                        Stage::Pose if self.truth => " (--truth runs none)",
+                        _ => " (see --stages)",
+                    }
+                );
+            }
+        }
+        if self.model.is_some() && !names.contains(&Stage::Gesture) {
+            bail!("--model: the gesture stage does not run here (see --stages)");
+        }
+        let stages = names
+            .into_iter()
+            .map(|stage| {
+                let args = self.stage_args(stage);
+                stage::check_args(stage, &args).map_err(|e| {
+                    anyhow::anyhow!("the arguments of the {} stage: {e}", stage.name())
+                })?;
+                let health =
+                    match stage {
+                        Stage::Viewer => Some(stage::viewer_address(&args).map_err(|e| {
+                            anyhow::anyhow!("the arguments of the viewer stage: {e}")
+                        })?),
+                        _ => None,
+                    };
+                Ok(StagePlan {
+                    health,
+                    ..StagePlan::own(stage, args)
+                })
+            })
+            .collect::<anyhow::Result<Vec<_>>>()?;
+        if stages.is_empty() {
+            bail!("no stages to run");
+        }
+        Ok(Plan {
+            stages,
+            rule: self.crash_rule(),
+        })
+    }
+
+    /// The command-line arguments the pipeline gives one stage.
+    fn stage_args(&self, stage: Stage) -> Vec<OsString> {
+        let mut out: Vec<OsString> = Vec::new();
+        match stage {
+            Stage::Capture => {
+                out.extend(["--source".into(), self.source.to_string().into()]);
+                if self.fast {
+                    out.push("--fast".into());
+                }
+                if self.looping {
+                    out.push("--loop".into());
+                }
+                if let Some(n) = self.frames {
+                    out.extend(["--frames".into(), n.to_string().into()]);
+                }
+                if self.truth {
+                    // Capture publishes the skeletons itself.
+                    out.push("--truth-skeletons".into());
+                }
+            }
+            Stage::Viewer => {
+                if let Some(addr) = self.listen {
+                    out.extend(["--listen".into(), addr.to_string().into()]);
+                }
+            }
+            Stage::Gesture => {
+                if let Some(model) = &self.model {
+                    out.extend(["--model".into(), model.into()]);
+                }
+            }
+            Stage::Pose => {}
+        }
+        for extra in self.stage_args.iter().filter(|e| e.stage == stage) {
+            out.extend(extra.args.iter().map(OsString::from));
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(line: &[&str]) -> PipelineArgs {
+        #[derive(clap::Parser)]
+        struct Run {
+            #[command(flatten)]
+            args: PipelineArgs,
+        }
+        let argv = std::iter::once("run").chain(line.iter().copied());
+        <Run as clap::Parser>::try_parse_from(argv).unwrap().args
+    }
+
+    fn args_of(plan: &Plan, stage: Stage) -> Vec<String> {
+        let s = plan.stages.iter().find(|s| s.stage == stage).unwrap();
+        s.args
+            .iter()
+            .map(|a| a.to_string_lossy().into_owned())
+            .collect()
+    }
+
+    #[test]
+    fn each_stage_gets_its_own_options_and_the_viewer_is_probed_where_it_listens() {
+        let plan = parse(&[
+            "--source",
+            "synthetic:draw:12",
+            "--loop",
+            "--model",
+            "m.json",
+            "--view",
+            "--listen",
+            "127.0.0.1:9090",
+            "--stage-args",
+            "pose=--recording r",
+        ])
+        .plan()
+        .unwrap();
+        let stages: Vec<Stage> = plan.stages.iter().map(|s| s.stage).collect();
+        assert_eq!(
+            stages,
+            [Stage::Capture, Stage::Pose, Stage::Gesture, Stage::Viewer]
+        );
+        assert_eq!(
+            args_of(&plan, Stage::Capture),
+            [
+                "stage",
+                "capture",
+                "--source",
+                "synthetic:draw:12",
+                "--loop"
+            ]
+        );
+        assert_eq!(
+            args_of(&plan, Stage::Pose),
+            ["stage", "pose", "--recording", "r"]
+        );
+        assert_eq!(
+            args_of(&plan, Stage::Gesture),
+            ["stage", "gesture", "--model", "m.json"]
+        );
+        let viewer = &plan.stages[3];
+        assert_eq!(viewer.health, Some("127.0.0.1:9090".parse().unwrap()));
+        assert!(plan.stages[..3].iter().all(|s| s.health.is_none()));
+        assert_eq!(plan.rule, CrashRule::default());
+    }
+
+    #[test]
+    fn truth_runs_no_pose_stage_and_capture_publishes_the_skeletons() {
+        let plan = parse(&["--truth", "--max-restarts", "2"]).plan().unwrap();
+        assert!(plan.stages.iter().all(|s| s.stage != Stage::Pose));
+        assert!(args_of(&plan, Stage::Capture).contains(&"--truth-skeletons".to_owned()));
+        assert_eq!(plan.rule.max_restarts, 2);
+    }
+
+    #[test]
+    fn options_for_a_stage_that_does_not_run_or_does_not_take_them_are_refused() {
+        let err = |line: &[&str]| parse(line).plan().unwrap_err().to_string();
+        assert!(err(&["--stage-args", "viewer=--quality 5"]).contains("(add --view)"));
+        assert!(
+            err(&["--truth", "--stage-args", "pose=--recording r"]).contains("--truth runs none")
+        );
+        assert!(err(&["--stages", "capture", "--model", "m"]).contains("--model"));
+        assert!(err(&["--stages", "capture,lens"]).contains("unknown stage \"lens\""));
+        let bad = err(&["--stage-args", "gesture=--no-such-flag"]);
+        assert!(bad.contains("the arguments of the gesture stage"), "{bad}");
+        assert!(PipelineArgs::with_source(SourceSpec::Synthetic(None))
+            .plan()
+            .is_ok());
+    }
+}

@@ -1,0 +1,228 @@
+//! One supervised stage's process: started, reaped, restarted with backoff, stopped.
+
+use super::{CrashRule, Deaths, HealthWatch, StagePlan, SupervisorError};
+use airglyph_ipc::{Pipeline, Stage};
+use std::os::unix::process::CommandExt;
+use std::process::{Child, Command, ExitStatus};
+use std::time::{Duration, Instant};
+
+/// The first restart waits this long; each further one twice as long, up to `MAX_BACKOFF`.
+const MIN_BACKOFF: Duration = Duration::from_millis(100);
+const MAX_BACKOFF: Duration = Duration::from_secs(5);
+/// A stage that dies sooner than this after its start waits longer for its restart each
+/// time; one that ran longer is restarted after `MIN_BACKOFF` again.
+const HEALTHY_AFTER: Duration = Duration::from_secs(2);
+/// How long a stage gets to stop after SIGTERM before SIGKILL.
+const STOP_GRACE: Duration = Duration::from_secs(3);
+
+/// Makes `cmd`'s child receive SIGTERM when this process dies (even by SIGKILL), so a
+/// stage whose supervisor is gone stops too instead of running on unsupervised.
+pub(super) fn end_with_parent(cmd: &mut Command) {
+    // SAFETY: prctl is async-signal-safe; the closure touches nothing else.
+    unsafe {
+        cmd.pre_exec(|| {
+            libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM);
+            Ok(())
+        });
+    }
+}
+
+/// One supervised stage.
+pub(super) struct Supervised<'a> {
+    plan: &'a StagePlan,
+    child: Option<Child>,
+    started: Instant,
+    backoff: Duration,
+    restart_at: Option<Instant>,
+    deaths: Deaths,
+    /// Exited by itself with success (a finite source ran out), or given up: not restarted.
+    finished: bool,
+    /// The viewer's: whether its web server still answers (a stopped or hung viewer
+    /// lives on as a process).
+    health: Option<HealthWatch>,
+}
+
+impl<'a> Supervised<'a> {
+    pub(super) fn new(plan: &'a StagePlan, rule: CrashRule) -> Result<Self, SupervisorError> {
+        let health = match plan.health {
+            Some(addr) if addr.port() == 0 => {
+                // Any free port, which only the viewer knows; its own watchdog still
+                // ends it when its server stops.
+                tracing::info!(
+                    stage = plan.stage.name(),
+                    "listens on any free port: the supervisor cannot check its health"
+                );
+                None
+            }
+            Some(addr) => Some(HealthWatch::start(addr).map_err(SupervisorError::Health)?),
+            None => None,
+        };
+        Ok(Self {
+            plan,
+            child: None,
+            started: Instant::now(),
+            backoff: MIN_BACKOFF,
+            restart_at: None,
+            deaths: Deaths::new(rule),
+            finished: false,
+            health,
+        })
+    }
+
+    pub(super) fn stage(&self) -> Stage {
+        self.plan.stage
+    }
+
+    pub(super) fn finished(&self) -> bool {
+        self.finished
+    }
+
+    pub(super) fn spawn(&mut self) -> Result<(), SupervisorError> {
+        let mut cmd = Command::new(&self.plan.program);
+        if let Some(arg0) = &self.plan.arg0 {
+            cmd.arg0(arg0);
+        }
+        end_with_parent(&mut cmd);
+        let child = cmd
+            .args(&self.plan.args)
+            .spawn()
+            .map_err(|source| SupervisorError::Start {
+                by_hand: self.plan.by_hand.clone(),
+                source,
+            })?;
+        tracing::debug!(stage = self.stage().name(), pid = child.id(), "started");
+        self.child = Some(child);
+        self.started = Instant::now();
+        self.restart_at = None;
+        if let Some(h) = &self.health {
+            h.restarted();
+        }
+        Ok(())
+    }
+
+    /// Looks at the stage once, at `now`: kills a viewer that stopped serving, reaps a
+    /// process that ended and plans its restart (or gives it up), and restarts one whose
+    /// backoff is over. An essential stage in a crash loop is an error.
+    pub(super) fn check(
+        &mut self,
+        now: Instant,
+        pipeline: &Pipeline,
+    ) -> Result<(), SupervisorError> {
+        let name = self.stage().name();
+        let Some(child) = self.child.as_mut() else {
+            if self.restart_at.is_some_and(|t| now >= t) {
+                self.spawn()?;
+                tracing::info!(
+                    stage = name,
+                    deaths = self.deaths.count(),
+                    "stage restarted"
+                );
+            }
+            return Ok(());
+        };
+        let status = child.try_wait().map_err(|source| SupervisorError::Wait {
+            stage: self.plan.stage,
+            source,
+        })?;
+        let Some(status) = status else {
+            if let Some(reason) = self.health.as_ref().and_then(HealthWatch::stopped_serving) {
+                // SIGKILL: a stopped process would not act on SIGTERM. Its death is then
+                // handled as any other, at the next round.
+                tracing::warn!(
+                    stage = name,
+                    pid = child.id(),
+                    %reason,
+                    "the viewer lives but stopped serving; killing it to start it again"
+                );
+                let _ = child.kill();
+            }
+            return Ok(());
+        };
+        self.child = None;
+        if status.success() {
+            tracing::info!(stage = name, "finished");
+            self.finished = true;
+            return Ok(());
+        }
+        // Free the dead stage's shared memory now, not only when it restarts.
+        pipeline.cleanup_dead_nodes();
+        let young = self.started.elapsed() <= HEALTHY_AFTER;
+        if !young {
+            // It was working: restart it at once, whatever came before.
+            self.backoff = MIN_BACKOFF;
+        }
+        let looping = self.deaths.record(now);
+        let window_s = self.deaths.rule().window.as_secs_f64();
+        if looping && !self.plan.essential() {
+            tracing::error!(
+                stage = name,
+                deaths = self.deaths.count(),
+                window_s,
+                last = %describe(status),
+                "stage keeps dying; giving it up (the pipeline runs on) — run `{}` alone to see why",
+                self.plan.by_hand
+            );
+            self.finished = true;
+            return Ok(());
+        }
+        if looping {
+            return Err(SupervisorError::CrashLoop {
+                stage: self.plan.stage,
+                deaths: self.deaths.count(),
+                window_s,
+                last: describe(status),
+                after_s: self.started.elapsed().as_secs_f64(),
+                by_hand: self.plan.by_hand.clone(),
+            });
+        }
+        tracing::warn!(
+            stage = name,
+            status = %describe(status),
+            backoff_ms = self.backoff.as_millis() as u64,
+            "stage died; restarting"
+        );
+        self.restart_at = Some(now + self.backoff);
+        if young {
+            self.backoff = (self.backoff * 2).min(MAX_BACKOFF);
+        }
+        Ok(())
+    }
+
+    /// Stops the process: SIGTERM, then SIGKILL after [`STOP_GRACE`].
+    pub(super) fn stop(&mut self) {
+        let Some(mut child) = self.child.take() else {
+            return;
+        };
+        // SAFETY: kill(2) on our own child's pid; the child is not reaped yet, so the pid
+        // cannot have been reused.
+        unsafe { libc::kill(child.id() as i32, libc::SIGTERM) };
+        let deadline = Instant::now() + STOP_GRACE;
+        loop {
+            match child.try_wait() {
+                Ok(Some(_)) => return,
+                Ok(None) if Instant::now() < deadline => {
+                    std::thread::sleep(Duration::from_millis(20))
+                }
+                _ => {
+                    tracing::warn!(
+                        stage = self.stage().name(),
+                        "did not stop within 3 s; killing it"
+                    );
+                    let _ = child.kill();
+                    let _ = child.wait();
+                    return;
+                }
+            }
+        }
+    }
+}
+
+/// How a process ended, in words.
+fn describe(status: ExitStatus) -> String {
+    use std::os::unix::process::ExitStatusExt;
+    match (status.code(), status.signal()) {
+        (Some(code), _) => format!("exit code {code}"),
+        (None, Some(sig)) => format!("signal {sig}"),
+        _ => "unknown status".into(),
+    }
+}
