@@ -48,7 +48,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }));
     let server = Server::start(args.listen, shared.clone())
         .context("is another viewer running there? pick another address with --listen")?;
-    let mut feed = Feed::new(&pipeline)?;
+    let mut feed = Feed::new(&pipeline)?.with_push(shared.push().clone());
     tracing::info!("viewer on http://{}/", server.addr());
     let result = (|| {
         while !shutdown::requested() {
@@ -63,6 +63,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             {
                 shared.notify();
             }
+            shared.push_state();
         }
         Ok(())
     })();
