@@ -93,7 +93,12 @@ const SKELETON: Settings = Settings {
 pub const SKELETON_HISTORY: usize = 256;
 const GESTURE: Settings = Settings {
     name: "airglyph/gesture",
-    buffer: 16,
+    // Events come seconds apart, but an importer whose link came back sends those it
+    // recovered at once (up to 64: `airglyph-zenoh`) with the live ones, and a full
+    // buffer drops its oldest without a word (gesture events carry no sequence to count
+    // gaps by). A subscriber descheduled a few hundred ms on a busy machine lost one of
+    // such a burst in a buffer of 64 (1 run in 3); 128 events are 17 KB a subscriber.
+    buffer: 128,
     max_publishers: 1,
     max_subscribers: 8,
     history: GESTURE_HISTORY,
