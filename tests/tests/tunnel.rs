@@ -47,10 +47,12 @@ impl Network {
         let (d, o) = (down.clone(), open.clone());
         std::thread::spawn(move || {
             for client in listener.incoming().map_while(Result::ok) {
-                let Ok(server) = (!d.load(Ordering::SeqCst))
-                    .then(|| TcpStream::connect(to))
-                    .unwrap_or_else(|| Err(std::io::Error::other("the network is down")))
-                else {
+                let connected = if d.load(Ordering::SeqCst) {
+                    Err(std::io::Error::other("the network is down"))
+                } else {
+                    TcpStream::connect(to)
+                };
+                let Ok(server) = connected else {
                     let _ = client.shutdown(Shutdown::Both);
                     continue;
                 };
@@ -105,7 +107,7 @@ fn gestures_cross_to_another_host_and_losses_are_counted() {
     let exporter_addr: SocketAddr = format!("127.0.0.1:{port}").parse().unwrap();
     let network = Network::start(exporter_addr);
 
-    let _exporter = device
+    let exporter = device
         .command_at(&bridge)
         .args([
             "export",
@@ -221,6 +223,7 @@ fn gestures_cross_to_another_host_and_losses_are_counted() {
         down_ms.last().copied().unwrap_or(0.0),
         totals.map_or("reported no totals".into(), |t| t.to_string()),
     );
+    assert!(stop(exporter).success(), "the exporter stops cleanly");
     assert_eq!(
         received_n + missed,
         sent_n,
