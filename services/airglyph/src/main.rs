@@ -56,6 +56,7 @@ enum Command {
     Devices(cmd::devices::Args),
     /// Show each stage's frame rate, drops and latency, live.
     Top(cmd::top::Args),
+    Echo(cmd::echo::Args),
     /// Write the viewer's picture of the running pipeline (depth, skeleton, trail, gestures) to a PNG.
     Snapshot(cmd::snapshot::Args),
     /// Measure each stage's latency frame by frame; write CSV, JSON and histograms.
@@ -142,6 +143,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Command::Record(a) => cmd::record::run(a),
         Command::Devices(a) => cmd::devices::run(a),
         Command::Top(a) => cmd::top::run(a),
+        Command::Echo(a) => cmd::echo::run(a),
         Command::Snapshot(a) => cmd::snapshot::run(a),
         Command::Profile(a) => cmd::profile::run(a),
         Command::Synth(a) => cmd::synth::run(a),
@@ -177,6 +179,15 @@ mod tests {
             &["run", "--max-restarts", "3", "--crash-window", "30"],
             &["demo"],
             &["top", "--json", "--wait", "1"],
+            &[
+                "echo",
+                "skeleton",
+                "--json",
+                "--max-rate",
+                "10",
+                "--count",
+                "3",
+            ],
             &[
                 "snapshot",
                 "--out",

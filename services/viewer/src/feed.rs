@@ -2,17 +2,20 @@
 //! Subscribers keep iceoryx2's small safe-overflow buffers, and a frame is copied out
 //! and its shared memory released at once, so the viewer never holds capture back.
 
+use crate::push::Push;
 use crate::scene::Scene;
 use airglyph_ipc::clock::monotonic_ns;
 use airglyph_ipc::port::DepthReceiver;
 use airglyph_ipc::{
     DecisionMsg, GestureEventMsg, IpcError, Pipeline, Receiver, SkeletonMsg, Stage, StageStatsMsg,
 };
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 /// The viewer's subscriptions to every service of a pipeline.
 pub struct Feed {
+    /// Where each message also goes, for the push stream's clients.
+    push: Option<Arc<Push>>,
     depth: DepthReceiver,
     skeletons: Receiver<SkeletonMsg>,
     decisions: Receiver<DecisionMsg>,
@@ -46,12 +49,21 @@ impl Feed {
         let skeletons = pipeline.skeleton_receiver()?;
         let depth = pipeline.depth_receiver()?;
         Ok(Self {
+            push: None,
             depth,
             skeletons,
             decisions,
             gestures,
             stats,
         })
+    }
+
+    /// Also hands every skeleton, gesture and stats message to `push`.
+    pub fn with_push(self, push: Arc<Push>) -> Self {
+        Self {
+            push: Some(push),
+            ..self
+        }
     }
 
     /// Waits up to `timeout` for a depth frame, then moves everything that has arrived
@@ -68,6 +80,9 @@ impl Feed {
             next = self.depth.try_recv()?;
         }
         while let Some(r) = self.skeletons.try_recv()? {
+            if let Some(p) = &self.push {
+                p.skeleton(&r.msg);
+            }
             lock().push_skeleton(r.msg);
             polled.skeletons += 1;
         }
@@ -76,11 +91,17 @@ impl Feed {
             polled.decisions += 1;
         }
         while let Some(r) = self.gestures.try_recv()? {
+            if let Some(p) = &self.push {
+                p.gesture(&r.msg);
+            }
             lock().push_gesture(r.msg, monotonic_ns());
             polled.gestures += 1;
         }
         for (stage, rx) in self.stats.iter_mut() {
             while let Some(r) = rx.try_recv()? {
+                if let Some(p) = &self.push {
+                    p.stats(*stage, &r.msg);
+                }
                 lock().push_stats(*stage, r.msg);
             }
         }

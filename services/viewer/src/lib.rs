@@ -12,7 +12,8 @@
 //! telemetry. It computes none of these itself: the picture shows what the recognizer
 //! saw. [`render()`] draws the picture, the same for the web page ([`server`],
 //! answering through [`routes`] from [`pictures`]) and for `airglyph snapshot`.
-//! [`health`] tells a supervisor whether the page is still served.
+//! [`push`] streams the pipeline's messages to the page and to scripts as server-sent
+//! events. [`health`] tells a supervisor whether the page is still served.
 
 #![warn(missing_docs)]
 
@@ -21,7 +22,9 @@ mod connections;
 pub mod draw;
 pub mod feed;
 pub mod health;
+mod idle;
 pub mod pictures;
+pub mod push;
 pub mod render;
 pub mod routes;
 pub mod scene;
@@ -29,6 +32,7 @@ pub mod server;
 
 pub use feed::Feed;
 pub use pictures::{ServeConfig, Shared};
+pub use push::Push;
 pub use render::{render, Overlay};
 pub use scene::{Picture, Scene};
 pub use server::{ServeError, Server};

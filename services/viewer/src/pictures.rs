@@ -4,6 +4,7 @@
 //! so watching costs the pipeline a bounded share of the machine whatever the number
 //! of browsers (or of requests a hostile client sends).
 
+use crate::push::Push;
 use crate::render::{encode_jpeg, encode_png, render};
 use crate::scene::Scene;
 use airglyph_ipc::clock::monotonic_ns;
@@ -46,7 +47,13 @@ pub struct Shared {
     fresh: watch::Sender<u64>,
     config: ServeConfig,
     encoder: Mutex<Encoder>,
+    push: Arc<Push>,
+    /// When the page's state was last pushed.
+    state_pushed: Mutex<Option<Instant>>,
 }
+
+/// The page's state is pushed at most this often (clients ask for their own rate below).
+const STATE_EVERY: Duration = Duration::from_millis(100);
 
 fn relock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
     // A web task that panicked must not take the viewer down with it.
@@ -65,7 +72,30 @@ impl Shared {
                 last: None,
                 pictures: 0,
             }),
+            push: Arc::new(Push::new()),
+            state_pushed: Mutex::new(None),
         }
+    }
+
+    /// The push stream's broadcaster ([`crate::push`]).
+    pub fn push(&self) -> &Arc<Push> {
+        &self.push
+    }
+
+    /// Pushes the page's state to the clients that want it, at most every
+    /// [`STATE_EVERY`]; call it often.
+    pub fn push_state(&self) {
+        if !self.push.wants_state() {
+            return;
+        }
+        {
+            let mut last = relock(&self.state_pushed);
+            if last.is_some_and(|t| t.elapsed() < STATE_EVERY) {
+                return;
+            }
+            *last = Some(Instant::now());
+        }
+        self.push.state(&self.state());
     }
 
     /// The scene the feed fills and the routes read.

@@ -1,9 +1,10 @@
 //! What each request gets: the page, the next picture (long-polled), a PNG snapshot,
-//! the panels' state as JSON, and the health check. Every answer is made from the
+//! the panels' state as JSON, the push stream of events, and the health check. Every answer is made from the
 //! request's method and target alone; bad input is a 4xx, never a panic.
 
 use crate::pictures::Shared;
-use http_body_util::Full;
+use crate::push;
+use http_body_util::{Either, Full};
 use hyper::body::Bytes;
 use hyper::{Method, Response, StatusCode};
 use std::sync::Arc;
@@ -14,10 +15,19 @@ pub const HEALTH_PATH: &str = "/healthz";
 /// Longest request target served: the page's own are under 40 bytes.
 pub const MAX_TARGET: usize = 2048;
 
-pub(crate) type Reply = Response<Full<Bytes>>;
+/// A whole answer, or the push stream's.
+pub(crate) type Reply = Response<Either<Full<Bytes>, push::Stream>>;
 
 fn reply(status: StatusCode, content_type: &str, body: impl Into<Bytes>) -> Reply {
-    let mut r = Response::new(Full::new(body.into()));
+    headed(status, content_type, Either::Left(Full::new(body.into())))
+}
+
+fn headed(
+    status: StatusCode,
+    content_type: &str,
+    body: Either<Full<Bytes>, push::Stream>,
+) -> Reply {
+    let mut r = Response::new(body);
     *r.status_mut() = status;
     let h = r.headers_mut();
     h.insert(
@@ -37,7 +47,7 @@ pub(crate) fn text(status: StatusCode, body: &str) -> Reply {
 }
 
 /// The value of `key` in a query string `a=1&b=2`.
-fn query_value<'a>(query: &'a str, key: &str) -> Option<&'a str> {
+pub(crate) fn query_value<'a>(query: &'a str, key: &str) -> Option<&'a str> {
     query
         .split('&')
         .filter_map(|kv| kv.split_once('='))
@@ -68,6 +78,14 @@ pub(crate) async fn route(shared: &Arc<Shared>, method: &Method, target: &str) -
     match path {
         "/" | "/index.html" => reply(StatusCode::OK, "text/html; charset=utf-8", PAGE),
         HEALTH_PATH => text(StatusCode::OK, "ok"),
+        "/events" => match push::Wants::parse(query) {
+            Ok(wants) => headed(
+                StatusCode::OK,
+                "text/event-stream",
+                Either::Right(push::open(shared.push(), wants)),
+            ),
+            Err(e) => text(StatusCode::BAD_REQUEST, &e),
+        },
         "/state.json" => reply(
             StatusCode::OK,
             "application/json",
@@ -137,6 +155,8 @@ mod tests {
         assert_eq!(get("/state.json"), 200);
         assert_eq!(get("/nope"), 404);
         assert_eq!(get("/frame.jpg?after=x"), 400);
+        assert_eq!(get("/events?skeletons=x"), 400);
+        assert_eq!(get("/events?skeletons=10"), 200);
         assert_eq!(get(&format!("/{}", "a".repeat(MAX_TARGET))), 414);
         assert_eq!(status(&shared, Method::POST, "/"), 405);
         assert_eq!(get("/frame.jpg?after=0"), 200);

@@ -7,7 +7,9 @@
 //! - A request's line and headers: [`MAX_HEAD`] bytes and [`MAX_HEADERS`] headers
 //!   (hyper answers 431 beyond), all of it within [`HEAD_TIMEOUT`] once begun.
 //! - A connection that neither sends nor takes a byte for [`IDLE_TIMEOUT`] is closed,
-//!   whether it is silent, mid-request or not reading its answer.
+//!   whether it is silent, mid-request or not reading its answer; one that carries the
+//!   push stream ([`crate::push`]) sends nothing after its request and is held to its
+//!   writes only (the stream writes a heartbeat every 5 s).
 //! - At most [`MAX_CONNECTIONS`] connections (fewer if the file descriptor limit is
 //!   lower); a new one pushes out the connection idle longest ([`Connections`]), and an
 //!   accept that fails (no descriptor left) frees one and goes on: the server never
@@ -17,8 +19,10 @@
 
 use crate::connections::{Connections, Ticket};
 use crate::health::{HealthError, Watchdog};
+use crate::idle::Idle;
 use crate::pictures::Shared;
 use crate::routes::route;
+use http_body_util::Either;
 use hyper::body::Incoming;
 use hyper::server::conn::http1;
 use hyper::service::service_fn;
@@ -26,6 +30,7 @@ use hyper::Request;
 use hyper_util::rt::{TokioIo, TokioTimer};
 use std::convert::Infallible;
 use std::net::SocketAddr;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::Duration;
@@ -228,29 +233,35 @@ fn serve(stream: tokio::net::TcpStream, shared: &Arc<Shared>, connections: &Arc<
     let ticket = Arc::new(connections.admit());
     let _ = stream.set_nodelay(true);
     let mut io = TimeoutStream::new(stream);
-    io.set_read_timeout(Some(IDLE_TIMEOUT));
     io.set_write_timeout(Some(IDLE_TIMEOUT));
+    // The read deadline is lifted once the connection carries the push stream.
+    let streaming = Arc::new(AtomicBool::new(false));
+    let io = Idle::new(Box::pin(io), IDLE_TIMEOUT, streaming.clone());
     let task = tokio::spawn(converse(
-        TokioIo::new(Box::pin(io)),
+        TokioIo::new(io),
         shared.clone(),
         ticket.clone(),
+        streaming,
     ));
     ticket.attach(task.abort_handle());
 }
 
 /// One connection's requests and answers, through hyper with the head's limits.
-async fn converse<I>(io: I, shared: Arc<Shared>, ticket: Arc<Ticket>)
+async fn converse<I>(io: I, shared: Arc<Shared>, ticket: Arc<Ticket>, streaming: Arc<AtomicBool>)
 where
     I: hyper::rt::Read + hyper::rt::Write + Unpin + Send + 'static,
 {
     let service = {
         let ticket = ticket.clone();
         service_fn(move |req: Request<Incoming>| {
-            let (shared, ticket) = (shared.clone(), ticket.clone());
+            let (shared, ticket, streaming) = (shared.clone(), ticket.clone(), streaming.clone());
             async move {
                 ticket.busy(true);
                 let target = req.uri().path_and_query().map_or("/", |p| p.as_str());
                 let reply = route(&shared, req.method(), target).await;
+                if matches!(reply.body(), Either::Right(_)) {
+                    streaming.store(true, Ordering::Relaxed);
+                }
                 ticket.busy(false);
                 Ok::<_, Infallible>(reply)
             }
@@ -275,7 +286,12 @@ pub async fn answer(shared: Arc<Shared>, request: &[u8]) -> Vec<u8> {
     use tokio::io::{AsyncReadExt, AsyncWriteExt};
     let (mut client, server) = tokio::io::duplex(64 * 1024);
     let ticket = Arc::new(Connections::new(1).admit());
-    let serving = converse(TokioIo::new(server), shared, ticket);
+    let serving = converse(
+        TokioIo::new(server),
+        shared,
+        ticket,
+        Arc::new(AtomicBool::new(false)),
+    );
     let talking = async move {
         let _ = client.write_all(request).await;
         let _ = client.shutdown().await;

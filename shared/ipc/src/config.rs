@@ -10,6 +10,9 @@
 //! prefix = "airglyph_"      # prefix of every file under /dev/shm and root
 //! ```
 //!
+//! The rest of the iceoryx2 settings come from iceoryx2's own configuration file, where
+//! iceoryx2 looks for it ([`crate::site`]).
+//!
 //! The root is the pipeline's own folder (iceoryx2's default, /tmp/iceoryx2/, is shared
 //! with every other iceoryx2 program on the machine), made closed to other users: see
 //! [`crate::ownership`].
@@ -111,10 +114,15 @@ impl IpcConfig {
         Ok(())
     }
 
-    /// The iceoryx2 configuration for this pipeline.
+    /// The iceoryx2 configuration for this pipeline: the machine's own iceoryx2 file
+    /// when there is one ([`crate::site`]: a site's settings hold), with this pipeline's
+    /// root and prefix on top.
     pub fn iceoryx2(&self) -> Result<Config, IpcError> {
         self.validate()?;
-        let mut config = Config::default();
+        let (mut config, _) = crate::site::config()?;
+        // The node counter's name is what `crate::ownership` guards: a site file must
+        // not move it where the check does not look.
+        config.global.node.global_mgmt_suffix = Config::default().global.node.global_mgmt_suffix;
         let mut root = self.root.clone();
         if !root.ends_with('/') {
             root.push('/');

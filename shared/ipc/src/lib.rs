@@ -22,6 +22,7 @@ pub mod ownership;
 pub mod port;
 pub mod process;
 pub mod shutdown;
+pub mod site;
 pub mod stats;
 pub mod wire;
 

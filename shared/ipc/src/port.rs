@@ -12,6 +12,7 @@ use iceoryx2::port::listener::Listener;
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::{Publisher as IoxPublisher, PublisherCreateError};
 use iceoryx2::port::subscriber::Subscriber;
+use iceoryx2::port::update_connections::UpdateConnections;
 use iceoryx2::prelude::*;
 use iceoryx2::sample::Sample;
 use iceoryx2::service::port_factory::{event, publish_subscribe};
@@ -99,11 +100,23 @@ const SKELETON: Settings = Settings {
 pub const SKELETON_HISTORY: usize = 256;
 const GESTURE: Settings = Settings {
     name: "airglyph/gesture",
-    buffer: 16,
+    // Events come seconds apart, but an importer whose link came back sends those it
+    // recovered at once (up to 64: `airglyph-zenoh`) with the live ones, and a full
+    // buffer drops its oldest without a word (gesture events carry no sequence to count
+    // gaps by). A subscriber descheduled a few hundred ms on a busy machine lost one of
+    // such a burst in a buffer of 64 (1 run in 3); 128 events are 17 KB a subscriber.
+    buffer: 128,
     max_publishers: 1,
     max_subscribers: 8,
-    history: 0,
+    history: GESTURE_HISTORY,
 };
+
+/// Gesture events the gesture publisher keeps for a subscriber that joins late and asks
+/// for them ([`Pipeline::gesture_receiver_with_history`], `airglyph echo gesture`): a
+/// program started a moment after a symbol was drawn still hears of it. Events come
+/// seconds apart, so 8 reach back a minute or more; they cost a few hundred bytes. They
+/// live in the gesture stage's process and go with it: a restarted stage starts with none.
+pub const GESTURE_HISTORY: usize = 8;
 const DECISION: Settings = Settings {
     name: "airglyph/decision",
     buffer: 8,
@@ -375,11 +388,12 @@ impl Pipeline {
         let events = self.event(name)?;
         Ok(Publisher {
             publisher,
+            subscribers: std::cell::Cell::new(0),
             notifier: events
                 .notifier_builder()
                 .create()
                 .map_err(|e| self.fail(name, e))?,
-            _service: service,
+            service,
             _events: events,
         })
     }
@@ -454,6 +468,14 @@ impl Pipeline {
     /// A subscriber to gesture events.
     pub fn gesture_receiver(&self) -> Result<Receiver<GestureEventMsg>, IpcError> {
         self.receiver(&GESTURE, GESTURE.name, GESTURE.buffer, 0)
+    }
+
+    /// A subscriber of `airglyph/gesture` first handed the publisher's last
+    /// [`GESTURE_HISTORY`] events, oldest first. They arrive when the publisher next
+    /// looks at its connections ([`Publisher::update_connections`], which the gesture
+    /// stage calls every round), not at once.
+    pub fn gesture_receiver_with_history(&self) -> Result<Receiver<GestureEventMsg>, IpcError> {
+        self.receiver(&GESTURE, GESTURE.name, GESTURE.buffer, GESTURE_HISTORY)
     }
 
     /// The publisher of the gesture stage's decisions, one a frame.
@@ -666,7 +688,9 @@ impl DepthPublisher {
 pub struct Publisher<T: Message> {
     publisher: IoxPublisher<Ipc, T, ()>,
     notifier: Notifier<Ipc>,
-    _service: publish_subscribe::PortFactory<Ipc, T, ()>,
+    /// Subscribers at the last [`Publisher::update_connections`].
+    subscribers: std::cell::Cell<usize>,
+    service: publish_subscribe::PortFactory<Ipc, T, ()>,
     _events: event::PortFactory<Ipc>,
 }
 
@@ -678,6 +702,20 @@ impl<T: Message> Publisher<T> {
             .map_err(|e| IpcError::service("publish", e))?;
         let _ = self.notifier.notify();
         Ok(())
+    }
+
+    /// Connects subscribers that came since the last send and hands them the history
+    /// they asked for. iceoryx2 does this at every send; a publisher that sends seldom
+    /// (gesture events) calls it between sends, or a late subscriber would wait for the
+    /// next event to hear of the last ones. A subscriber that cannot be connected now
+    /// is tried again at the next call.
+    pub fn update_connections(&self) {
+        let subscribers = self.service.dynamic_config().number_of_subscribers();
+        let newcomers = subscribers > self.subscribers.replace(subscribers);
+        if self.publisher.update_connections().is_ok() && newcomers {
+            // Wakes the newcomer blocked on the event: its history has arrived.
+            let _ = self.notifier.notify();
+        }
     }
 }
 

@@ -35,8 +35,9 @@ pub struct DepthHeader {
     pub cy: f32,
     /// Which kind of source produced the frame ([`SourceKind`] as u32).
     pub source_kind: u32,
-    /// Padding to 8 bytes, written as 0.
-    pub _reserved: u32,
+    /// [`DepthHeader::FROM_ANOTHER_HOST`], or 0. (Was `_reserved`, always 0: the layout
+    /// and type name are those of before.)
+    pub flags: u32,
 }
 
 /// The kind of depth source, as carried in [`DepthHeader::source_kind`].
@@ -96,6 +97,11 @@ fn check_times(capture_ns: u64, publish_ns: u64, now_ns: u64) -> Result<(), Head
 }
 
 impl DepthHeader {
+    /// In [`DepthHeader::flags`]: the frame was captured on another host and carried
+    /// here (`airglyph import`). Its times are that host's CLOCK_MONOTONIC, which says
+    /// nothing about this host's: they are checked for order, never against our clock.
+    pub const FROM_ANOTHER_HOST: u32 = 1;
+
     /// The camera's intrinsics at the frame's size.
     pub fn intrinsics(&self) -> Intrinsics {
         Intrinsics::new(self.width, self.height, self.fx, self.fy, self.cx, self.cy)
@@ -105,6 +111,25 @@ impl DepthHeader {
     pub fn set_intrinsics(&mut self, k: &Intrinsics) {
         (self.width, self.height, self.fx, self.fy, self.cx, self.cy) =
             (k.width, k.height, k.fx, k.fy, k.cx, k.cy);
+    }
+
+    /// The header with its times on this host's clock, given when it was received: a
+    /// frame from another host ([`DepthHeader::FROM_ANOTHER_HOST`]) is moved so that it
+    /// was published as it was received (the time in transit cannot be known without a
+    /// shared clock), its capture as long before that as it was there; a frame of this
+    /// host is as it is. What a stage makes of it (a skeleton's latency chain) is then
+    /// in one clock and in order.
+    pub fn on_this_host(&self, received_ns: u64) -> Self {
+        if self.flags & Self::FROM_ANOTHER_HOST == 0 {
+            return *self;
+        }
+        let back = |t: u64| received_ns.saturating_sub(self.publish_ns.saturating_sub(t));
+        Self {
+            capture_ns: back(self.capture_ns).max(1),
+            source_ns: back(self.source_ns),
+            publish_ns: received_ns,
+            ..*self
+        }
     }
 
     /// Checks a received header against its payload and the receiver's clock. Shared
@@ -118,6 +143,12 @@ impl DepthHeader {
             });
         }
         self.intrinsics().validate()?;
+        // Another host's clock is not ours: a frame from there may come from our future.
+        let now_ns = if self.flags & Self::FROM_ANOTHER_HOST != 0 {
+            u64::MAX - CLOCK_SLACK_NS
+        } else {
+            now_ns
+        };
         check_times(self.capture_ns, self.publish_ns, now_ns)
     }
 }
@@ -276,6 +307,14 @@ impl SkeletonMsg {
         }
         Ok(())
     }
+}
+
+/// The iceoryx2 type name of a wire type: what a program in another language must give
+/// its copy of the type (`python/airglyph/wire.py`).
+pub fn type_name<T: ZeroCopySend>() -> &'static str {
+    // SAFETY: only reads the name. The trait's contract (the same layout wherever the
+    // name is used) is what the caller checks with it.
+    unsafe { <T as ZeroCopySend>::type_name() }
 }
 
 /// Longest gesture label on the wire, in UTF-8 bytes.
@@ -585,6 +624,34 @@ mod tests {
         );
         let mut h = header();
         h.publish_ns = 1_000_000_000;
+        assert!(matches!(
+            h.validate(640 * 480, 30),
+            Err(HeaderError::Timestamps { .. })
+        ));
+    }
+
+    #[test]
+    fn a_frame_from_another_host_is_not_held_to_our_clock() {
+        let mut h = header();
+        (h.capture_ns, h.publish_ns) = (5_000_000_000, 6_000_000_000);
+        // Published "in our future": another host's clock runs ahead of ours.
+        assert!(matches!(
+            h.validate(640 * 480, 30),
+            Err(HeaderError::Timestamps { .. })
+        ));
+        h.flags = DepthHeader::FROM_ANOTHER_HOST;
+        assert!(h.validate(640 * 480, 30).is_ok());
+        // On this host's clock: published when received, captured as long before.
+        let here = h.on_this_host(100_000);
+        assert_eq!((here.capture_ns, here.publish_ns), (1, 100_000));
+        let here = h.on_this_host(2_000_000_000);
+        assert_eq!(
+            (here.capture_ns, here.publish_ns),
+            (1_000_000_000, 2_000_000_000)
+        );
+        assert_eq!(header().on_this_host(7), header());
+        // Its times must still be in order.
+        h.capture_ns = 7_000_000_000;
         assert!(matches!(
             h.validate(640 * 480, 30),
             Err(HeaderError::Timestamps { .. })

@@ -25,6 +25,14 @@ struct Args {
     /// it, as a hostile publisher of the pipeline's own user can; then exit.
     #[arg(long)]
     tamper: Option<u64>,
+    /// Instead of receiving: publish this many gesture events, --hz a second (labels
+    /// 0–9 in turn, frames numbered on, stamped with their publish time), printing one
+    /// line each; then exit.
+    #[arg(long)]
+    publish_gestures: Option<u64>,
+    /// With --publish-gestures: events a second.
+    #[arg(long, default_value_t = 20.0)]
+    hz: f64,
     /// What to receive: depth, skeleton, gesture or decision.
     #[arg(long, default_value = "depth")]
     stream: String,
@@ -48,6 +56,9 @@ fn main() -> anyhow::Result<()> {
     }
     if let Some(n) = args.tamper {
         return tamper(&pipeline, n);
+    }
+    if let Some(n) = args.publish_gestures {
+        return publish_gestures(&pipeline, n, args.hz);
     }
     match args.stream.as_str() {
         "depth" => depth(&pipeline, &args),
@@ -85,6 +96,45 @@ fn main() -> anyhow::Result<()> {
             anyhow::bail!("unknown stream {other:?}: expected depth, skeleton, gesture or decision")
         }
     }
+}
+
+fn publish_gestures(pipeline: &Pipeline, n: u64, hz: f64) -> anyhow::Result<()> {
+    let publisher = pipeline.gesture_publisher()?;
+    let session = monotonic_ns();
+    ready()?;
+    let every = Duration::from_secs_f64(1.0 / hz.max(0.1));
+    for i in 0..n {
+        let now = monotonic_ns();
+        let mut g = GestureEventMsg {
+            score: 0.9,
+            start_sequence: i * 10,
+            end_sequence: i * 10 + 9,
+            start_ns: now,
+            end_ns: now,
+            session,
+            chain: airglyph_ipc::LatencyChain {
+                capture_ns: now,
+                capture_publish_ns: now,
+                pose_receive_ns: now,
+                pose_publish_ns: now,
+                gesture_receive_ns: now,
+                gesture_publish_ns: now,
+            },
+            ..GestureEventMsg::default()
+        };
+        g.set_label(&(i % 10).to_string())?;
+        publisher.send(g)?;
+        println!(
+            "{}",
+            serde_json::json!({"sent": i, "end_sequence": g.end_sequence, "publish_ns": now})
+        );
+        std::io::stdout().flush()?;
+        std::thread::sleep(every);
+        if shutdown::requested() {
+            break;
+        }
+    }
+    Ok(())
 }
 
 fn publish_bad(pipeline: &Pipeline, n: u64) -> anyhow::Result<()> {

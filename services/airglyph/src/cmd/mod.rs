@@ -6,6 +6,7 @@ pub mod collect;
 pub mod completions;
 pub mod demo;
 pub mod devices;
+pub mod echo;
 #[cfg(feature = "lab")]
 pub mod eval_gestures;
 #[cfg(feature = "lab")]
@@ -21,6 +22,7 @@ pub mod record;
 pub mod run;
 pub mod snapshot;
 pub mod spot;
+pub mod stats_json;
 pub mod synth;
 pub mod top;
 #[cfg(feature = "lab")]

@@ -256,6 +256,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut last_seen: Option<(Instant, LatencyChain)> = None;
     while !shutdown::requested() {
         telemetry.tick();
+        // A subscriber that joined since (`airglyph echo gesture`) gets the last events now.
+        events.update_connections();
         // Every skeleton, not only the newest: the trajectory needs them all.
         let received = skeletons.recv(Duration::from_millis(100))?;
         telemetry.set_rejected(skeletons.rejected());
@@ -299,7 +301,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             std::thread::sleep(Duration::from_millis(args.delay_ms));
         }
         if !replayed {
-            telemetry.input(r.receive_ns - msg.chain.pose_publish_ns, dropped);
+            telemetry.input(
+                r.receive_ns.saturating_sub(msg.chain.pose_publish_ns),
+                dropped,
+            );
         }
         let mut chain = msg.chain;
         chain.gesture_receive_ns = r.receive_ns;
@@ -329,7 +334,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
         decision.chain.gesture_publish_ns = decided_ns;
         decisions.send(decision)?;
-        telemetry.output(decided_ns - r.receive_ns, decided_ns - msg.chain.capture_ns);
+        telemetry.output(
+            decided_ns - r.receive_ns,
+            decided_ns.saturating_sub(msg.chain.capture_ns),
+        );
     }
     Ok(())
 }

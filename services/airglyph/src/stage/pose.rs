@@ -115,8 +115,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let frame = frames.latest(Duration::from_millis(100))?;
         telemetry.set_rejected(frames.rejected());
         let Some(frame) = frame else { continue };
-        let h = *frame.header();
-        telemetry.input(frame.receive_ns - h.publish_ns, frame.dropped);
+        // One clock for the whole chain, also for a frame from another host.
+        let h = frame.header().on_this_host(frame.receive_ns);
+        telemetry.input(frame.receive_ns.saturating_sub(h.publish_ns), frame.dropped);
         let r = stage.estimate(h.intrinsics(), frame.view(), h.capture_ns);
         let mut msg = skeleton_msg(&h, frame.receive_ns, &r);
         // Hand the frame's shared memory back before we publish.
@@ -125,7 +126,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         publisher.send(msg)?;
         telemetry.output(
             msg.chain.pose_publish_ns - msg.chain.pose_receive_ns,
-            msg.chain.pose_publish_ns - h.capture_ns,
+            msg.chain.pose_publish_ns.saturating_sub(h.capture_ns),
         );
     }
     Ok(())

@@ -11,8 +11,14 @@ use std::time::Duration;
 
 /// The viewer stage: a web page of the live pipeline.
 ///
+/// It also pushes what the pipeline says to scripts and browsers as server-sent events
+/// on /events (gestures with the keys of `run --json`; ?skeletons=HZ, ?state=HZ,
+/// ?stats=0: docs/integrating.md).
+///
 /// Serves on 127.0.0.1 (this machine only) unless --listen says otherwise, e.g.
-/// `--listen 0.0.0.0:8080` to watch from another computer. It only reads: nothing the
+/// `--listen 0.0.0.0:8080` to watch from another computer: then anyone who reaches the
+/// port sees the depth image, the skeletons and the gestures, with no login and in the
+/// clear; only on a network you trust. It only reads: nothing the
 /// other stages need comes from it, and a slow browser gets fewer pictures rather than
 /// slowing anything. The pipeline it joins is set by AIRGLYPH_IPC_ROOT /
 /// AIRGLYPH_IPC_PREFIX (or the config file named by AIRGLYPH_CONFIG). Started by
@@ -48,7 +54,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }));
     let server = Server::start(args.listen, shared.clone())
         .context("is another viewer running there? pick another address with --listen")?;
-    let mut feed = Feed::new(&pipeline)?;
+    let mut feed = Feed::new(&pipeline)?.with_push(shared.push().clone());
     tracing::info!("viewer on http://{}/", server.addr());
     let result = (|| {
         while !shutdown::requested() {
@@ -63,6 +69,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             {
                 shared.notify();
             }
+            shared.push_state();
         }
         Ok(())
     })();

@@ -1,0 +1,245 @@
+//! The Python package (`python/`): its ctypes copies of the wire types against the Rust
+//! layout, and its example receiving the demo's gestures through iceoryx2's Python
+//! bindings.
+
+use airglyph_ipc::wire::{type_name, Percentiles};
+use airglyph_ipc::{
+    DecisionMsg, DepthHeader, GestureEventMsg, LatencyChain, SkeletonMsg, StageStatsMsg,
+};
+use airglyph_system_tests::{json_lines, one_at_a_time, signal, Isolated};
+use serde_json::{json, Value};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::Duration;
+
+fn python_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../python")
+}
+
+/// A Python 3 on PATH (`AIRGLYPH_PYTHON` to name another).
+fn python3() -> Option<PathBuf> {
+    if let Some(p) = std::env::var_os("AIRGLYPH_PYTHON") {
+        return Some(PathBuf::from(p));
+    }
+    let path = std::env::var_os("PATH")?;
+    std::env::split_paths(&path)
+        .map(|d| d.join("python3"))
+        .find(|p| p.exists())
+}
+
+/// The Python with iceoryx2's bindings that `scripts/setup` installs (a venv in the
+/// target folder), or `AIRGLYPH_PYTHON`.
+fn python_with_iceoryx2() -> Option<PathBuf> {
+    let candidates = std::env::var_os("AIRGLYPH_PYTHON")
+        .map(PathBuf::from)
+        .into_iter()
+        .chain([Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/python/bin/python3")]);
+    candidates.into_iter().find(|p| {
+        p.exists()
+            && Command::new(p)
+                .args(["-c", "import iceoryx2"])
+                .stderr(Stdio::null())
+                .status()
+                .is_ok_and(|s| s.success())
+    })
+}
+
+/// Offset and size of each field, the struct's size, alignment and type name.
+macro_rules! layout {
+    ($t:ty { $($field:ident),* $(,)? }) => {{
+        let v = <$t>::default();
+        let mut fields = serde_json::Map::new();
+        $(
+            fields.insert(
+                stringify!($field).to_owned(),
+                json!([std::mem::offset_of!($t, $field), std::mem::size_of_val(&v.$field)]),
+            );
+        )*
+        (
+            stringify!($t).to_owned(),
+            json!({
+                "type_name": type_name::<$t>(),
+                "size": std::mem::size_of::<$t>(),
+                "align": std::mem::align_of::<$t>(),
+                "fields": fields,
+            }),
+        )
+    }};
+}
+
+#[test]
+fn the_python_wire_types_have_the_rust_layout() {
+    let Some(python) = python3() else {
+        eprintln!("skipped: no python3 on PATH");
+        return;
+    };
+    let rust: serde_json::Map<String, Value> = [
+        layout!(LatencyChain {
+            capture_ns,
+            capture_publish_ns,
+            pose_receive_ns,
+            pose_publish_ns,
+            gesture_receive_ns,
+            gesture_publish_ns
+        }),
+        layout!(DepthHeader {
+            sequence,
+            session,
+            capture_ns,
+            publish_ns,
+            source_ns,
+            width,
+            height,
+            fx,
+            fy,
+            cx,
+            cy,
+            source_kind,
+            flags
+        }),
+        layout!(SkeletonMsg {
+            sequence,
+            session,
+            chain,
+            joints,
+            confidence,
+            person_found,
+            _pad,
+            visible,
+            _reserved
+        }),
+        layout!(GestureEventMsg {
+            label,
+            label_len,
+            score,
+            start_sequence,
+            end_sequence,
+            start_ns,
+            end_ns,
+            session,
+            chain,
+            hand,
+            _reserved
+        }),
+        layout!(DecisionMsg {
+            sequence,
+            session,
+            chain,
+            gesture,
+            _reserved
+        }),
+        layout!(Percentiles {
+            count,
+            p50,
+            p90,
+            p99,
+            max
+        }),
+        layout!(StageStatsMsg {
+            stage,
+            pid,
+            time_ns,
+            window_ns,
+            frames_in,
+            frames_out,
+            frames_dropped,
+            frames_rejected,
+            fps,
+            _reserved,
+            processing,
+            waiting,
+            latency
+        }),
+    ]
+    .into_iter()
+    .collect();
+    let out = Command::new(python)
+        .args(["-m", "airglyph.wire"])
+        .current_dir(python_dir())
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let py: serde_json::Map<String, Value> = serde_json::from_slice(&out.stdout).unwrap();
+    // Every type, and every field by name, offset and size: a field added, moved or
+    // resized on one side only fails here.
+    assert_eq!(
+        py.keys().collect::<Vec<_>>(),
+        rust.keys().collect::<Vec<_>>()
+    );
+    for (name, r) in &rust {
+        assert_eq!(
+            &py[name], r,
+            "{name}: Python (left) and Rust (right) differ"
+        );
+    }
+}
+
+#[test]
+fn the_python_example_prints_the_demos_gestures() {
+    let Some(python) = python_with_iceoryx2() else {
+        eprintln!(
+            "skipped: no Python with iceoryx2's bindings (scripts/setup makes target/python \
+             with `pip install iceoryx2==0.10.*`; PyPI unreachable?), or set AIRGLYPH_PYTHON"
+        );
+        return;
+    };
+    let _one = one_at_a_time();
+    let p = Isolated::new();
+    let mut demo = p
+        .command("airglyph")
+        .args(["demo", "--symbols", "3A7", "--truth", "--json"])
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let demo_lines = json_lines(demo.stdout.take().unwrap());
+    let first = demo_lines
+        .recv_timeout(Duration::from_secs(90))
+        .expect("the demo's first gesture");
+    // Joins late, like any program started beside a running pipeline.
+    let mut example = p
+        .command_at(&python)
+        .arg(python_dir().join("examples/gestures.py"))
+        .env("PYTHONPATH", python_dir())
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let heard = json_lines(example.stdout.take().unwrap());
+    let mut from_demo = vec![first];
+    from_demo.extend(demo_lines.iter().take_while(|l| l["event"] == "gesture"));
+    assert!(demo.wait().unwrap().success());
+    let key = |g: &Value| {
+        (
+            g["label"].clone(),
+            g["session"].clone(),
+            g["start_frame"].clone(),
+            g["end_frame"].clone(),
+        )
+    };
+    let mut got = Vec::new();
+    while got.len() < from_demo.len() {
+        match heard.recv_timeout(Duration::from_secs(5)) {
+            Ok(g) => got.push(g),
+            Err(_) => break,
+        }
+    }
+    signal(&example, libc::SIGTERM);
+    let _ = example.wait();
+    assert_eq!(
+        got.iter().map(key).collect::<Vec<_>>(),
+        from_demo.iter().map(key).collect::<Vec<_>>(),
+        "the Python example heard every gesture of the demo, in order"
+    );
+    // The same keys as `airglyph run --json`.
+    let keys = |v: &Value| {
+        let mut k: Vec<String> = v.as_object().unwrap().keys().cloned().collect();
+        k.sort();
+        k
+    };
+    let mut run_keys = keys(&from_demo[0]);
+    run_keys.retain(|k| k != "drawn");
+    assert_eq!(keys(&got[0]), run_keys);
+}

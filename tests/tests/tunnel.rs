@@ -1,0 +1,237 @@
+//! Gesture events from one host's pipeline to another's through `airglyph-zenoh`: two
+//! isolated pipelines (roots and prefixes of their own) stand for the two hosts, and a
+//! TCP relay between them is the network, cut for longer than the exporter keeps events
+//! and put back. Every event sent is received, or counted as lost by the importer:
+//! nothing goes silently.
+
+use airglyph_ipc::clock::monotonic_ns;
+use airglyph_system_tests::{json_lines, signal, start_probe, stop, Isolated};
+use std::io::{Read, Write};
+use std::net::{Shutdown, SocketAddr, TcpListener, TcpStream};
+use std::path::PathBuf;
+use std::process::Stdio;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// `airglyph-zenoh`, when it was built (`cargo build -p airglyph-zenoh`, a step of its
+/// own in scripts/test: Zenoh is heavy to build).
+fn bridge() -> Option<PathBuf> {
+    let exe = std::env::current_exe().ok()?;
+    let path = exe.parent()?.parent()?.join("airglyph-zenoh");
+    path.exists().then_some(path)
+}
+
+fn free_port() -> u16 {
+    TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port()
+}
+
+/// The network between the two hosts: a TCP relay to `to` that can be cut (every
+/// connection closed, new ones refused) and put back.
+struct Network {
+    addr: SocketAddr,
+    down: Arc<AtomicBool>,
+    open: Arc<Mutex<Vec<TcpStream>>>,
+}
+
+impl Network {
+    fn start(to: SocketAddr) -> Self {
+        let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+        let addr = listener.local_addr().unwrap();
+        let down = Arc::new(AtomicBool::new(false));
+        let open: Arc<Mutex<Vec<TcpStream>>> = Arc::default();
+        let (d, o) = (down.clone(), open.clone());
+        std::thread::spawn(move || {
+            for client in listener.incoming().map_while(Result::ok) {
+                let connected = if d.load(Ordering::SeqCst) {
+                    Err(std::io::Error::other("the network is down"))
+                } else {
+                    TcpStream::connect(to)
+                };
+                let Ok(server) = connected else {
+                    let _ = client.shutdown(Shutdown::Both);
+                    continue;
+                };
+                let mut held = o.lock().unwrap();
+                for (from, into) in [(&client, &server), (&server, &client)] {
+                    let (mut from, mut into) =
+                        (from.try_clone().unwrap(), into.try_clone().unwrap());
+                    std::thread::spawn(move || {
+                        let mut buf = [0u8; 16 * 1024];
+                        while let Ok(n) = from.read(&mut buf) {
+                            if n == 0 || into.write_all(&buf[..n]).is_err() {
+                                break;
+                            }
+                        }
+                        let _ = into.shutdown(Shutdown::Both);
+                    });
+                }
+                held.extend([client, server]);
+            }
+        });
+        Self { addr, down, open }
+    }
+
+    fn cut(&self) {
+        self.down.store(true, Ordering::SeqCst);
+        for s in self.open.lock().unwrap().drain(..) {
+            let _ = s.shutdown(Shutdown::Both);
+        }
+    }
+
+    fn restore(&self) {
+        self.down.store(false, Ordering::SeqCst);
+    }
+}
+
+/// How long the network is down.
+const CUT: Duration = Duration::from_secs(5);
+
+fn percentile(sorted: &[f64], p: f64) -> f64 {
+    sorted[((sorted.len() - 1) as f64 * p).round() as usize]
+}
+
+#[test]
+fn gestures_cross_to_another_host_and_losses_are_counted() {
+    let Some(bridge) = bridge() else {
+        eprintln!("skipped: airglyph-zenoh is not built (cargo build -p airglyph-zenoh; scripts/test does)");
+        return;
+    };
+    let (device, other) = (Isolated::new(), Isolated::new());
+    let domain = format!("test{}", std::process::id());
+    let port = free_port();
+    let exporter_addr: SocketAddr = format!("127.0.0.1:{port}").parse().unwrap();
+    let network = Network::start(exporter_addr);
+
+    let exporter = device
+        .command_at(&bridge)
+        .args([
+            "export",
+            "--domain",
+            &domain,
+            "--listen",
+            &format!("tcp/{exporter_addr}"),
+        ])
+        .spawn()
+        .unwrap();
+    let mut importer = other
+        .command_at(&bridge)
+        .args([
+            "import",
+            "--json",
+            "--domain",
+            &domain,
+            "--connect",
+            &format!("tcp/{}", network.addr),
+        ])
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let reports = json_lines(importer.stdout.take().unwrap());
+    let (receiver, received) = start_probe(&other, &["--stream", "gesture", "--idle", "60"]);
+    // The two sessions find each other through the relay.
+    std::thread::sleep(Duration::from_secs(3));
+
+    let sent_n = 200u64;
+    let (sender, sent) = start_probe(
+        &device,
+        &["--publish-gestures", &sent_n.to_string(), "--hz", "20"],
+    );
+    // 10 s of events; the link is cut from 3 s to 8 s in: 100 events sent meanwhile,
+    // more than the exporter keeps (64), so some are lost for good and must be counted.
+    let started = Instant::now();
+    std::thread::sleep(Duration::from_secs(3));
+    network.cut();
+    let cut_ns = monotonic_ns();
+    std::thread::sleep(CUT);
+    network.restore();
+    let restored_ns = monotonic_ns();
+    let cut_for = started.elapsed();
+    let mut publish_ns = std::collections::HashMap::new();
+    while let Ok(line) = sent.recv_timeout(Duration::from_secs(15)) {
+        publish_ns.insert(
+            line["end_sequence"].as_u64().unwrap(),
+            line["publish_ns"].as_u64().unwrap(),
+        );
+        if publish_ns.len() as u64 == sent_n {
+            break;
+        }
+    }
+    assert_eq!(
+        publish_ns.len() as u64,
+        sent_n,
+        "the sender sent everything"
+    );
+    assert!(stop(sender).success());
+    // Time for the importer to find and fetch what the cut lost.
+    std::thread::sleep(Duration::from_secs(4));
+
+    let mut got = Vec::new();
+    while let Ok(g) = received.recv_timeout(Duration::from_millis(500)) {
+        got.push(g);
+    }
+    stop(receiver);
+    signal(&importer, libc::SIGTERM);
+    assert!(
+        importer.wait().unwrap().success(),
+        "the importer stops cleanly"
+    );
+    let mut missed = 0;
+    let mut totals = None;
+    while let Ok(r) = reports.recv_timeout(Duration::from_secs(2)) {
+        match (r["event"].as_str(), r["stream"].as_str()) {
+            (Some("missed"), Some("gesture")) => missed += r["count"].as_u64().unwrap(),
+            (Some("totals"), Some("gesture")) => totals = Some(r),
+            _ => {}
+        }
+    }
+
+    let mut seen = std::collections::HashSet::new();
+    // Events sent while the link was up, and those sent while it was down (received, if
+    // at all, when it came back).
+    let (mut up_ms, mut down_ms) = (Vec::new(), Vec::new());
+    for g in &got {
+        let end = g["end_sequence"].as_u64().unwrap();
+        assert!(seen.insert(end), "gesture {end} received twice");
+        let sent_at = publish_ns[&end];
+        let ms = g["receive_ns"].as_u64().unwrap().saturating_sub(sent_at) as f64 * 1e-6;
+        if (cut_ns..restored_ns).contains(&sent_at) {
+            down_ms.push(ms);
+        } else {
+            up_ms.push(ms);
+        }
+    }
+    up_ms.sort_by(f64::total_cmp);
+    down_ms.sort_by(f64::total_cmp);
+    let received_n = seen.len() as u64;
+    eprintln!(
+        "tunnel: sent {sent_n}, received {received_n}, counted lost {missed}, link cut for {:.0} s \
+         ({:.1} s into the run); sent while up: {} events, latency p50 {:.2} ms, p99 {:.2} ms; \
+         sent while down: {} received after it came back, latency p50 {:.0} ms, max {:.0} ms; \
+         importer {}",
+        CUT.as_secs_f64(),
+        cut_for.as_secs_f64() - CUT.as_secs_f64(),
+        up_ms.len(),
+        percentile(&up_ms, 0.5),
+        percentile(&up_ms, 0.99),
+        down_ms.len(),
+        if down_ms.is_empty() { 0.0 } else { percentile(&down_ms, 0.5) },
+        down_ms.last().copied().unwrap_or(0.0),
+        totals.map_or("reported no totals".into(), |t| t.to_string()),
+    );
+    assert!(stop(exporter).success(), "the exporter stops cleanly");
+    assert_eq!(
+        received_n + missed,
+        sent_n,
+        "every event was received or counted as lost"
+    );
+    assert!(received_n > sent_n / 2, "most events crossed");
+    assert!(
+        missed > 0,
+        "a cut longer than the exporter keeps loses events, and says so"
+    );
+}
