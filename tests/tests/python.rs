@@ -119,13 +119,18 @@ fn the_python_wire_types_have_the_rust_layout() {
             session,
             chain,
             hand,
-            _reserved
+            _reserved,
+            bezier_len,
+            bezier
         }),
         layout!(DecisionMsg {
             sequence,
             session,
             chain,
+            hand_point,
             gesture,
+            hand_found,
+            hand,
             _reserved
         }),
         layout!(Percentiles {
