@@ -310,6 +310,41 @@ pub fn json_lines(stdout: ChildStdout) -> mpsc::Receiver<serde_json::Value> {
     rx
 }
 
+/// Items of `rx` until `n` came or `within` passed.
+pub fn take_lines<T>(rx: &mpsc::Receiver<T>, n: usize, within: Duration) -> Vec<T> {
+    let deadline = Instant::now() + within;
+    let mut out = Vec::new();
+    while out.len() < n {
+        match rx.recv_timeout(deadline.saturating_duration_since(Instant::now())) {
+            Ok(v) => out.push(v),
+            Err(_) => break,
+        }
+    }
+    out
+}
+
+/// A gesture line's identity: the same label, session and frames twice would be one
+/// gesture twice.
+pub fn gesture_identity(g: &serde_json::Value) -> (String, u64, u64, u64) {
+    (
+        g["label"].as_str().unwrap_or("?").to_owned(),
+        g["session"].as_u64().unwrap_or(0),
+        g["start_frame"].as_u64().unwrap_or(0),
+        g["end_frame"].as_u64().unwrap_or(0),
+    )
+}
+
+/// A Python 3 on PATH (`AIRGLYPH_PYTHON` to name another).
+pub fn python3() -> Option<PathBuf> {
+    if let Some(p) = std::env::var_os("AIRGLYPH_PYTHON") {
+        return Some(PathBuf::from(p));
+    }
+    let path = std::env::var_os("PATH")?;
+    std::env::split_paths(&path)
+        .map(|d| d.join("python3"))
+        .find(|p| p.exists())
+}
+
 pub fn start_probe(p: &Isolated, extra: &[&str]) -> (Child, mpsc::Receiver<serde_json::Value>) {
     let mut child = p
         .command("airglyph-probe")

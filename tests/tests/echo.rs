@@ -1,20 +1,12 @@
 //! `airglyph echo` as an unrelated process beside a running pipeline: it joins late,
 //! hears every gesture once and in order, and prints skeletons, decisions and stats.
 
-use airglyph_system_tests::{json_lines, one_at_a_time, signal, succeed, Isolated};
+use airglyph_system_tests::{
+    gesture_identity, json_lines, one_at_a_time, signal, succeed, take_lines, Isolated,
+};
 use std::process::{Child, Stdio};
 use std::sync::mpsc;
-use std::time::{Duration, Instant};
-
-/// A gesture's identity: the same session and frames twice would be one gesture twice.
-fn identity(g: &serde_json::Value) -> (String, u64, u64, u64) {
-    (
-        g["label"].as_str().unwrap_or("?").to_owned(),
-        g["session"].as_u64().unwrap(),
-        g["start_frame"].as_u64().unwrap(),
-        g["end_frame"].as_u64().unwrap(),
-    )
-}
+use std::time::Duration;
 
 fn echo(p: &Isolated, args: &[&str]) -> (Child, mpsc::Receiver<serde_json::Value>) {
     let mut child = p
@@ -26,24 +18,6 @@ fn echo(p: &Isolated, args: &[&str]) -> (Child, mpsc::Receiver<serde_json::Value
         .unwrap();
     let lines = json_lines(child.stdout.take().unwrap());
     (child, lines)
-}
-
-/// Lines until `n` came or `within` passed.
-fn take(
-    lines: &mpsc::Receiver<serde_json::Value>,
-    n: usize,
-    within: Duration,
-) -> Vec<serde_json::Value> {
-    let deadline = Instant::now() + within;
-    let mut out = Vec::new();
-    while out.len() < n {
-        let left = deadline.saturating_duration_since(Instant::now());
-        match lines.recv_timeout(left) {
-            Ok(v) => out.push(v),
-            Err(_) => break,
-        }
-    }
-    out
 }
 
 #[test]
@@ -87,15 +61,15 @@ fn a_late_echo_prints_every_gesture_of_the_demo_once_in_order() {
     let mut from_demo = vec![first];
     from_demo.extend(demo_lines.iter().take_while(|l| l["event"] == "gesture"));
     assert!(demo.wait().unwrap().success());
-    let from_demo: Vec<_> = from_demo.iter().map(identity).collect();
+    let from_demo: Vec<_> = from_demo.iter().map(gesture_identity).collect();
     assert!(
         from_demo.len() >= 3,
         "the demo recognized too little to tell: {from_demo:?}"
     );
 
-    let heard: Vec<_> = take(&gestures, from_demo.len() + 1, Duration::from_secs(3))
+    let heard: Vec<_> = take_lines(&gestures, from_demo.len() + 1, Duration::from_secs(3))
         .iter()
-        .map(identity)
+        .map(gesture_identity)
         .collect();
     signal(&gestures_echo, libc::SIGTERM);
     assert!(

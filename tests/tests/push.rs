@@ -3,19 +3,12 @@
 //! holds a stream open beside it. (The page's own use of it, through headless Chromium,
 //! is `viewer.rs`: its panels are filled from the stream only.)
 
-use airglyph_system_tests::{json_lines, one_at_a_time, shut_down, Isolated};
+use airglyph_system_tests::{json_lines, one_at_a_time, python3, shut_down, Isolated};
 use std::io::Write;
 use std::net::{TcpListener, TcpStream};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-
-fn python3() -> Option<PathBuf> {
-    let path = std::env::var_os("PATH")?;
-    std::env::split_paths(&path)
-        .map(|d| d.join("python3"))
-        .find(|p| p.exists())
-}
 
 #[test]
 fn a_script_gets_each_gesture_pushed_while_a_client_that_never_reads_holds_on() {

@@ -6,7 +6,9 @@ use airglyph_ipc::wire::{type_name, Percentiles};
 use airglyph_ipc::{
     DecisionMsg, DepthHeader, GestureEventMsg, LatencyChain, SkeletonMsg, StageStatsMsg,
 };
-use airglyph_system_tests::{json_lines, one_at_a_time, signal, Isolated};
+use airglyph_system_tests::{
+    gesture_identity, json_lines, one_at_a_time, python3, signal, take_lines, Isolated,
+};
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -14,17 +16,6 @@ use std::time::Duration;
 
 fn python_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../python")
-}
-
-/// A Python 3 on PATH (`AIRGLYPH_PYTHON` to name another).
-fn python3() -> Option<PathBuf> {
-    if let Some(p) = std::env::var_os("AIRGLYPH_PYTHON") {
-        return Some(PathBuf::from(p));
-    }
-    let path = std::env::var_os("PATH")?;
-    std::env::split_paths(&path)
-        .map(|d| d.join("python3"))
-        .find(|p| p.exists())
 }
 
 /// The Python with iceoryx2's bindings that `scripts/setup` installs (a venv in the
@@ -216,26 +207,12 @@ fn the_python_example_prints_the_demos_gestures() {
     let mut from_demo = vec![first];
     from_demo.extend(demo_lines.iter().take_while(|l| l["event"] == "gesture"));
     assert!(demo.wait().unwrap().success());
-    let key = |g: &Value| {
-        (
-            g["label"].clone(),
-            g["session"].clone(),
-            g["start_frame"].clone(),
-            g["end_frame"].clone(),
-        )
-    };
-    let mut got = Vec::new();
-    while got.len() < from_demo.len() {
-        match heard.recv_timeout(Duration::from_secs(5)) {
-            Ok(g) => got.push(g),
-            Err(_) => break,
-        }
-    }
+    let got = take_lines(&heard, from_demo.len(), Duration::from_secs(5));
     signal(&example, libc::SIGTERM);
     let _ = example.wait();
     assert_eq!(
-        got.iter().map(key).collect::<Vec<_>>(),
-        from_demo.iter().map(key).collect::<Vec<_>>(),
+        got.iter().map(gesture_identity).collect::<Vec<_>>(),
+        from_demo.iter().map(gesture_identity).collect::<Vec<_>>(),
         "the Python example heard every gesture of the demo, in order"
     );
     // The same keys as `airglyph run --json`.

@@ -19,8 +19,7 @@
 //! the pipeline or another client.
 
 use crate::routes::query_value;
-use airglyph_core::Joint;
-use airglyph_ipc::wire::Hand as WireHand;
+use airglyph_ipc::json;
 use airglyph_ipc::{GestureEventMsg, SkeletonMsg, Stage, StageStatsMsg};
 use hyper::body::{Bytes, Frame};
 use serde_json::json;
@@ -124,84 +123,23 @@ impl Push {
 
     /// Pushes a gesture event to the clients that asked for gestures.
     pub fn gesture(&self, m: &GestureEventMsg) {
-        self.send(Kind::Gesture, || gesture_json(m).to_string());
+        self.send(Kind::Gesture, || json::GestureLine::live(m).line());
     }
 
     /// Pushes a skeleton to the clients that asked for skeletons (each at its own rate).
     pub fn skeleton(&self, m: &SkeletonMsg) {
-        self.send(Kind::Skeleton, || skeleton_json(m).to_string());
+        self.send(Kind::Skeleton, || json::skeleton(m).to_string());
     }
 
     /// Pushes a stage's telemetry to the clients that asked for stats.
     pub fn stats(&self, stage: Stage, m: &StageStatsMsg) {
-        self.send(Kind::Stats, || stats_json(stage, m).to_string());
+        self.send(Kind::Stats, || json::stats_event(stage, m).to_string());
     }
 
     /// The page's panels (`Shared::state`), for clients that asked for them.
     pub fn state(&self, state: &serde_json::Value) {
         self.send(Kind::State, || state.to_string());
     }
-}
-
-fn ms(ns: u64) -> f64 {
-    ns as f64 * 1e-6
-}
-
-/// A gesture with the keys of `airglyph run --json` (README, "JSON output").
-pub fn gesture_json(m: &GestureEventMsg) -> serde_json::Value {
-    json!({
-        "event": "gesture",
-        "label": m.label().unwrap_or("?"),
-        "score": m.score as f64,
-        "start_frame": m.start_sequence,
-        "end_frame": m.end_sequence,
-        "hand": if m.hand == WireHand::Left as u8 { "left" } else { "right" },
-        "start_ns": m.start_ns,
-        "end_ns": m.end_ns,
-        "session": m.session,
-        "latency_ms": ms(m.chain.gesture_publish_ns.saturating_sub(m.chain.capture_ns)),
-    })
-}
-
-/// A skeleton with the keys of `airglyph echo skeleton --json`.
-fn skeleton_json(m: &SkeletonMsg) -> serde_json::Value {
-    let by_joint =
-        |f: &dyn Fn(usize) -> serde_json::Value| -> serde_json::Map<String, serde_json::Value> {
-            Joint::ALL
-                .iter()
-                .enumerate()
-                .map(|(i, j)| (j.name().to_owned(), f(i)))
-                .collect()
-        };
-    json!({
-        "event": "skeleton",
-        "sequence": m.sequence,
-        "session": m.session,
-        "person_found": m.person_found != 0,
-        "joints": by_joint(&|i| json!(m.joints[i])),
-        "confidence": by_joint(&|i| json!(m.confidence[i])),
-        "visible": by_joint(&|i| json!(m.visible & (1 << i) != 0)),
-        "capture_ns": m.chain.capture_ns,
-        "latency_ms": ms(m.chain.pose_publish_ns.max(m.chain.capture_publish_ns).saturating_sub(m.chain.capture_ns)),
-    })
-}
-
-/// A stage's telemetry with the keys of `airglyph echo stats --json`.
-fn stats_json(stage: Stage, s: &StageStatsMsg) -> serde_json::Value {
-    let p = |p: &airglyph_ipc::wire::Percentiles| json!({"count": p.count, "p50_ms": ms(p.p50), "p90_ms": ms(p.p90), "p99_ms": ms(p.p99), "max_ms": ms(p.max)});
-    json!({
-        "event": "stats",
-        "stage": stage.name(),
-        "pid": s.pid,
-        "fps": s.fps,
-        "frames_in": s.frames_in,
-        "frames_out": s.frames_out,
-        "frames_dropped": s.frames_dropped,
-        "frames_rejected": s.frames_rejected,
-        "processing": p(&s.processing),
-        "waiting": p(&s.waiting),
-        "latency": p(&s.latency),
-    })
 }
 
 /// What one client asked for (`/events?skeletons=10&stats=0&state=4`).

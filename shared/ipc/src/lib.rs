@@ -17,6 +17,7 @@
 pub mod clock;
 pub mod config;
 mod error;
+pub mod json;
 pub mod options;
 pub mod ownership;
 pub mod port;

@@ -1,12 +1,12 @@
 //! `airglyph demo`: the synthetic person draws symbols in front of a virtual camera; the
 //! full three-process pipeline names them.
 
-use crate::cmd::gesture_json::GestureJson;
 use crate::pipeline::PipelineArgs;
 use airglyph::supervisor::{supervise_gestures, NODE};
 use airglyph_capture::synthetic::{scene, DEMO_SYMBOLS};
 use airglyph_capture::SourceSpec;
 use airglyph_core::gestures::drawn_for;
+use airglyph_ipc::json::GestureLine;
 use airglyph_ipc::{GestureEventMsg, Pipeline};
 use airglyph_synth::Synthesizer;
 use anyhow::Context;
@@ -64,7 +64,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             Some(i) if recognized[i].is_none() => {
                 let drawn = &truth[i].label;
                 if json {
-                    writeln!(out, "{}", GestureJson::live(e).drawn(Some(drawn)).line())?;
+                    writeln!(out, "{}", GestureLine::live(e).drawn(Some(drawn)).line())?;
                 } else {
                     let mark = if *drawn == label { "✓" } else { "✗" };
                     writeln!(
@@ -78,7 +78,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             _ => {
                 stray += 1;
                 if json {
-                    writeln!(out, "{}", GestureJson::live(e).drawn(None).line())?;
+                    writeln!(out, "{}", GestureLine::live(e).drawn(None).line())?;
                 } else {
                     writeln!(out, "(spotted {label} while no symbol was drawn)")?;
                 }

@@ -1,7 +1,7 @@
 //! `airglyph echo`: a running pipeline's messages, one line each, for other programs.
 
-use super::stats_json::stats_json;
 use airglyph_core::Joint;
+use airglyph_ipc::json::{self, GestureLine};
 use airglyph_ipc::{
     shutdown, site, DecisionMsg, GestureEventMsg, Pipeline, Receiver, SkeletonMsg, Stage,
     StageStatsMsg,
@@ -187,7 +187,7 @@ fn gestures(pipeline: &Pipeline, args: &Args, out: &mut Lines) -> anyhow::Result
         if !printed.first_time(&r.msg) {
             continue;
         }
-        let g = super::gesture_json::GestureJson::live(&r.msg);
+        let g = GestureLine::live(&r.msg);
         out.print(
             || g.line(),
             || {
@@ -199,34 +199,6 @@ fn gestures(pipeline: &Pipeline, args: &Args, out: &mut Lines) -> anyhow::Result
         )?;
     }
     Ok(())
-}
-
-fn latency_ms(from_ns: u64, to_ns: u64) -> f64 {
-    to_ns.saturating_sub(from_ns) as f64 * 1e-6
-}
-
-/// A skeleton's line: joints by name, as `airglyph pose --json` writes them.
-fn skeleton_json(m: &SkeletonMsg) -> serde_json::Value {
-    let by_joint =
-        |f: &dyn Fn(usize) -> serde_json::Value| -> serde_json::Map<String, serde_json::Value> {
-            Joint::ALL
-                .iter()
-                .enumerate()
-                .map(|(i, j)| (j.name().to_owned(), f(i)))
-                .collect()
-        };
-    let found = m.person_found != 0;
-    serde_json::json!({
-        "event": "skeleton",
-        "sequence": m.sequence,
-        "session": m.session,
-        "person_found": found,
-        "joints": by_joint(&|i| serde_json::json!(m.joints[i])),
-        "confidence": by_joint(&|i| serde_json::json!(m.confidence[i])),
-        "visible": by_joint(&|i| serde_json::json!(m.visible & (1 << i) != 0)),
-        "capture_ns": m.chain.capture_ns,
-        "latency_ms": latency_ms(m.chain.capture_ns, m.chain.pose_publish_ns.max(m.chain.capture_publish_ns)),
-    })
 }
 
 fn skeletons(pipeline: &Pipeline, args: &Args, out: &mut Lines) -> anyhow::Result<()> {
@@ -243,7 +215,7 @@ fn skeletons(pipeline: &Pipeline, args: &Args, out: &mut Lines) -> anyhow::Resul
         last = Some(Instant::now());
         let m = r.msg;
         out.print(
-            || skeleton_json(&m).to_string(),
+            || json::skeleton(&m).to_string(),
             || {
                 let head = m.joints[Joint::Head.index()];
                 if m.person_found != 0 {
@@ -265,13 +237,9 @@ fn decisions(pipeline: &Pipeline, out: &mut Lines) -> anyhow::Result<()> {
     while out.more() {
         let Some(r) = rx.recv(ROUND)? else { continue };
         let m = r.msg;
-        let latency = latency_ms(m.chain.capture_ns, m.chain.gesture_publish_ns);
+        let latency = json::latency_ms(m.chain.capture_ns, m.chain.gesture_publish_ns);
         out.print(
-            || {
-                serde_json::json!({"event": "decision", "sequence": m.sequence, "session": m.session,
-                                   "gesture": m.gesture != 0, "latency_ms": latency})
-                .to_string()
-            },
+            || json::decision(&m).to_string(),
             || {
                 format!(
                     "frame {}  {}  ({latency:.1} ms after capture)",
@@ -297,12 +265,7 @@ fn stats(pipeline: &Pipeline, out: &mut Lines) -> anyhow::Result<()> {
                 any = true;
                 let s = r.msg;
                 out.print(
-                    || {
-                        let mut v = stats_json(&s);
-                        v["event"] = "stats".into();
-                        v["stage"] = stage.name().into();
-                        v.to_string()
-                    },
+                    || json::stats_event(*stage, &s).to_string(),
                     || {
                         format!(
                             "{:<8} {:>6.1} fps  {:>9} frames  {:>6} dropped  {:>6} rejected  capture→out p50 {:.1} ms",

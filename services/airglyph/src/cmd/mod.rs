@@ -14,7 +14,6 @@ pub mod eval_pose;
 #[cfg(feature = "lab")]
 pub mod eval_spotting;
 pub mod fetch_assets;
-pub mod gesture_json;
 pub mod man;
 pub mod pose;
 pub mod profile;
@@ -22,20 +21,19 @@ pub mod record;
 pub mod run;
 pub mod snapshot;
 pub mod spot;
-pub mod stats_json;
 pub mod synth;
 pub mod top;
 #[cfg(feature = "lab")]
 pub mod train;
 
+use airglyph_ipc::json::{gesture_latency_ms, GestureLine};
 use airglyph_ipc::GestureEventMsg;
-use gesture_json::GestureJson;
 
 /// Prints a gesture event as a line of text or of JSON. An error is stdout gone (a
 /// reader such as `head` that has what it wanted): the caller stops, it does not panic.
 pub fn print_gesture(event: &GestureEventMsg, json: bool) -> std::io::Result<()> {
     use std::io::Write;
-    let g = GestureJson::live(event);
+    let g = GestureLine::live(event);
     if json {
         writeln!(std::io::stdout(), "{}", g.line())
     } else {
@@ -46,7 +44,7 @@ pub fn print_gesture(event: &GestureEventMsg, json: bool) -> std::io::Result<()>
             g.score,
             g.start_frame,
             g.end_frame,
-            gesture_json::latency_ms(event)
+            gesture_latency_ms(event)
         )
     }
 }

@@ -1,11 +1,12 @@
 //! `airglyph spot DIR`: the gesture stage's spotter over a recording, offline.
 
-use crate::cmd::gesture_json::GestureJson;
 use crate::interrupt::Interrupted;
+use crate::stage::gesture::wire_hand;
 use airglyph_core::gestures::{drawn_for, read_gestures_csv};
 use airglyph_core::recording::Recording;
 use airglyph_core::{Joint, Skeleton};
 use airglyph_gesture::{Model, ModelSource, Spotter, SpotterConfig};
+use airglyph_ipc::json::GestureLine;
 use airglyph_ipc::shutdown;
 use airglyph_pose::{PoseConfig, PoseEstimator};
 use anyhow::Context;
@@ -165,7 +166,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         let drawn = drawn.map(|d| truth[d].label.as_str());
         if args.json {
-            let line = GestureJson::spotted(&g);
+            let line = GestureLine::offline(
+                &g.label,
+                g.score,
+                [g.start_seq, g.end_seq],
+                wire_hand(g.hand),
+                [g.start_ns, g.end_ns],
+            );
             // Beside the symbol drawn there when the recording says what was drawn.
             let line = if truth.is_empty() {
                 line

@@ -1,6 +1,5 @@
 //! `airglyph top`: each stage's telemetry, live.
 
-use super::stats_json::stats_json;
 use airglyph_ipc::options;
 use airglyph_ipc::{shutdown, Pipeline, Receiver, Stage, StageStatsMsg};
 use std::collections::BTreeMap;
@@ -59,7 +58,7 @@ fn show(args: &Args) -> std::io::Result<()> {
             if latest.len() == receivers.len() || started.elapsed().as_secs_f64() >= args.wait {
                 let stages: serde_json::Map<String, serde_json::Value> = latest
                     .iter()
-                    .map(|(k, (_, s))| (k.to_string(), stats_json(s)))
+                    .map(|(k, (_, s))| (k.to_string(), airglyph_ipc::json::stats(s)))
                     .collect();
                 return writeln!(out, "{}", serde_json::json!({ "stages": stages }));
             }

@@ -96,7 +96,7 @@ impl Reported {
 }
 
 /// The wire's name for the gesture library's hand.
-fn wire_hand(hand: Hand) -> WireHand {
+pub fn wire_hand(hand: Hand) -> WireHand {
     match hand {
         Hand::Left => WireHand::Left,
         Hand::Right => WireHand::Right,
