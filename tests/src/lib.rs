@@ -310,6 +310,71 @@ pub fn json_lines(stdout: ChildStdout) -> mpsc::Receiver<serde_json::Value> {
     rx
 }
 
+/// `airglyph profile --json` of a running pipeline for `seconds` (`env` gives the
+/// command the pipeline's environment): its report, and how long the profile took.
+pub fn profile_report(
+    env: impl Fn(&mut Command),
+    seconds: f64,
+) -> anyhow::Result<(serde_json::Value, Duration)> {
+    static N: AtomicU32 = AtomicU32::new(0);
+    let out_dir = std::env::temp_dir().join(format!(
+        "airglyph-profile-{}-{}",
+        std::process::id(),
+        N.fetch_add(1, Ordering::Relaxed)
+    ));
+    let mut cmd = Command::new(binary_path("airglyph"));
+    cmd.args([
+        "profile",
+        "--json",
+        "--seconds",
+        &seconds.to_string(),
+        "--out",
+    ])
+    .arg(&out_dir);
+    env(&mut cmd);
+    let t0 = Instant::now();
+    let out = cmd.stderr(Stdio::null()).output()?;
+    let took = t0.elapsed();
+    let _ = std::fs::remove_dir_all(&out_dir);
+    anyhow::ensure!(
+        out.status.success(),
+        "airglyph profile failed: {}",
+        out.status
+    );
+    Ok((serde_json::from_slice(&out.stdout)?, took))
+}
+
+/// The median of `v` (the mean of the middle two when `v` has an even length).
+pub fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        (v[n / 2 - 1] + v[n / 2]) / 2.0
+    }
+}
+
+/// `airglyph demo --symbols SYMBOLS --truth --json` started, and its first gesture come:
+/// the demo, the rest of its lines, and that first one.
+pub fn demo_first_gesture(
+    p: &Isolated,
+    symbols: &str,
+) -> (Child, mpsc::Receiver<serde_json::Value>, serde_json::Value) {
+    let mut demo = p
+        .command("airglyph")
+        .args(["demo", "--symbols", symbols, "--truth", "--json"])
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let lines = json_lines(demo.stdout.take().unwrap());
+    let first = lines
+        .recv_timeout(Duration::from_secs(90))
+        .expect("the demo's first gesture");
+    assert_eq!(first["event"], "gesture", "{first}");
+    (demo, lines, first)
+}
+
 /// Items of `rx` until `n` came or `within` passed.
 pub fn take_lines<T>(rx: &mpsc::Receiver<T>, n: usize, within: Duration) -> Vec<T> {
     let deadline = Instant::now() + within;

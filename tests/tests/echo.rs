@@ -2,7 +2,8 @@
 //! hears every gesture once and in order, and prints skeletons, decisions and stats.
 
 use airglyph_system_tests::{
-    gesture_identity, json_lines, one_at_a_time, signal, succeed, take_lines, Isolated,
+    demo_first_gesture, gesture_identity, json_lines, one_at_a_time, signal, succeed, take_lines,
+    Isolated,
 };
 use std::process::{Child, Stdio};
 use std::sync::mpsc;
@@ -24,18 +25,7 @@ fn echo(p: &Isolated, args: &[&str]) -> (Child, mpsc::Receiver<serde_json::Value
 fn a_late_echo_prints_every_gesture_of_the_demo_once_in_order() {
     let _one = one_at_a_time();
     let p = Isolated::new();
-    let mut demo = p
-        .command("airglyph")
-        .args(["demo", "--symbols", "3A7L", "--truth", "--json"])
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let demo_lines = json_lines(demo.stdout.take().unwrap());
-    // Joins after the first gesture: that one comes from the gesture stage's history.
-    let first = demo_lines
-        .recv_timeout(Duration::from_secs(90))
-        .expect("the demo's first gesture");
-    assert_eq!(first["event"], "gesture", "{first}");
+    let (mut demo, demo_lines, first) = demo_first_gesture(&p, "3A7L");
     let (mut gestures_echo, gestures) = echo(&p, &["gesture", "--json"]);
 
     // The other streams, while the pipeline runs: one line of each, with its keys.

@@ -7,7 +7,8 @@ use airglyph_ipc::{
     DecisionMsg, DepthHeader, GestureEventMsg, LatencyChain, SkeletonMsg, StageStatsMsg,
 };
 use airglyph_system_tests::{
-    gesture_identity, json_lines, one_at_a_time, python3, signal, take_lines, Isolated,
+    demo_first_gesture, gesture_identity, json_lines, one_at_a_time, python3, signal, take_lines,
+    Isolated,
 };
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -185,16 +186,7 @@ fn the_python_example_prints_the_demos_gestures() {
     };
     let _one = one_at_a_time();
     let p = Isolated::new();
-    let mut demo = p
-        .command("airglyph")
-        .args(["demo", "--symbols", "3A7", "--truth", "--json"])
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let demo_lines = json_lines(demo.stdout.take().unwrap());
-    let first = demo_lines
-        .recv_timeout(Duration::from_secs(90))
-        .expect("the demo's first gesture");
+    let (mut demo, demo_lines, first) = demo_first_gesture(&p, "3A7");
     // Joins late, like any program started beside a running pipeline.
     let mut example = p
         .command_at(&python)

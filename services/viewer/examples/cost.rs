@@ -10,7 +10,7 @@
 //! cycle the viewer or the browser takes shows in its frame rate. Run it on an otherwise
 //! idle machine: other work moves the figures more than the viewer does.
 
-use airglyph_system_tests::{binary_path, stage_children, stop};
+use airglyph_system_tests::{binary_path, median, profile_report, stage_children, stop};
 use anyhow::{bail, Context};
 use clap::Parser;
 use std::io::{Read, Write};
@@ -143,22 +143,7 @@ fn one_run(args: &Args, view: bool, n: usize) -> anyhow::Result<Run> {
         .and_then(|s| s["viewer"]["pictures"].as_u64())
         .unwrap_or(0);
     let cpu0 = viewer.map_or(0.0, cpu_seconds);
-    let t0 = Instant::now();
-    let out_dir =
-        std::env::temp_dir().join(format!("airglyph-cost-profile-{}-{n}", std::process::id()));
-    let mut profile_cmd = Command::new(binary_path("airglyph"));
-    profile_cmd
-        .args([
-            "profile",
-            "--json",
-            "--seconds",
-            &args.seconds.to_string(),
-            "--out",
-        ])
-        .arg(&out_dir);
-    env(&mut profile_cmd);
-    let out = profile_cmd.stderr(Stdio::null()).output()?;
-    let elapsed = t0.elapsed().as_secs_f64();
+    let profiled = profile_report(env, args.seconds);
     let cpu = viewer.map_or(0.0, cpu_seconds) - cpu0;
     let pictures1 = view
         .then(|| get(addr, "/state.json").ok())
@@ -169,12 +154,9 @@ fn one_run(args: &Args, view: bool, n: usize) -> anyhow::Result<Run> {
         stop(b);
     }
     stop(supervisor);
-    let _ = std::fs::remove_dir_all(&out_dir);
     let _ = std::fs::remove_dir_all(&profile);
-    if !out.status.success() {
-        bail!("airglyph profile failed");
-    }
-    let report: serde_json::Value = serde_json::from_slice(&out.stdout)?;
+    let (report, took) = profiled?;
+    let elapsed = took.as_secs_f64();
     let st = &report["stages"];
     let fps = |s: &str| st[s]["fps"].as_f64().unwrap_or(0.0);
     Ok(Run {
@@ -191,16 +173,6 @@ fn tempfile_dir(n: usize) -> anyhow::Result<PathBuf> {
     let d = std::env::temp_dir().join(format!("airglyph-cost-browser-{}-{n}", std::process::id()));
     std::fs::create_dir_all(&d)?;
     Ok(d)
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(|a, b| a.total_cmp(b));
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        (v[n / 2 - 1] + v[n / 2]) / 2.0
-    }
 }
 
 fn main() -> anyhow::Result<()> {

@@ -8,7 +8,7 @@
 //! ```
 //! `--fast` lets capture run as fast as it can, so any cycle the clients take shows.
 
-use airglyph_system_tests::{binary_path, stop};
+use airglyph_system_tests::{binary_path, median, profile_report, stop};
 use anyhow::{bail, Context};
 use clap::Parser;
 use std::io::{Read, Write};
@@ -111,22 +111,7 @@ fn one_run(args: &Args, clients: usize, n: usize) -> anyhow::Result<Run> {
         .collect();
     std::thread::sleep(Duration::from_secs_f64(args.warmup));
     let b0 = bytes.load(Ordering::Relaxed);
-    let t0 = Instant::now();
-    let out_dir =
-        std::env::temp_dir().join(format!("airglyph-push-profile-{}-{n}", std::process::id()));
-    let mut profile = Command::new(binary_path("airglyph"));
-    profile
-        .args([
-            "profile",
-            "--json",
-            "--seconds",
-            &args.seconds.to_string(),
-            "--out",
-        ])
-        .arg(&out_dir);
-    env(&mut profile);
-    let out = profile.stderr(Stdio::null()).output()?;
-    let elapsed = t0.elapsed().as_secs_f64();
+    let profiled = profile_report(env, args.seconds);
     let read = bytes.load(Ordering::Relaxed) - b0;
     done.store(true, Ordering::Relaxed);
     for t in threads {
@@ -135,12 +120,9 @@ fn one_run(args: &Args, clients: usize, n: usize) -> anyhow::Result<Run> {
             .context("a push client")?;
     }
     stop(supervisor);
-    let _ = std::fs::remove_dir_all(&out_dir);
     let _ = std::fs::remove_dir_all(&root);
-    if !out.status.success() {
-        bail!("airglyph profile failed");
-    }
-    let report: serde_json::Value = serde_json::from_slice(&out.stdout)?;
+    let (report, took) = profiled?;
+    let elapsed = took.as_secs_f64();
     let fps = |s: &str| report["stages"][s]["fps"].as_f64().unwrap_or(0.0);
     Ok(Run {
         capture_fps: fps("capture"),
@@ -152,16 +134,6 @@ fn one_run(args: &Args, clients: usize, n: usize) -> anyhow::Result<Run> {
             0.0
         },
     })
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        (v[n / 2 - 1] + v[n / 2]) / 2.0
-    }
 }
 
 fn main() -> anyhow::Result<()> {
