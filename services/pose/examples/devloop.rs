@@ -2,7 +2,7 @@
 //! figures and writes overlays (green = truth, red = estimate).
 //!
 //! `cargo run --release -p airglyph-pose --example devloop -- [pose:NAME|bvh:FILE|draw:SYMBOLS]
-//!  [mh] [follow] [noise] [floor|room] [seated] [table] [upper] [partial] [single] [qvga] [lateral:M] [dist:M]
+//!  [mh] [follow] [noise] [floor|room] [seated] [table] [mug] [upper] [partial] [single] [qvga] [lateral:M] [dist:M]
 //!  [yaw:DEG] [frames] [oracle|oracle-only] [overlays:DIR] [from:N] [every:N] [set:FIELD=VALUE]`
 #![allow(clippy::needless_range_loop)]
 
@@ -58,6 +58,9 @@ fn main() {
         } else if a == "table" {
             cfg.props
                 .push(airglyph_synth::Prop::Table(airglyph_synth::Table::default()));
+        } else if a == "mug" {
+            cfg.props
+                .push(airglyph_synth::Prop::Mug(airglyph_synth::Mug::default()));
         } else if a == "upper" {
             upper = true;
         } else if a == "partial" {

@@ -18,8 +18,8 @@ use airglyph_core::{Joint, Skeleton};
 use airglyph_pose::metrics::{PoseEval, Summary};
 use airglyph_pose::{overlay, PoseConfig, PoseEstimator};
 use airglyph_synth::{
-    Background, BodySpec, Chair, DrawSpec, MotionSpec, Placement, Posture, ProceduralBody, Prop,
-    SceneConfig, Synthesizer, Table,
+    Background, BodySpec, Chair, DrawSpec, MotionSpec, Mug, Placement, Posture, ProceduralBody,
+    Prop, SceneConfig, Synthesizer, Table,
 };
 use std::io::Write;
 use std::path::PathBuf;
@@ -90,6 +90,10 @@ fn kinds() -> Vec<Kind> {
             ..cfg
         }
     };
+    let with_mug = |mut cfg: SceneConfig| {
+        cfg.props.push(Prop::Mug(Mug::default()));
+        cfg
+    };
     let follow = |mut cfg: SceneConfig| {
         cfg.placement.follow = true;
         cfg
@@ -141,6 +145,11 @@ fn kinds() -> Vec<Kind> {
             name: "seated-rest (1.2 m, no table)",
             scene: near(seated(base(&mh, MotionSpec::Rest, 1.2), false)),
             held_out: false,
+        },
+        Kind {
+            name: "seated-rest by a mug (1.4 m, table)",
+            scene: near(with_mug(seated(base(&mh, MotionSpec::Rest, 1.4), true))),
+            held_out: true,
         },
         Kind {
             name: "far-rest (3.6 m)",

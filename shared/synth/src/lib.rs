@@ -90,7 +90,7 @@ pub use canon::{Bone, Pose, TposeSkeleton};
 pub use error::SynthError;
 pub use motion::{DrawSpec, MotionSpec};
 pub use poses::{Posture, ScriptedPose};
-pub use room::{Background, Chair, Prop, Table};
+pub use room::{Background, Chair, Mug, Prop, Table};
 
 use airglyph_core::gestures::write_gestures_csv;
 use airglyph_core::recording::{RecordingInfo, RecordingWriter};
@@ -297,6 +297,18 @@ impl Synthesizer {
                     prop.reach_m(),
                     pl.distance_m
                 )));
+            }
+            if let Prop::Mug(m) = prop {
+                let tables = cfg.props.iter().filter_map(|p| match p {
+                    Prop::Table(t) => Some(t.height_m),
+                    _ => None,
+                });
+                if !tables.into_iter().any(|h| (h - m.base_m).abs() < 0.005) {
+                    return Err(SynthError::Config(format!(
+                        "{prop:?} stands on a table: add a table whose top is at its base ({} m)",
+                        m.base_m
+                    )));
+                }
             }
         }
         if let Posture::Seated { seat_height_m } = cfg.posture {
@@ -596,6 +608,7 @@ fn describe(cfg: &SceneConfig) -> String {
         out.push_str(match p {
             Prop::Table(_) => "/table",
             Prop::Chair(_) => "/chair",
+            Prop::Mug(_) => "/mug",
         });
     }
     out

@@ -29,6 +29,9 @@ pub enum Prop {
     Table(Table),
     /// A chair under the person, its back behind them.
     Chair(Chair),
+    /// A mug beside the right hand's place on the table: something the person touches
+    /// that is not the person.
+    Mug(Mug),
 }
 
 /// A four-legged table in front of the person.
@@ -79,6 +82,24 @@ impl Default for Chair {
 /// The usual chair seat height, which a seated person sits at.
 pub const SEAT_HEIGHT_M: f32 = 0.46;
 
+/// A mug standing just outside the right hand as the hands-on-table pose rests it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Mug {
+    /// Floor to the mug's base: the top of the table it stands on.
+    pub base_m: f32,
+    /// Floor to its rim.
+    pub height_m: f32,
+}
+
+impl Default for Mug {
+    fn default() -> Self {
+        Self {
+            base_m: TABLE_HEIGHT_M,
+            height_m: 0.1,
+        }
+    }
+}
+
 /// An axis-aligned box in the room frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Block {
@@ -128,6 +149,15 @@ impl Prop {
                 }
                 v
             }
+            Prop::Mug(m) => {
+                // The right hand rests at x = -0.17 m, 0.38 m ahead of the hips (a body
+                // of 1.75 m): the mug's side 1-2 cm beyond the little finger.
+                let (x0, x1, z0, z1) = (-0.31, -0.23, 0.33, 0.41);
+                vec![Block::new(
+                    [x0, m.base_m, z0],
+                    [x1, m.base_m + m.height_m, z1],
+                )]
+            }
         }
     }
 
@@ -136,6 +166,7 @@ impl Prop {
         let sizes: &[f32] = match self {
             Prop::Table(t) => &[t.height_m, t.width_m, t.depth_m, t.gap_m],
             Prop::Chair(c) => &[c.seat_height_m, c.back_height_m],
+            Prop::Mug(m) => &[m.base_m, m.height_m],
         };
         sizes.iter().all(|v| v.is_finite() && *v > 0.0 && *v < 5.0)
     }

@@ -7,7 +7,7 @@ use airglyph_core::gestures::write_gestures_csv;
 use airglyph_core::Intrinsics;
 use airglyph_ipc::shutdown;
 use airglyph_synth::{
-    Background, BodySpec, Chair, GestureTruth, MotionSpec, Placement, Posture, ProceduralBody,
+    Background, BodySpec, Chair, GestureTruth, MotionSpec, Mug, Placement, Posture, ProceduralBody,
     Prop, SceneConfig, ScriptedPose, SynthError, Table,
 };
 use anyhow::{bail, Context};
@@ -40,6 +40,10 @@ pub struct Args {
     /// A table (0.74 m high, 1.2 × 0.7 m) in front of the person, 0.22 m from their hips.
     #[arg(long)]
     pub table: bool,
+    /// A mug (8 × 8 × 10 cm) on the table just beyond the right hand's place of rest:
+    /// an object the person touches. Needs --table.
+    #[arg(long, requires = "table")]
+    pub mug: bool,
     /// Frames to write (at most the clip's length); default: the whole clip or symbol
     /// list, 300 for endless motion.
     #[arg(long, value_parser = airglyph_ipc::options::within(1usize, 1_000_000), allow_negative_numbers = true)]
@@ -170,6 +174,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     if args.table {
         props.push(Prop::Table(Table::default()));
+    }
+    if args.mug {
+        props.push(Prop::Mug(Mug::default()));
     }
     let cfg = SceneConfig {
         body,
