@@ -15,8 +15,9 @@
 //! and forearm, from the frames whose bent elbow tells the two bones apart (a straight
 //! limb cannot; legs are rarely seen bent enough, so they keep one ratio).
 
-use crate::config::{Limb, PoseConfig};
+use crate::config::PoseConfig;
 use crate::register::Fit;
+use crate::Limb;
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
 

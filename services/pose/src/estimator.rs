@@ -6,7 +6,7 @@ use crate::assign::{assign, limb_costs, LimbCosts};
 use crate::body::{segment_of, BodyPose, BodyTemplate, Posed, Segment};
 use crate::calibrate::BodyCalibration;
 use crate::chains::{limb_chain, LimbState, TargetMarks};
-use crate::config::{Limb, PoseConfig};
+use crate::config::PoseConfig;
 use crate::debug::{Debug, StepTimes};
 use crate::dijkstra::Graph;
 use crate::geodesic::Geodesic;
@@ -21,6 +21,7 @@ use crate::torso::{
     anchored_at_head_top, facing_from_feet, head_top_of_mask, keypoints, TorsoEstimator, TorsoFit,
     TorsoPoints, TorsoPose, TorsoStart,
 };
+use crate::Limb;
 use airglyph_core::{DepthView, Intrinsics, Joint, Skeleton};
 use nalgebra::{Point3, Vector3};
 use std::time::Instant;

@@ -168,7 +168,7 @@ fn an_arm_held_out_beside_the_silhouette_is_pulled_back_onto_it() {
     cfg.priors.limb_rest = 0.0;
     let posed = Posed::new(&t, &truth);
     let mut tips = t.tips.map(|(s, local)| Some(posed.point(s, &local)));
-    tips[crate::config::Limb::RightArm.index()] = None;
+    tips[crate::Limb::RightArm.index()] = None;
     // How far the arm's joints project from the nearest person pixel.
     let off_silhouette = |pose: &BodyPose| {
         let skel = Posed::new(&t, pose).skeleton(&t);
