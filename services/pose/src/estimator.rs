@@ -711,12 +711,12 @@ fn assign_limbs(
         }
     }
     if let (Some(prev), true) = (t.body, cfg.register.enabled) {
-        drop_borrowed_tips(tpl, &prev, &mut tips, &cfg.register);
+        drop_borrowed_tips(tpl, &prev, &mut tips, &cfg.register.race);
     }
     let race = !cfg.register.enabled
         || torso.detecting
         || t.body
-            .is_none_or(|prev| tips_strayed(tpl, &prev, &tips, &cfg.register));
+            .is_none_or(|prev| tips_strayed(tpl, &prev, &tips, &cfg.register.race));
     d.raced = race;
     Assigned {
         limb,
@@ -819,7 +819,7 @@ fn register_body(
     d: &mut Debug,
 ) -> Option<Skeleton> {
     let tpl = body.template;
-    reg.prepare(frame, &cfg.register);
+    reg.prepare(frame, &cfg.register.sampling);
     let geodesic = seed
         .race
         .then(|| BodyPose::from_skeleton(&tpl, &seed.skeleton))
