@@ -1,6 +1,9 @@
 //! Every tunable number of the estimator, with the seed's values where it gives them,
 //! grouped by the step that reads it. Each group's type is defined in its step's module
-//! and re-exported here.
+//! and re-exported here. A step is handed the sections it reads, never the whole
+//! [`PoseConfig`] (only the estimator holds that): this module gathers the steps'
+//! types, so a step naming it would make the two depend on each other
+//! (`scripts/check-imports`).
 
 pub use crate::assign::AssignConfig;
 pub use crate::body::BodyConfig;

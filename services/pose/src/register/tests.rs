@@ -1,7 +1,6 @@
 use super::solver::bone_steps;
 use super::*;
-use crate::body::{Posed, Shape};
-use crate::PoseConfig;
+use crate::body::{BodyConfig, Posed, Shape};
 use airglyph_core::{Intrinsics, Joint, Skeleton};
 use nalgebra::{Rotation3, Unit, Vector3};
 
@@ -68,8 +67,8 @@ fn facing(at: Point3<f32>) -> BodyPose {
 
 /// The MakeHuman template at the default limb lengths, seen by a 320×240 camera.
 fn scene() -> (BodyTemplate, Intrinsics) {
-    let cfg = PoseConfig::default();
-    let t = BodyTemplate::from_shape(&Shape::makehuman(), &crate::body::Limbs::from_config(&cfg));
+    let bones = crate::body::Limbs::from_config(&BodyConfig::default());
+    let t = BodyTemplate::from_shape(&Shape::makehuman(), &bones);
     (t, Intrinsics::default().scaled_to(320, 240))
 }
 
