@@ -221,7 +221,7 @@ fn main() {
     }
     eprintln!("{} frames", samples.len());
 
-    let limbs = Limbs::from_config(&PoseConfig::default());
+    let limbs = Limbs::from_config(&PoseConfig::default().body);
     let mut shape = Shape::makehuman();
     // Joints: the truth in its segment's frame (left side), shape units.
     let joint_in = |s: &Sample, seg: Segment, j: Joint| -> Vector3<f64> {

@@ -1,10 +1,11 @@
 //! Step 5: the geodesic maxima given to the five limbs by least total cost.
 
+use crate::body::BodyConfig;
 use crate::dijkstra::Graph;
 use crate::geodesic::Geodesic;
 use crate::graph::{GeoGraph, NONE};
-use crate::torso::TorsoPose;
-use crate::{Limb, PoseConfig};
+use crate::torso::{TorsoConfig, TorsoPose};
+use crate::Limb;
 use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 
@@ -72,7 +73,8 @@ pub struct LimbCosts {
 /// with where it is cut for each limb. `cut`: which maxima lie where the body is cut
 /// from view; `roots`: the limbs' roots in the camera frame;
 /// `inv`: camera frame → torso frame; `last_extremity`: each limb's extremity of the
-/// last frame, torso frame; `path`: a buffer.
+/// last frame, torso frame; `body`: the limbs' lengths; `torso`: its key points (the
+/// hips' height); `path`: a buffer.
 #[allow(clippy::too_many_arguments)]
 pub fn limb_costs(
     graph: &GeoGraph,
@@ -82,7 +84,9 @@ pub fn limb_costs(
     roots: &[Point3<f32>; 5],
     inv: &TorsoPose,
     last_extremity: &[Option<Point3<f32>>; 5],
-    cfg: &PoseConfig,
+    cfg: &AssignConfig,
+    body: &BodyConfig,
+    torso: &TorsoConfig,
     path: &mut Vec<u32>,
 ) -> LimbCosts {
     let n = graph.node_count();
@@ -90,7 +94,6 @@ pub fn limb_costs(
     let mut cuts: Vec<[usize; 5]> = Vec::with_capacity(maxima.len());
     let mut lengths: Vec<[f32; 5]> = Vec::with_capacity(maxima.len());
     let mut paths: Vec<Vec<u32>> = Vec::with_capacity(maxima.len());
-    let a_cfg = &cfg.assign;
     for (&m, &at_a_cut) in maxima.iter().zip(cut) {
         path.clear();
         let mut a = m;
@@ -123,17 +126,17 @@ pub fn limb_costs(
             let p_cut = path[near.1];
             let mut best = (dm - geo.dist(p_cut) as f32 * 1e-3 + near.0, near.1);
             // The geodesic length of a limb hardly depends on how it is bent.
-            let (l1, l2) = cfg.body.bones(l);
-            let reach = l1 + l2 + cfg.body.extremity_extra(l);
+            let (l1, l2) = body.bones(l);
+            let reach = l1 + l2 + body.extremity_extra(l);
             // A hand resting against the hip or held before the chest may reach the
             // torso by a path that never passes its shoulder: the arm's own link is
             // hidden. Its geodesic length then says nothing; it must only be within
             // the arm's reach, and its targets are the forearm's and hand's.
             let hidden = matches!(l, Limb::LeftArm | Limb::RightArm)
-                && a_cfg.hidden_root_gap > 0.0
-                && near.0 > a_cfg.hidden_root_gap;
+                && cfg.hidden_root_gap > 0.0
+                && near.0 > cfg.hidden_root_gap;
             let mut c = if hidden {
-                let distal = ((l2 + cfg.body.extremity_extra(l)) * 1000.0) as u32;
+                let distal = ((l2 + body.extremity_extra(l)) * 1000.0) as u32;
                 let d_m = geo.dist(m);
                 let end = path
                     .iter()
@@ -141,13 +144,13 @@ pub fn limb_costs(
                     .unwrap_or(path.len() - 1);
                 best = (f32::NAN, end);
                 let euclid = (graph.pos[m as usize] - r).norm();
-                (euclid - reach).max(0.0) + a_cfg.hidden_root_cost
+                (euclid - reach).max(0.0) + cfg.hidden_root_cost
             } else {
                 (best.0 - reach).abs() + (near.0 - 0.05).max(0.0)
             };
             if let Some(prev) = last_extremity[l.index()] {
                 let pm = graph.pos[m as usize];
-                c += a_cfg.temporal_weight * (inv.apply(&pm) - prev).norm();
+                c += cfg.temporal_weight * (inv.apply(&pm) - prev).norm();
             }
             // An extremity lies on its own side of the body.
             let local = inv.apply(&graph.pos[m as usize]);
@@ -156,14 +159,13 @@ pub fn limb_costs(
                 Limb::RightArm | Limb::RightLeg => local.x.max(0.0),
                 // The top of the head is on the torso's axis, not out on a shoulder.
                 Limb::Head => {
-                    (-local.y).max(0.0)
-                        + a_cfg.head_off_axis_weight * (local.x.abs() - 0.08).max(0.0)
+                    (-local.y).max(0.0) + cfg.head_off_axis_weight * (local.x.abs() - 0.08).max(0.0)
                 }
             };
             // Feet stay below the hips, and never reach the chest: a maximum up there
             // is a head, a hand or an ear, and the legs may well be out of view.
             if matches!(l, Limb::LeftLeg | Limb::RightLeg) {
-                c += (local.y - cfg.torso.keypoints.left_hip[1] + 0.2).max(0.0);
+                c += (local.y - torso.keypoints.left_hip[1] + 0.2).max(0.0);
                 if local.y > 0.0 {
                     c = f32::INFINITY;
                 }
@@ -205,7 +207,7 @@ pub fn limb_costs(
     // A bent elbow or knee is a geodesic maximum of its own, beside the path to the
     // hand or foot beyond it. Such a maximum is no limb's end while the farther one is
     // there: it costs extra for every limb but the head.
-    if a_cfg.dominated_cost > 0.0 {
+    if cfg.dominated_cost > 0.0 {
         for (bi, &mb) in maxima.iter().enumerate() {
             let pb = graph.pos[mb as usize];
             let db = geo.dist(mb);
@@ -218,7 +220,7 @@ pub fn limb_costs(
             });
             if dominated {
                 for c in &mut cost[bi][1..] {
-                    *c += a_cfg.dominated_cost;
+                    *c += cfg.dominated_cost;
                 }
             }
         }

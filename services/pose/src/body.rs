@@ -16,7 +16,6 @@
 //! the joints' places. Arm and leg lengths scale with the person's
 //! (`calibrate.rs`).
 
-use crate::config::PoseConfig;
 use crate::Limb;
 use airglyph_core::{Joint, Skeleton};
 use nalgebra::{Point3, Rotation3, Unit, Vector3};
@@ -401,12 +400,12 @@ pub struct Limbs {
 
 impl Limbs {
     /// The configured bone lengths.
-    pub fn from_config(cfg: &PoseConfig) -> Self {
+    pub fn from_config(cfg: &BodyConfig) -> Self {
         Self {
-            upper_arm: cfg.body.upper_arm,
-            forearm: cfg.body.forearm,
-            thigh: cfg.body.thigh,
-            shin: cfg.body.shin,
+            upper_arm: cfg.upper_arm,
+            forearm: cfg.forearm,
+            thigh: cfg.thigh,
+            shin: cfg.shin,
         }
     }
 
@@ -424,10 +423,12 @@ impl Limbs {
 }
 
 impl BodyTemplate {
-    /// The configured shape with the configured bone lengths (already scaled to the
-    /// person's by the calibration when that is on).
-    pub fn new(cfg: &PoseConfig) -> Self {
-        Self::from_shape(&cfg.register.shape, &Limbs::from_config(cfg))
+    /// The configured shape ([`crate::config::RegisterConfig::shape`]) with the
+    /// configured bone lengths (already scaled to the person's by the calibration when
+    /// that is on). The two sections, not the whole [`crate::PoseConfig`]: the settings
+    /// gather this module's [`BodyConfig`], so the body cannot depend on them.
+    pub fn new(shape: &Shape, bones: &BodyConfig) -> Self {
+        Self::from_shape(shape, &Limbs::from_config(bones))
     }
 
     /// The body of `shape` with the bone lengths `limbs`.
@@ -733,7 +734,7 @@ mod tests {
     use super::*;
 
     fn standing() -> (BodyTemplate, BodyPose) {
-        let t = BodyTemplate::new(&PoseConfig::default());
+        let t = BodyTemplate::new(&Shape::makehuman(), &BodyConfig::default());
         // Facing the camera 2.5 m away: the person's left is the camera's +x, up is -y,
         // forward is -z.
         let r = Rotation3::from_basis_unchecked(&[Vector3::x(), -Vector3::y(), -Vector3::z()]);
@@ -755,12 +756,12 @@ mod tests {
         assert!(s[Joint::LeftHip].x > 0.05 && s[Joint::RightHip].x < -0.05);
         // Bone lengths are the configured ones, to within the shape's placing of the
         // joints (a joint may lie a little off its segment's axis).
-        let cfg = PoseConfig::default();
+        let cfg = BodyConfig::default();
         let ua = (s[Joint::LeftElbow] - s[Joint::LeftShoulder]).norm();
         let fa = (s[Joint::LeftHand] - s[Joint::LeftElbow]).norm();
-        assert!((ua - cfg.body.upper_arm).abs() < 0.01 && (fa - cfg.body.forearm).abs() < 0.01);
+        assert!((ua - cfg.upper_arm).abs() < 0.01 && (fa - cfg.forearm).abs() < 0.01);
         let leg = s[Joint::LeftFoot].y - s[Joint::LeftHip].y;
-        assert!((leg - cfg.body.thigh - cfg.body.shin).abs() < 0.01, "{leg}");
+        assert!((leg - cfg.thigh - cfg.shin).abs() < 0.01, "{leg}");
     }
 
     #[test]

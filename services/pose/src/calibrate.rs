@@ -1,7 +1,7 @@
 //! Body-size calibration: the person's arm and leg lengths, learned from the geodesic
 //! lengths of their limbs while they move.
 //!
-//! The bone lengths of [`PoseConfig::default`] are one body's. A longer-armed person's
+//! The bone lengths of [`BodyConfig::default`] are one body's. A longer-armed person's
 //! hand then lies beyond the fitted chain's reach, and a geodesic maximum on a knee can
 //! look more like a foot than the foot does. The geodesic length of a limb, from its
 //! root to its extremity, hardly changes as the limb bends, so each frame in which a
@@ -15,8 +15,9 @@
 //! and forearm, from the frames whose bent elbow tells the two bones apart (a straight
 //! limb cannot; legs are rarely seen bent enough, so they keep one ratio).
 
-use crate::config::{Limb, PoseConfig};
-use crate::register::Fit;
+use crate::body::BodyConfig;
+use crate::register::{Fit, LengthsConfig, PriorsConfig};
+use crate::Limb;
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
 
@@ -136,11 +137,17 @@ pub struct BodyCalibration {
 
 impl BodyCalibration {
     /// Records one frame's geodesic length (metres, from the limb root to the assigned
-    /// maximum) of a limb; `base` is the configuration the ratios refer to.
-    pub fn measure(&mut self, base: &PoseConfig, limb: Limb, geodesic_length: f32) {
-        let (l1, l2) = base.body.bones(limb);
-        let reach = l1 + l2 + base.body.extremity_extra(limb);
-        let [arm_ref, leg_ref] = base.calibrate.geodesic_reach_ratio;
+    /// maximum) of a limb; `base` is the body the ratios refer to.
+    pub fn measure(
+        &mut self,
+        cfg: &CalibrateConfig,
+        base: &BodyConfig,
+        limb: Limb,
+        geodesic_length: f32,
+    ) {
+        let (l1, l2) = base.bones(limb);
+        let reach = l1 + l2 + base.extremity_extra(limb);
+        let [arm_ref, leg_ref] = cfg.geodesic_reach_ratio;
         match limb {
             Limb::LeftArm | Limb::RightArm => self.arms.add(geodesic_length / reach / arm_ref),
             Limb::LeftLeg | Limb::RightLeg => self.legs.add(geodesic_length / reach / leg_ref),
@@ -208,30 +215,30 @@ impl BodyCalibration {
         }
     }
 
-    /// `base` with the bone lengths scaled to this person and its collarbones' rest.
-    pub fn apply(&self, base: &PoseConfig) -> PoseConfig {
+    /// The bone lengths of `body` scaled to this person, and its collarbones' rest put
+    /// in `priors`: the two sections of the settings the calibration changes, handed
+    /// over alone (the settings gather this module's [`CalibrateConfig`]).
+    pub fn apply(&self, body: &mut BodyConfig, priors: &mut PriorsConfig) {
         let (a, l) = (self.arm_ratio(), self.leg_ratio());
         // The split moves the elbow along the arm and keeps the reach (to first order).
-        let (u, f) = (base.body.upper_arm, base.body.forearm);
+        let (u, f) = (body.upper_arm, body.forearm);
         let k = self.arm_split();
-        let mut cfg = base.clone();
-        cfg.body.upper_arm = u * a * k.powf(f / (u + f));
-        cfg.body.forearm = f * a * k.powf(-u / (u + f));
-        cfg.body.thigh = base.body.thigh * l;
-        cfg.body.shin = base.body.shin * l;
-        cfg.register.priors.collar_rest = self.collars;
-        cfg
+        body.upper_arm = u * a * k.powf(f / (u + f));
+        body.forearm = f * a * k.powf(-u / (u + f));
+        body.thigh *= l;
+        body.shin *= l;
+        priors.collar_rest = self.collars;
     }
 
-    /// Learns from a registered body `b` (fitted with `cfg`): the limb lengths (and the
-    /// collarbones' rest) its frame asks for, from frames whose limbs the camera sees
-    /// well.
-    pub fn learn(&mut self, b: &Fit, cfg: &PoseConfig) {
+    /// Learns from a registered body `b`: the limb lengths (and the collarbones' rest)
+    /// its frame asks for, from frames whose limbs the camera sees well (`cfg`: how
+    /// well, and how fast the collarbones follow).
+    pub fn learn(&mut self, b: &Fit, cfg: &LengthsConfig) {
         use crate::body::Segment::{self, *};
         let seen = |segs: &[Segment]| {
             segs.iter().map(|s| b.seen[s.index()]).sum::<f32>() / segs.len() as f32
         };
-        let gate = cfg.register.lengths.seen;
+        let gate = cfg.seen;
         let arms = seen(&[LeftUpperArm, LeftForearm, RightUpperArm, RightForearm]);
         let legs = seen(&[LeftThigh, LeftShin, RightThigh, RightShin]);
         self.refine([
@@ -252,10 +259,7 @@ impl BodyCalibration {
                 let v = r.scaled_axis();
                 [v.x, v.y, v.z]
             };
-            self.refine_collars(
-                [rel(LeftCollar), rel(RightCollar)],
-                cfg.register.lengths.collar_gain,
-            );
+            self.refine_collars([rel(LeftCollar), rel(RightCollar)], cfg.collar_gain);
         }
     }
 
@@ -269,49 +273,55 @@ impl BodyCalibration {
 mod tests {
     use super::*;
 
+    /// `base` with the bone lengths scaled by `c`.
+    fn scaled_by(c: &BodyCalibration, base: &BodyConfig) -> BodyConfig {
+        let mut body = base.clone();
+        c.apply(&mut body, &mut PriorsConfig::default());
+        body
+    }
+
     #[test]
     fn default_until_enough_samples_then_the_high_percentile() {
-        let base = PoseConfig::default();
+        let (cfg, base) = (CalibrateConfig::default(), BodyConfig::default());
         let mut c = BodyCalibration::default();
-        let (l1, l2) = base.body.bones(Limb::LeftArm);
+        let (l1, l2) = base.bones(Limb::LeftArm);
         // What the configured body itself would measure.
-        let reach = (l1 + l2 + base.body.extremity_extra(Limb::LeftArm))
-            * base.calibrate.geodesic_reach_ratio[0];
+        let reach = (l1 + l2 + base.extremity_extra(Limb::LeftArm)) * cfg.geodesic_reach_ratio[0];
         for _ in 0..MIN_SAMPLES - 1 {
-            c.measure(&base, Limb::LeftArm, reach * 1.2);
+            c.measure(&cfg, &base, Limb::LeftArm, reach * 1.2);
         }
         assert_eq!(c.arm_ratio(), 1.0);
-        c.measure(&base, Limb::RightArm, reach * 1.2);
+        c.measure(&cfg, &base, Limb::RightArm, reach * 1.2);
         assert!((c.arm_ratio() - 1.2).abs() < 1e-4);
         // Shortened paths (occlusion, bridges) below the percentile do not pull it down.
         for _ in 0..MIN_SAMPLES / 2 {
-            c.measure(&base, Limb::LeftArm, reach * 0.5);
+            c.measure(&cfg, &base, Limb::LeftArm, reach * 0.5);
         }
         assert!((c.arm_ratio() - 1.2).abs() < 1e-4);
         assert_eq!(c.leg_ratio(), 1.0, "the legs are measured apart");
-        let scaled = c.apply(&base);
-        assert!((scaled.body.upper_arm - base.body.upper_arm * 1.2).abs() < 1e-5);
-        assert_eq!(scaled.body.thigh, base.body.thigh);
+        let scaled = scaled_by(&c, &base);
+        assert!((scaled.upper_arm - base.upper_arm * 1.2).abs() < 1e-5);
+        assert_eq!(scaled.thigh, base.thigh);
     }
 
     #[test]
     fn bounded_and_deaf_to_nonsense() {
-        let base = PoseConfig::default();
+        let (cfg, base) = (CalibrateConfig::default(), BodyConfig::default());
         let mut c = BodyCalibration::default();
         for _ in 0..100 {
-            c.measure(&base, Limb::LeftLeg, 10.0);
-            c.measure(&base, Limb::LeftLeg, f32::NAN);
+            c.measure(&cfg, &base, Limb::LeftLeg, 10.0);
+            c.measure(&cfg, &base, Limb::LeftLeg, f32::NAN);
         }
         assert_eq!(c.leg_ratio(), 1.0);
         for _ in 0..100 {
-            c.measure(&base, Limb::LeftLeg, 0.5 * 0.95);
+            c.measure(&cfg, &base, Limb::LeftLeg, 0.5 * 0.95);
         }
         assert_eq!(c.leg_ratio(), MIN_RATIO);
     }
 
     #[test]
     fn bent_arms_split_the_bones_and_keep_the_reach() {
-        let base = PoseConfig::default();
+        let base = BodyConfig::default();
         let mut c = BodyCalibration::default();
         // Frames asking for a longer upper arm and a shorter forearm.
         for _ in 0..MIN_SAMPLES - 1 {
@@ -324,15 +334,10 @@ mod tests {
         }
         assert!(c.arm_split() > 1.1, "{}", c.arm_split());
         assert!(c.arm_split() <= MAX_SPLIT.exp() + 1e-6);
-        let scaled = c.apply(&base);
-        assert!(
-            scaled.body.upper_arm > base.body.upper_arm && scaled.body.forearm < base.body.forearm
-        );
-        let reach = |p: &PoseConfig| p.body.upper_arm + p.body.forearm;
+        let scaled = scaled_by(&c, &base);
+        assert!(scaled.upper_arm > base.upper_arm && scaled.forearm < base.forearm);
+        let reach = |p: &BodyConfig| p.upper_arm + p.forearm;
         assert!((reach(&scaled) / reach(&base) - 1.0).abs() < 0.01);
-        assert_eq!(
-            (scaled.body.thigh, scaled.body.shin),
-            (base.body.thigh, base.body.shin)
-        );
+        assert_eq!((scaled.thigh, scaled.shin), (base.thigh, base.shin));
     }
 }

@@ -1,12 +1,13 @@
 //! Step 6 (the seed's): a two-joint chain fitted to a limb's target points by weighted
 //! closed-form rotations.
 
+use crate::body::BodyConfig;
 use crate::dijkstra::{Graph, INF};
 use crate::geodesic::Geodesic;
 use crate::geom::{closest_on_segment, RotationAccumulator};
 use crate::graph::{GeoGraph, NONE};
 use crate::torso::TorsoPose;
-use crate::{Limb, PoseConfig};
+use crate::Limb;
 use airglyph_core::Skeleton;
 use nalgebra::{Point3, Vector3};
 use serde::{Deserialize, Serialize};
@@ -147,7 +148,9 @@ pub struct TargetMarks {
 /// The seed's two-joint chain of limb `l` from `root_p`: fitted to the target points
 /// along `found`'s path and to the maximum, from the path's own bend and from the last
 /// frame's fit `prev`, whichever fits better; without a maximum the last fit, trusted
-/// less. `f`: the focal length, pixels.
+/// less. `body`: the limbs' lengths; `behind_tip`: the hands'
+/// [`crate::config::HandsConfig::behind_tip`] (a number, not the hands' section: the
+/// hands' step takes this one's [`ChainConfig`]); `f`: the focal length, pixels.
 #[allow(clippy::too_many_arguments)]
 pub fn limb_chain(
     l: Limb,
@@ -155,13 +158,15 @@ pub fn limb_chain(
     found: Found,
     torso: &TorsoPose,
     prev: Option<LimbState>,
-    cfg: &PoseConfig,
+    cfg: &ChainConfig,
+    body: &BodyConfig,
+    behind_tip: f32,
     f: f32,
     graph: &GeoGraph,
     geo: &Geodesic,
     marks: &mut TargetMarks,
 ) -> LimbFit {
-    let (l1, l2) = cfg.body.bones(l);
+    let (l1, l2) = body.bones(l);
     let inv = torso.inverse();
     let Some((path, maximum)) = found else {
         // Occluded: keep the last fit (in the torso frame), trusted less.
@@ -176,7 +181,7 @@ pub fn limb_chain(
                 confidence: 0.1,
             }
         });
-        let conf = (s.confidence * cfg.chains.occluded_decay).clamp(0.0, 1.0);
+        let conf = (s.confidence * cfg.occluded_decay).clamp(0.0, 1.0);
         let mid = torso.apply(&s.mid);
         let end = torso.apply(&s.end);
         return LimbFit {
@@ -193,18 +198,18 @@ pub fn limb_chain(
             targets: None,
         };
     };
-    let targets = gather_targets(path, l, f, &cfg.chains, graph, geo, marks);
+    let targets = gather_targets(path, l, f, cfg, graph, geo, marks);
     let mut cands: Vec<Chain> = Vec::with_capacity(2);
     // From the geodesic path: the middle joint where the path is one
     // upper bone from the root.
     let ext = graph.pos[maximum as usize];
-    let ext_b = ext + ext.coords.normalize() * cfg.chains.surface_offset(l);
+    let ext_b = ext + ext.coords.normalize() * cfg.surface_offset(l);
     let mut mid_guess = ext_b;
     if l2 > 0.0 {
         for &p in path.iter().rev() {
             let q = graph.pos[p as usize];
             if (q - root_p).norm() >= l1 {
-                mid_guess = q + q.coords.normalize() * cfg.chains.surface_offset(l);
+                mid_guess = q + q.coords.normalize() * cfg.surface_offset(l);
                 break;
             }
         }
@@ -221,9 +226,9 @@ pub fn limb_chain(
         let (fitc, e) = fit_chain(
             c,
             &targets,
-            cfg.chains.omega_succ,
-            cfg.chains.beyond_end_weight,
-            cfg.chains.iterations,
+            cfg.omega_succ,
+            cfg.beyond_end_weight,
+            cfg.iterations,
         );
         if best.is_none_or(|(_, be)| e < be) {
             best = Some((fitc, e));
@@ -234,9 +239,9 @@ pub fn limb_chain(
     // towards the elbow, rather than where the forearm's assumed length
     // puts it: a forearm a few centimetres off would otherwise shrink
     // every stroke the hand draws towards the elbow.
-    if cfg.hands.behind_tip > 0.0 && matches!(l, Limb::LeftArm | Limb::RightArm) {
+    if behind_tip > 0.0 && matches!(l, Limb::LeftArm | Limb::RightArm) {
         if let Some(u) = (ext_b - fitc.mid).try_normalize(1e-6) {
-            fitc.end = ext_b - u * cfg.hands.behind_tip;
+            fitc.end = ext_b - u * behind_tip;
         }
     }
     let rms = e.sqrt();

@@ -1,6 +1,9 @@
 //! Every tunable number of the estimator, with the seed's values where it gives them,
 //! grouped by the step that reads it. Each group's type is defined in its step's module
-//! and re-exported here.
+//! and re-exported here. A step is handed the sections it reads, never the whole
+//! [`PoseConfig`] (only the estimator holds that): this module gathers the steps'
+//! types, so a step naming it would make the two depend on each other
+//! (`scripts/check-imports`).
 
 pub use crate::assign::AssignConfig;
 pub use crate::body::BodyConfig;
@@ -16,7 +19,8 @@ pub use crate::register::{
 pub use crate::segment::SegmentConfig;
 pub use crate::smooth::SmoothingConfig;
 pub use crate::torso::{TorsoConfig, TorsoPoints};
-use airglyph_core::Joint;
+// Kept at its old path, `airglyph_pose::config::Limb`; the type lives in `limb.rs`.
+pub use crate::limb::Limb;
 use serde::{Deserialize, Serialize};
 
 /// Settings of [`crate::PoseEstimator`]. `PoseConfig::default()` is what the pose stage
@@ -71,51 +75,5 @@ impl Default for PoseConfig {
             calibrate: CalibrateConfig::default(),
             smoothing: SmoothingConfig::default(),
         }
-    }
-}
-
-/// The five limbs, each a chain from a torso key point to an extremity.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Limb {
-    /// Neck to the top of the head.
-    Head,
-    /// Left shoulder to the left fingertips.
-    LeftArm,
-    /// Right shoulder to the right fingertips.
-    RightArm,
-    /// Left hip to the left toes.
-    LeftLeg,
-    /// Right hip to the right toes.
-    RightLeg,
-}
-
-impl Limb {
-    /// The five limbs in index order.
-    pub const ALL: [Limb; 5] = [
-        Limb::Head,
-        Limb::LeftArm,
-        Limb::RightArm,
-        Limb::LeftLeg,
-        Limb::RightLeg,
-    ];
-
-    /// Root, middle and end joint (the head has no middle joint: root neck, end head).
-    pub fn joints(self) -> (Joint, Option<Joint>, Joint) {
-        match self {
-            Limb::Head => (Joint::Neck, None, Joint::Head),
-            Limb::LeftArm => (Joint::LeftShoulder, Some(Joint::LeftElbow), Joint::LeftHand),
-            Limb::RightArm => (
-                Joint::RightShoulder,
-                Some(Joint::RightElbow),
-                Joint::RightHand,
-            ),
-            Limb::LeftLeg => (Joint::LeftHip, Some(Joint::LeftKnee), Joint::LeftFoot),
-            Limb::RightLeg => (Joint::RightHip, Some(Joint::RightKnee), Joint::RightFoot),
-        }
-    }
-
-    /// The limb's place in [`Limb::ALL`] and in per-limb arrays.
-    pub fn index(self) -> usize {
-        self as usize
     }
 }

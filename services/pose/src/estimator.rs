@@ -6,7 +6,7 @@ use crate::assign::{assign, limb_costs, LimbCosts};
 use crate::body::{segment_of, BodyPose, BodyTemplate, Posed, Segment};
 use crate::calibrate::BodyCalibration;
 use crate::chains::{limb_chain, LimbState, TargetMarks};
-use crate::config::{Limb, PoseConfig};
+use crate::config::PoseConfig;
 use crate::debug::{Debug, StepTimes};
 use crate::dijkstra::Graph;
 use crate::geodesic::Geodesic;
@@ -21,6 +21,7 @@ use crate::torso::{
     anchored_at_head_top, facing_from_feet, head_top_of_mask, keypoints, TorsoEstimator, TorsoFit,
     TorsoPoints, TorsoPose, TorsoStart,
 };
+use crate::Limb;
 use airglyph_core::{DepthView, Intrinsics, Joint, Skeleton};
 use nalgebra::{Point3, Vector3};
 use std::time::Instant;
@@ -72,7 +73,12 @@ impl Tracking {
         self.frames_tracked += 1;
         let redetect = self.frames_tracked >= cfg.register.race.redetect_every.max(1);
         let tracked = (!redetect)
-            .then(|| self.body.and_then(|b| crate::torso::of_body(&b, cfg)))
+            .then(|| {
+                self.body.and_then(|b| {
+                    let tpl = BodyTemplate::new(&cfg.register.shape, &cfg.body);
+                    crate::torso::of_body(&b, &tpl, &cfg.torso)
+                })
+            })
             .flatten();
         let start = match (tracked, self.torso.zip(self.torso_offset)) {
             (Some(pose), _) => TorsoStart::Known(pose),
@@ -295,11 +301,11 @@ impl PoseEstimator {
             return None;
         }
         // The settings with the person's limb lengths as learned so far.
-        let cfg = &if self.cfg.calibrate.enabled {
-            self.calib.apply(&self.cfg)
-        } else {
-            self.cfg.clone()
-        };
+        let mut cfg = self.cfg.clone();
+        if self.cfg.calibrate.enabled {
+            self.calib.apply(&mut cfg.body, &mut cfg.register.priors);
+        }
+        let cfg = &cfg;
         self.debug = Debug {
             work_size: (depth.width(), depth.height()),
             ..Debug::default()
@@ -352,7 +358,7 @@ impl PoseEstimator {
         turn_to_the_feet(s, t, &mut torso, &whole, cfg);
         // 5. The maxima given to the limbs (the head's holding the torso's height), and
         // the limbs' tips checked against the tracked body.
-        let tpl = BodyTemplate::new(cfg);
+        let tpl = BodyTemplate::new(&cfg.register.shape, &cfg.body);
         // A limb whose root the camera cannot see (hips below the image's border or
         // behind a table) shows no end in view either.
         let rooted = Limb::ALL.map(|l| frame.sees(torso.keypoints.root_of(l)));
@@ -362,7 +368,8 @@ impl PoseEstimator {
             for l in Limb::ALL {
                 if let Some(mi) = assigned.limb[l.index()] {
                     let length = assigned.lengths[mi][l.index()];
-                    self.calib.measure(&self.cfg, l, length);
+                    self.calib
+                        .measure(&self.cfg.calibrate, &self.cfg.body, l, length);
                 }
             }
         }
@@ -656,7 +663,9 @@ fn assign_limbs(
         &Limb::ALL.map(|l| *torso.keypoints.root_of(l)),
         &inv,
         &t.limbs.map(|l| l.and_then(|l| l.extremity)),
-        cfg,
+        &cfg.assign,
+        &cfg.body,
+        &cfg.torso,
         &mut s.path,
     );
     let mut cost = cost;
@@ -710,12 +719,12 @@ fn assign_limbs(
         }
     }
     if let (Some(prev), true) = (t.body, cfg.register.enabled) {
-        drop_borrowed_tips(tpl, &prev, &mut tips, &cfg.register);
+        drop_borrowed_tips(tpl, &prev, &mut tips, &cfg.register.race);
     }
     let race = !cfg.register.enabled
         || torso.detecting
         || t.body
-            .is_none_or(|prev| tips_strayed(tpl, &prev, &tips, &cfg.register));
+            .is_none_or(|prev| tips_strayed(tpl, &prev, &tips, &cfg.register.race));
     d.raced = race;
     Assigned {
         limb,
@@ -772,7 +781,20 @@ fn chains(
         let root = *torso.keypoints.root_of(l);
         let (graph, geo, marks) = (&s.graph, &s.geodesic, &mut s.marks);
         let prev = t.limbs[li];
-        let limb = limb_chain(l, root, found, &torso.pose, prev, cfg, f, graph, geo, marks);
+        let limb = limb_chain(
+            l,
+            root,
+            found,
+            &torso.pose,
+            prev,
+            &cfg.chains,
+            &cfg.body,
+            cfg.hands.behind_tip,
+            f,
+            graph,
+            geo,
+            marks,
+        );
         t.limbs[li] = Some(limb.state);
         if let Some(targets) = limb.targets {
             d.targets[li] = targets;
@@ -818,7 +840,7 @@ fn register_body(
     d: &mut Debug,
 ) -> Option<Skeleton> {
     let tpl = body.template;
-    reg.prepare(frame, &cfg.register);
+    reg.prepare(frame, &cfg.register.sampling);
     let geodesic = seed
         .race
         .then(|| BodyPose::from_skeleton(&tpl, &seed.skeleton))
@@ -830,7 +852,7 @@ fn register_body(
         &seed.tips,
         body.side_on,
         body.offered,
-        cfg,
+        &cfg.register,
     );
     // A person found afresh has their arms searched for too. (While tracking, a
     // searched arm won frames it should not: an arm hidden behind the body, which
@@ -848,7 +870,7 @@ fn register_body(
     let mut placed = None;
     if let Some(b) = best {
         if let Some(calib) = calib {
-            calib.learn(&b, cfg);
+            calib.learn(&b, &cfg.register.lengths);
         }
         placed = fitted_joints(&b, &tpl, &seed.tips, frame, cfg);
         if placed.is_some() {
@@ -927,7 +949,7 @@ fn fitted_joints(
         let seen = b.seen[segment_of(j).index()];
         skel.confidence[j.index()] = (0.1 + 0.9 * seen).clamp(0.0, 1.0);
     }
-    hands_at_fingertips(&mut skel, &posed, tpl, tips, cfg);
-    let hands = hands_at_their_points(&skel, frame, tpl, &posed, cfg);
+    hands_at_fingertips(&mut skel, &posed, tpl, tips, &cfg.hands, &cfg.chains);
+    let hands = hands_at_their_points(&skel, frame, tpl, &posed, &cfg.hands);
     Some((skel, hands))
 }

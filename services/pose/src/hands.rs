@@ -15,8 +15,9 @@
 //! states and the next frame's start are the fit's, so the tracker is not steered by
 //! it.
 
+use crate::chains::ChainConfig;
 use crate::register::{nearest_is, place, Frame};
-use crate::{body::BodyTemplate, body::Posed, body::Segment, Limb, PoseConfig};
+use crate::{body::BodyTemplate, body::Posed, body::Segment, Limb};
 use airglyph_core::{Joint, Skeleton};
 use nalgebra::{Point3, Vector3};
 use serde::{Deserialize, Serialize};
@@ -59,29 +60,32 @@ const MIN_POINTS: usize = 5;
 /// The hands of a registered body moved to follow the fingertips seen (the arms'
 /// geodesic maxima `tips`), as in the seed's chains: a capsule forearm cannot bend at
 /// the wrist, and its end lags a quickly drawing hand. Only where the body's own tip
-/// lies within [`HandsConfig::tip_trust`] of the maximum.
+/// lies within [`HandsConfig::tip_trust`] of the maximum. `chains`: where the
+/// fingertips seen are set back to the surface ([`ChainConfig::surface_offset`]), as the
+/// chains set them.
 pub fn hands_at_fingertips(
     skel: &mut Skeleton,
     posed: &Posed,
     tpl: &BodyTemplate,
     tips: &[Option<Point3<f32>>; 5],
-    cfg: &PoseConfig,
+    cfg: &HandsConfig,
+    chains: &ChainConfig,
 ) {
     for (l, hand, elbow) in [
         (Limb::LeftArm, Joint::LeftHand, Joint::LeftElbow),
         (Limb::RightArm, Joint::RightHand, Joint::RightElbow),
     ] {
-        let (Some(ext), true) = (tips[l.index()], cfg.hands.behind_tip > 0.0) else {
+        let (Some(ext), true) = (tips[l.index()], cfg.behind_tip > 0.0) else {
             continue;
         };
-        let ext_b = ext + ext.coords.normalize() * cfg.chains.surface_offset(l);
+        let ext_b = ext + ext.coords.normalize() * chains.surface_offset(l);
         let (seg, local) = tpl.tips[l.index()];
         let tip = posed.point(seg, &local);
-        if (tip - ext_b).norm() > cfg.hands.tip_trust {
+        if (tip - ext_b).norm() > cfg.tip_trust {
             continue;
         }
         if let Some(u) = (ext_b - skel[elbow]).try_normalize(1e-6) {
-            skel.set(hand, ext_b - u * cfg.hands.behind_tip);
+            skel.set(hand, ext_b - u * cfg.behind_tip);
             // Its fingertips are in sight.
             let c = &mut skel.confidence[hand.index()];
             *c = c.max(0.9);
@@ -97,9 +101,9 @@ pub fn hands_at_their_points(
     frame: &Frame,
     template: &BodyTemplate,
     posed: &Posed,
-    cfg: &PoseConfig,
+    cfg: &HandsConfig,
 ) -> [Option<Point3<f32>>; 2] {
-    let radius = cfg.hands.points_radius;
+    let radius = cfg.points_radius;
     if radius <= 0.0 {
         return [None; 2];
     }
@@ -128,7 +132,7 @@ pub fn hands_at_their_points(
                 break;
             }
             let centre = Point3::from(sum / n as f32);
-            let palm = centre + centre.coords.normalize() * cfg.hands.behind_surface;
+            let palm = centre + centre.coords.normalize() * cfg.behind_surface;
             let d = palm - h;
             h += d - axis * d.dot(&axis);
         }
@@ -166,15 +170,14 @@ fn near_pixels<'a>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::body::BodyPose;
+    use crate::body::{BodyConfig, BodyPose, Shape};
     use airglyph_core::Intrinsics;
     use nalgebra::Rotation3;
 
     /// A body standing 2.5 m before the camera, arms hanging, and a camera image to
     /// put points in.
     fn standing() -> (BodyTemplate, Posed, Skeleton, Intrinsics) {
-        let cfg = PoseConfig::default();
-        let t = BodyTemplate::new(&cfg);
+        let t = BodyTemplate::new(&Shape::makehuman(), &BodyConfig::default());
         let r = Rotation3::from_basis_unchecked(&[Vector3::x(), -Vector3::y(), -Vector3::z()]);
         let pose = BodyPose {
             pelvis: Point3::new(0.0, 0.0, 2.5),
@@ -219,15 +222,15 @@ mod tests {
     #[test]
     fn a_hand_turned_at_the_wrist_is_found_across_its_forearm_and_only_there() {
         let (t, posed, skel, k) = standing();
-        let cfg = PoseConfig::default();
+        let cfg = HandsConfig::default();
         let (hand, elbow) = (skel[Joint::LeftHand], skel[Joint::LeftElbow]);
         let axis = (hand - elbow).normalize();
         // The palm 4 cm outwards of where the fit put the hand (a wrist turned
         // sideways), its front surface facing the camera.
         let palm = hand + Vector3::new(0.04, 0.0, 0.0);
-        let surface = palm - Vector3::z() * cfg.hands.behind_surface;
+        let surface = palm - Vector3::z() * cfg.behind_surface;
         let seen = disc(surface, 0.04);
-        let place_in = |points: &[Point3<f32>], cfg: &PoseConfig| {
+        let place_in = |points: &[Point3<f32>], cfg: &HandsConfig| {
             let (img, mask) = image(&k, points);
             let frame = Frame {
                 points: &img,
@@ -262,16 +265,14 @@ mod tests {
             .find(|p| !nearest_is(&placed, p, Segment::LeftThigh))
             .expect("the thigh's surface lies between its axis and the hand");
         let beside = disc(thigh_surface - out * 0.01, 0.015);
-        assert!(beside
-            .iter()
-            .all(|p| (p - hand).norm() < cfg.hands.points_radius));
+        assert!(beside.iter().all(|p| (p - hand).norm() < cfg.points_radius));
         let mut with_thigh = seen.clone();
         with_thigh.extend(beside);
         assert_eq!(place_in(&with_thigh, &cfg)[0], left);
 
         // Off: nothing moves.
         let mut off = cfg.clone();
-        off.hands.points_radius = 0.0;
+        off.points_radius = 0.0;
         assert_eq!(place_in(&seen, &off), [None; 2]);
     }
 }

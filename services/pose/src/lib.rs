@@ -154,6 +154,7 @@ mod geodesic;
 mod geom;
 mod graph;
 mod hands;
+mod limb;
 pub mod metrics;
 pub mod overlay;
 mod register;
@@ -162,9 +163,10 @@ mod smooth;
 mod torso;
 mod view;
 
-pub use config::{Limb, PoseConfig};
+pub use config::PoseConfig;
 pub use debug::{Debug, StepTimes};
 pub use estimator::{PoseEstimator, PoseResult};
+pub use limb::Limb;
 pub use register::OfferedStart;
 
 /// The steps one at a time, for the benches and diagnostics (`benches/pose.rs` times

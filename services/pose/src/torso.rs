@@ -7,7 +7,6 @@ use crate::geodesic::Geodesic;
 use crate::geom::{horn_rigid, Moments, Rigid};
 use crate::graph::{GeoGraph, NONE};
 use crate::Limb;
-use crate::PoseConfig;
 use airglyph_core::Joint;
 use nalgebra::{Matrix3, Point3, Rotation3, Vector3};
 use serde::{Deserialize, Serialize};
@@ -670,12 +669,10 @@ pub fn keypoints(pose: &TorsoPose, cfg: &TorsoConfig) -> TorsoPoints<Point3<f32>
 }
 
 /// The torso frame of the seed's steps (key points of [`TorsoConfig::keypoints`])
-/// that fits the registered body `body` best.
-pub fn of_body(body: &BodyPose, cfg: &PoseConfig) -> Option<TorsoPose> {
-    let tpl = BodyTemplate::new(cfg);
-    let s = Posed::new(&tpl, body).skeleton(&tpl);
+/// that fits the registered body `body` (of template `tpl`) best.
+pub fn of_body(body: &BodyPose, tpl: &BodyTemplate, cfg: &TorsoConfig) -> Option<TorsoPose> {
+    let s = Posed::new(tpl, body).skeleton(tpl);
     let model: Vec<Point3<f32>> = cfg
-        .torso
         .keypoints
         .to_array()
         .iter()

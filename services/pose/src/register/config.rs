@@ -1,4 +1,6 @@
-//! The registration's settings, one section a part of it.
+//! The registration's settings, one section a part of it. Each section's type is the
+//! part's own, and each part is handed its section alone, never the whole: this module
+//! only gathers them, and no part whose section it gathers depends on it.
 
 pub use super::energy::EnergyConfig;
 pub use super::priors::PriorsConfig;

@@ -1,7 +1,7 @@
 //! Priors on the joints' turns, and how hidden each limb was (for the pull towards
 //! hanging).
 
-use super::{Gradient, Normal, RegisterConfig};
+use super::{Gradient, Normal};
 use crate::body::{BodyPose, Segment};
 use nalgebra::Vector3;
 
@@ -71,25 +71,19 @@ pub(super) fn add_joint_priors(
     g: &mut Gradient,
     pose: &BodyPose,
     hidden: &[f32; Segment::COUNT],
-    cfg: &RegisterConfig,
+    cfg: &PriorsConfig,
 ) {
     use Segment::*;
     // (segment, weight per axis of φ, bending limit on φ.x: (sign, allowed))
-    let hinge = |seg| (seg, [0.0, cfg.priors.hinge_twist, cfg.priors.hinge_side]);
-    let rest = |seg: Segment| (seg, [cfg.priors.limb_rest * hidden[seg.index()] as f64; 3]);
+    let hinge = |seg| (seg, [0.0, cfg.hinge_twist, cfg.hinge_side]);
+    let rest = |seg: Segment| (seg, [cfg.limb_rest * hidden[seg.index()] as f64; 3]);
     let priors = [
-        (Head, [cfg.priors.head; 3]),
-        (Chest, [cfg.priors.chest; 3]),
-        (Abdomen, [cfg.priors.abdomen; 3]),
+        (Head, [cfg.head; 3]),
+        (Chest, [cfg.chest; 3]),
+        (Abdomen, [cfg.abdomen; 3]),
         // The collarbone points sideways (x): its turn about x is no motion at all.
-        (
-            LeftCollar,
-            [cfg.priors.hinge_twist, cfg.priors.collar, cfg.priors.collar],
-        ),
-        (
-            RightCollar,
-            [cfg.priors.hinge_twist, cfg.priors.collar, cfg.priors.collar],
-        ),
+        (LeftCollar, [cfg.hinge_twist, cfg.collar, cfg.collar]),
+        (RightCollar, [cfg.hinge_twist, cfg.collar, cfg.collar]),
         rest(LeftUpperArm),
         rest(RightUpperArm),
         rest(LeftThigh),
@@ -105,8 +99,8 @@ pub(super) fn add_joint_priors(
         let mut phi = (rp.inverse() * pose.rotation[seg.index()]).scaled_axis();
         // The collarbones keep near the person's own rest, learned as they move.
         match seg {
-            LeftCollar => phi -= Vector3::from(cfg.priors.collar_rest[0]),
-            RightCollar => phi -= Vector3::from(cfg.priors.collar_rest[1]),
+            LeftCollar => phi -= Vector3::from(cfg.collar_rest[0]),
+            RightCollar => phi -= Vector3::from(cfg.collar_rest[1]),
             _ => {}
         }
         let rpm = rp.matrix().cast::<f64>();
@@ -128,8 +122,8 @@ pub(super) fn add_joint_priors(
         // One-way bending: the knee flexes with φ.x > 0 (the shin goes back), the elbow
         // with φ.x < 0 (the forearm comes forward).
         let over = match seg {
-            LeftShin | RightShin => (-phi.x - cfg.priors.hinge_slack).max(0.0),
-            LeftForearm | RightForearm => (phi.x - cfg.priors.hinge_slack).max(0.0),
+            LeftShin | RightShin => (-phi.x - cfg.hinge_slack).max(0.0),
+            LeftForearm | RightForearm => (phi.x - cfg.hinge_slack).max(0.0),
             _ => 0.0,
         };
         if over > 0.0 {
@@ -138,7 +132,7 @@ pub(super) fn add_joint_priors(
             } else {
                 1.0
             };
-            add(0, sign * over, cfg.priors.hinge_limit);
+            add(0, sign * over, cfg.hinge_limit);
         }
     }
 }

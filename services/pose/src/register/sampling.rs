@@ -2,7 +2,7 @@
 //! the silhouette's edge, a grid inside) and, for the silhouette term, a map of the
 //! nearest person pixel.
 
-use super::{Frame, RegisterConfig, Registration};
+use super::{Frame, Registration};
 
 /// Which person points the registration's data term takes (part of
 /// [`super::RegisterConfig`]).
@@ -189,9 +189,9 @@ impl Registration {
     /// Thin parts (limbs, within [`SamplingConfig::thin_px`] of the silhouette's edge)
     /// keep every pixel: a forearm is two or three pixels wide. The thick interior is
     /// taken on a grid of [`SamplingConfig::interior_stride`].
-    pub fn prepare(&mut self, f: &Frame, cfg: &RegisterConfig) {
-        let s = cfg.sampling.interior_stride.max(1);
-        let edge = EdgeTest::new(cfg.sampling.thin_px);
+    pub fn prepare(&mut self, f: &Frame, cfg: &SamplingConfig) {
+        let s = cfg.interior_stride.max(1);
+        let edge = EdgeTest::new(cfg.thin_px);
         self.data.clear();
         let (mut u0, mut v0, mut u1, mut v1) = (usize::MAX, usize::MAX, 0, 0);
         for v in 0..f.height {

@@ -294,7 +294,7 @@ impl Registration {
                 break;
             }
             let (mut h, mut g) = acc.assemble();
-            add_joint_priors(&mut h, &mut g, &pose, p.hidden, cfg);
+            add_joint_priors(&mut h, &mut g, &pose, p.hidden, &cfg.priors);
             for i in 0..N {
                 h[(i, i)] += cfg.solver.damping * h[(i, i)] + cfg.solver.damping_abs;
             }

@@ -4,7 +4,7 @@
 
 use super::RegisterConfig;
 use crate::body::{BodyPose, BodyTemplate, Posed, Segment};
-use crate::{Limb, PoseConfig};
+use crate::Limb;
 use airglyph_core::Skeleton;
 use nalgebra::{Point3, Vector3};
 use std::borrow::Cow;
@@ -48,10 +48,10 @@ pub fn starts<'a>(
     tips: &[Option<Point3<f32>>; 5],
     side_on: Option<Point3<f32>>,
     offered: Option<OfferedStart>,
-    cfg: &'a PoseConfig,
+    cfg: &'a RegisterConfig,
 ) -> Starts<'a> {
     let hybrid = tracked
-        .zip(geodesic.filter(|_| cfg.register.race.hybrid))
+        .zip(geodesic.filter(|_| cfg.race.hybrid))
         .and_then(|(prev, geo)| hybrid_start(tpl, &prev, &geo, tips, cfg));
     let mut poses: Vec<BodyPose> = [tracked, hybrid, geodesic].into_iter().flatten().collect();
     // Arms at rest lie against the body: no geodesic maximum marks their hands, and the
@@ -68,11 +68,11 @@ pub fn starts<'a>(
     let (register_cfg, tips_now) = match geodesic.zip(side_on) {
         Some((g, centroid)) => {
             poses.extend(side_on_starts(&g, &centroid));
-            let mut side_on_cfg = cfg.register.clone();
-            side_on_cfg.solver.race_iterations = cfg.register.solver.iterations;
+            let mut side_on_cfg = cfg.clone();
+            side_on_cfg.solver.race_iterations = cfg.solver.iterations;
             (Cow::Owned(side_on_cfg), [None; 5])
         }
-        None => (Cow::Borrowed(&cfg.register), *tips),
+        None => (Cow::Borrowed(cfg), *tips),
     };
     match offered {
         Some(OfferedStart::Also(s)) => free.extend(BodyPose::from_skeleton(tpl, &s)),
@@ -124,16 +124,14 @@ fn hybrid_start(
     prev: &BodyPose,
     geo: &BodyPose,
     tips: &[Option<Point3<f32>>; 5],
-    cfg: &PoseConfig,
+    cfg: &RegisterConfig,
 ) -> Option<BodyPose> {
     let posed = Posed::new(tpl, prev);
     let mut h = *prev;
     let mut changed = false;
     for l in Limb::ALL {
         let (seg, local) = tpl.tips[l.index()];
-        if tips[l.index()]
-            .is_some_and(|m| (posed.point(seg, &local) - m).norm() > cfg.register.race.gap)
-        {
+        if tips[l.index()].is_some_and(|m| (posed.point(seg, &local) - m).norm() > cfg.race.gap) {
             h = h.with_limb_of(geo, l);
             changed = true;
         }

@@ -1,7 +1,6 @@
 use super::solver::bone_steps;
 use super::*;
-use crate::body::{Posed, Shape};
-use crate::PoseConfig;
+use crate::body::{BodyConfig, Posed, Shape};
 use airglyph_core::{Intrinsics, Joint, Skeleton};
 use nalgebra::{Rotation3, Unit, Vector3};
 
@@ -68,8 +67,8 @@ fn facing(at: Point3<f32>) -> BodyPose {
 
 /// The MakeHuman template at the default limb lengths, seen by a 320×240 camera.
 fn scene() -> (BodyTemplate, Intrinsics) {
-    let cfg = PoseConfig::default();
-    let t = BodyTemplate::from_shape(&Shape::makehuman(), &crate::body::Limbs::from_config(&cfg));
+    let bones = crate::body::Limbs::from_config(&BodyConfig::default());
+    let t = BodyTemplate::from_shape(&Shape::makehuman(), &bones);
     (t, Intrinsics::default().scaled_to(320, 240))
 }
 
@@ -133,7 +132,7 @@ fn registration_finds_the_pose_a_body_was_drawn_at() {
     let posed = Posed::new(&t, &truth);
     let tips = t.tips.map(|(s, local)| Some(posed.point(s, &local)));
     let mut reg = Registration::default();
-    reg.prepare(&frame, &cfg);
+    reg.prepare(&frame, &cfg.sampling);
     assert!(reg.data_len() > 1000);
     let fit = reg
         .fit(&frame, &t, &racing(vec![start], tips, &cfg), &SEEN, false)
@@ -168,7 +167,7 @@ fn an_arm_held_out_beside_the_silhouette_is_pulled_back_onto_it() {
     cfg.priors.limb_rest = 0.0;
     let posed = Posed::new(&t, &truth);
     let mut tips = t.tips.map(|(s, local)| Some(posed.point(s, &local)));
-    tips[crate::config::Limb::RightArm.index()] = None;
+    tips[crate::Limb::RightArm.index()] = None;
     // How far the arm's joints project from the nearest person pixel.
     let off_silhouette = |pose: &BodyPose| {
         let skel = Posed::new(&t, pose).skeleton(&t);
@@ -187,7 +186,7 @@ fn an_arm_held_out_beside_the_silhouette_is_pulled_back_onto_it() {
     let before = off_silhouette(&start);
     assert!(before[1] > 20.0, "{before:?} pixels off");
     let mut reg = Registration::default();
-    reg.prepare(&frame, &cfg);
+    reg.prepare(&frame, &cfg.sampling);
     let fit = reg
         .fit(&frame, &t, &racing(vec![start], tips, &cfg), &SEEN, false)
         .expect("a start");
@@ -213,7 +212,7 @@ fn a_tip_on_another_limb_of_the_tracked_body_is_dropped() {
     let cfg = RegisterConfig::default();
     // Every limb's own tip stays, a hanging hand beside its thigh too.
     let mut tips = own;
-    drop_borrowed_tips(&t, &tracked, &mut tips, &cfg);
+    drop_borrowed_tips(&t, &tracked, &mut tips, &cfg.race);
     assert_eq!(tips, own);
     // The right arm given a point of the left forearm (its front, halfway down).
     let c = t
@@ -224,14 +223,14 @@ fn a_tip_on_another_limb_of_the_tracked_body_is_dropped() {
     let mid = Point3::from((c.a.coords + c.b.coords) * 0.5);
     let on_left_forearm = posed.point(c.segment, &mid) - Vector3::z() * c.ra.min(c.rb);
     tips[Limb::RightArm.index()] = Some(on_left_forearm);
-    drop_borrowed_tips(&t, &tracked, &mut tips, &cfg);
+    drop_borrowed_tips(&t, &tracked, &mut tips, &cfg.race);
     assert_eq!(tips[Limb::RightArm.index()], None);
     assert_eq!(tips[Limb::LeftArm.index()], own[Limb::LeftArm.index()]);
     // Off, it stays.
     tips[Limb::RightArm.index()] = Some(on_left_forearm);
     let mut off = cfg;
     off.race.borrowed_tip_gap = 0.0;
-    drop_borrowed_tips(&t, &tracked, &mut tips, &off);
+    drop_borrowed_tips(&t, &tracked, &mut tips, &off.race);
     assert_eq!(tips[Limb::RightArm.index()], Some(on_left_forearm));
 }
 
@@ -241,7 +240,7 @@ fn only_a_tip_off_the_tracked_body_makes_the_geodesic_estimate_race() {
     let (t, tracked, own) = tracked_with_own_tips();
     let posed = Posed::new(&t, &tracked);
     let cfg = RegisterConfig::default();
-    assert!(!tips_strayed(&t, &tracked, &own, &cfg));
+    assert!(!tips_strayed(&t, &tracked, &own, &cfg.race));
     // The left leg's maximum on the front of the right knee: far from the left toes,
     // but on the body.
     let shin = t
@@ -254,15 +253,15 @@ fn only_a_tip_off_the_tracked_body_makes_the_geodesic_estimate_race() {
     tips[Limb::LeftLeg.index()] = Some(knee);
     let toes = own[Limb::LeftLeg.index()].expect("toes");
     assert!((knee - toes).norm() > cfg.race.gap);
-    assert!(!tips_strayed(&t, &tracked, &tips, &cfg));
+    assert!(!tips_strayed(&t, &tracked, &tips, &cfg.race));
     // Without the surface test it races.
     let mut anywhere = cfg.clone();
     anywhere.race.off_body = 0.0;
-    assert!(tips_strayed(&t, &tracked, &tips, &anywhere));
+    assert!(tips_strayed(&t, &tracked, &tips, &anywhere.race));
     // A hand raised 40 cm before the chest, where the tracked body is not, races.
     let mut tips = own;
     tips[Limb::RightArm.index()] = Some(Point3::new(0.0, -0.2, 2.2));
-    assert!(tips_strayed(&t, &tracked, &tips, &cfg));
+    assert!(tips_strayed(&t, &tracked, &tips, &cfg.race));
 }
 
 #[test]
@@ -314,7 +313,7 @@ fn the_better_start_wins_the_race() {
     let mut cfg = RegisterConfig::default();
     cfg.sampling.interior_stride = 1;
     let mut reg = Registration::default();
-    reg.prepare(&frame, &cfg);
+    reg.prepare(&frame, &cfg.sampling);
     let posed = Posed::new(&t, &truth);
     let tips = t.tips.map(|(s, local)| Some(posed.point(s, &local)));
     for starts in [[away, near], [near, away]] {

@@ -3,7 +3,6 @@
 //! estimate must race the tracked body.
 
 use super::capsules::{place, surface_distance};
-use super::RegisterConfig;
 use crate::body::{BodyPose, BodyTemplate, Posed};
 use nalgebra::Point3;
 
@@ -53,18 +52,18 @@ pub fn tips_strayed(
     t: &BodyTemplate,
     tracked: &BodyPose,
     tips: &[Option<Point3<f32>>; 5],
-    cfg: &RegisterConfig,
+    cfg: &RaceConfig,
 ) -> bool {
     let posed = Posed::new(t, tracked);
     let mut placed = None;
     tips.iter().zip(&t.tips).any(|(m, (seg, local))| {
         let Some(m) = m else { return false };
-        if (posed.point(*seg, local) - m).norm() <= cfg.race.gap {
+        if (posed.point(*seg, local) - m).norm() <= cfg.gap {
             return false;
         }
-        cfg.race.off_body <= 0.0 || {
+        cfg.off_body <= 0.0 || {
             let placed = placed.get_or_insert_with(|| place(t, &posed));
-            surface_distance(placed.iter(), m) > cfg.race.off_body
+            surface_distance(placed.iter(), m) > cfg.off_body
         }
     })
 }
@@ -81,9 +80,9 @@ pub fn drop_borrowed_tips(
     t: &BodyTemplate,
     tracked: &BodyPose,
     tips: &mut [Option<Point3<f32>>; 5],
-    cfg: &RegisterConfig,
+    cfg: &RaceConfig,
 ) {
-    if cfg.race.borrowed_tip_gap <= 0.0 || tips.iter().all(Option::is_none) {
+    if cfg.borrowed_tip_gap <= 0.0 || tips.iter().all(Option::is_none) {
         return;
     }
     let placed = place(t, &Posed::new(t, tracked));
@@ -97,7 +96,7 @@ pub fn drop_borrowed_tips(
         let borrowed = crate::Limb::ALL.iter().any(|&o| {
             o != l && {
                 let d = distance(o, &m);
-                d < ON_SURFACE && own > d + cfg.race.borrowed_tip_gap
+                d < ON_SURFACE && own > d + cfg.borrowed_tip_gap
             }
         });
         if borrowed {
