@@ -145,6 +145,7 @@ impl PipelineArgs {
         }
         Ok(Plan {
             stages,
+            companions: Vec::new(),
             rule: self.crash_rule(),
         })
     }
