@@ -1,7 +1,9 @@
 //! The command line itself: what it refuses and how it says so, arguments that carry
 //! spaces, and what it prints.
 
-use airglyph_system_tests::{fail, json_lines, one_at_a_time, stop, succeed, synth, Isolated};
+use airglyph_system_tests::{
+    binary_path, fail, json_lines, one_at_a_time, stop, succeed, synth, Isolated,
+};
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
 use std::process::Stdio;
@@ -45,6 +47,44 @@ fn stage_arguments_are_checked_before_anything_starts() {
         );
     assert!(err.contains("--model"), "{err}");
     assert!(p.processes().is_empty() && p.shm_files().is_empty());
+}
+
+#[test]
+fn export_without_airglyph_zenoh_is_refused_before_anything_starts() {
+    let p = Isolated::new();
+    // This build's airglyph in a folder of its own (an airglyph-zenoh built beside the
+    // original must not be found), with a PATH that has none either.
+    let exe = binary_path("airglyph");
+    let alone = tempfile::tempdir_in(exe.parent().unwrap()).unwrap();
+    let airglyph = alone.path().join("airglyph");
+    if std::fs::hard_link(&exe, &airglyph).is_err() {
+        std::fs::copy(&exe, &airglyph).unwrap();
+    }
+    let path = tempfile::tempdir().unwrap();
+    let err = fail(p.command_at(&airglyph).env("PATH", path.path()).args([
+        "run",
+        "--export",
+        "zenoh",
+        "--export-listen",
+        "tcp/127.0.0.1:7447",
+    ]));
+    assert!(
+        err.contains("--export zenoh needs the airglyph-zenoh executable"),
+        "{err}"
+    );
+    assert!(
+        err.contains(&alone.path().display().to_string()),
+        "names where it looked: {err}"
+    );
+    assert!(
+        err.contains("cargo build --release -p airglyph-zenoh"),
+        "{err}"
+    );
+    assert!(p.processes().is_empty() && p.shm_files().is_empty());
+    assert!(
+        !p.root.exists(),
+        "no stage started, not even the pipeline's folder"
+    );
 }
 
 /// The first gesture `airglyph run ARGS` prints, drawing a 3.

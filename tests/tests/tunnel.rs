@@ -2,10 +2,12 @@
 //! isolated pipelines (roots and prefixes of their own) stand for the two hosts, and a
 //! TCP relay between them is the network, cut for longer than the exporter keeps events
 //! and put back. Every event sent is received, or counted as lost by the importer:
-//! nothing goes silently.
+//! nothing goes silently. And `airglyph run --export zenoh`: the pipeline with its
+//! exporter as one command, whose gestures and stats reach `airglyph echo` on the other
+//! side, also across a restart of the exporter.
 
 use airglyph_ipc::clock::monotonic_ns;
-use airglyph_system_tests::{json_lines, signal, start_probe, stop, Isolated};
+use airglyph_system_tests::{json_lines, one_at_a_time, signal, start_probe, stop, Isolated};
 use std::io::{Read, Write};
 use std::net::{Shutdown, SocketAddr, TcpListener, TcpStream};
 use std::path::PathBuf;
@@ -97,6 +99,9 @@ fn percentile(sorted: &[f64], p: f64) -> f64 {
 
 #[test]
 fn gestures_cross_to_another_host_and_losses_are_counted() {
+    // Alone: the other test here runs a whole pipeline, which would take the CPU from
+    // this one's bursts.
+    let _one = one_at_a_time();
     let Some(bridge) = bridge() else {
         eprintln!("skipped: airglyph-zenoh is not built (cargo build -p airglyph-zenoh; scripts/test does)");
         return;
@@ -234,4 +239,159 @@ fn gestures_cross_to_another_host_and_losses_are_counted() {
         missed > 0,
         "a cut longer than the exporter keeps loses events, and says so"
     );
+}
+
+/// A gesture's identity: the same session and frames twice would be one gesture twice.
+fn identity(g: &serde_json::Value) -> (String, u64, u64, u64) {
+    (
+        g["label"].as_str().unwrap_or("?").to_owned(),
+        g["session"].as_u64().unwrap_or(0),
+        g["start_frame"].as_u64().unwrap_or(0),
+        g["end_frame"].as_u64().unwrap_or(0),
+    )
+}
+
+/// The pids of `airglyph-zenoh export` processes of pipeline `p`.
+fn exporters(p: &Isolated) -> Vec<u32> {
+    p.processes()
+        .into_iter()
+        .filter(|pid| {
+            let cmdline = std::fs::read(format!("/proc/{pid}/cmdline")).unwrap_or_default();
+            let args: Vec<&[u8]> = cmdline.split(|&b| b == 0).take(2).collect();
+            args.len() == 2 && args[0].ends_with(b"airglyph-zenoh") && args[1] == b"export"
+        })
+        .collect()
+}
+
+#[test]
+fn run_export_zenoh_carries_gestures_and_stats_to_another_host_across_a_restart() {
+    let _one = one_at_a_time();
+    let Some(bridge) = bridge() else {
+        eprintln!("skipped: airglyph-zenoh is not built (cargo build -p airglyph-zenoh; scripts/test does)");
+        return;
+    };
+    let (device, other) = (Isolated::new(), Isolated::new());
+    let domain = format!("run{}", std::process::id());
+    let endpoint = format!("tcp/127.0.0.1:{}", free_port());
+
+    // The other host first: an importer that connects (and keeps trying until the
+    // device listens), and `echo` reading what it republishes.
+    let mut importer = other
+        .command_at(&bridge)
+        .args([
+            "import",
+            "--json",
+            "--domain",
+            &domain,
+            "--connect",
+            &endpoint,
+        ])
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let reports = json_lines(importer.stdout.take().unwrap());
+    let mut gestures_echo = other
+        .command("airglyph")
+        .args(["echo", "gesture", "--json"])
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let heard = json_lines(gestures_echo.stdout.take().unwrap());
+    let mut stats_echo = other
+        .command("airglyph")
+        .args(["echo", "stats", "--json", "--count", "2"])
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let stats = json_lines(stats_echo.stdout.take().unwrap());
+
+    // The device: three symbols, the person's exact skeleton (no pose stage: less CPU),
+    // and the exporter; the source runs out and the run ends by itself.
+    let mut run = device
+        .command("airglyph")
+        .args(["run", "--source", "synthetic:draw:37L", "--truth", "--json"])
+        .args(["--export", "zenoh", "--export-listen", &endpoint])
+        .args(["--export-domain", &domain])
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let printed = json_lines(run.stdout.take().unwrap());
+
+    let first = heard
+        .recv_timeout(Duration::from_secs(60))
+        .expect("a gesture of the device heard on the other host");
+    let stats: Vec<_> = (0..2)
+        .map_while(|_| stats.recv_timeout(Duration::from_secs(5)).ok())
+        .collect();
+    let exporter = exporters(&device);
+    assert_eq!(exporter.len(), 1, "one exporter: {exporter:?}");
+    // The exporter dies: the supervisor starts it again, and the gestures after come
+    // through the new one.
+    // SAFETY: kill(2) on a process of this test's own pipeline.
+    unsafe { libc::kill(exporter[0] as i32, libc::SIGKILL) };
+    let deadline = Instant::now() + Duration::from_secs(5);
+    let restarted = loop {
+        let now = exporters(&device);
+        if now.iter().any(|pid| !exporter.contains(pid)) {
+            break now;
+        }
+        assert!(Instant::now() < deadline, "the exporter was not restarted");
+        std::thread::sleep(Duration::from_millis(50));
+    };
+
+    let status = run.wait().unwrap();
+    assert!(status.success(), "the run ends with its source: {status}");
+    assert!(
+        device.processes().is_empty(),
+        "the exporter stops with the pipeline: {:?}",
+        device.processes()
+    );
+    assert!(
+        device.shm_files().is_empty(),
+        "left behind: {:?}",
+        device.shm_files()
+    );
+    // Until its end of file: the stages, which share its stdout, are gone too.
+    let from_run: Vec<_> = printed
+        .iter()
+        .filter(|l| l["event"] == "gesture")
+        .map(|g| identity(&g))
+        .collect();
+    let mut from_echo = vec![identity(&first)];
+    while from_echo.len() < from_run.len() {
+        match heard.recv_timeout(Duration::from_secs(5)) {
+            Ok(g) => from_echo.push(identity(&g)),
+            Err(_) => break,
+        }
+    }
+    for child in [&stats_echo, &gestures_echo, &importer] {
+        signal(child, libc::SIGTERM);
+    }
+    assert!(stats_echo.wait().unwrap().success());
+    assert!(gestures_echo.wait().unwrap().success());
+    assert!(
+        importer.wait().unwrap().success(),
+        "the importer stops cleanly"
+    );
+    let totals: Vec<_> = reports
+        .try_iter()
+        .filter(|r| r["event"] == "totals" && r["stream"] == "gesture")
+        .collect();
+    eprintln!(
+        "run --export zenoh: the device printed {from_run:?}; the other host heard {from_echo:?}; \
+         exporter {exporter:?} killed, then {restarted:?}; stats {}; importer {totals:?}",
+        stats.first().map_or("none".into(), |s| s.to_string())
+    );
+    assert!(
+        from_run.len() >= 2,
+        "too few gestures to tell: {from_run:?}"
+    );
+    assert_eq!(
+        from_echo, from_run,
+        "every gesture the device printed reached the other host, once, in order"
+    );
+    assert_eq!(stats.len(), 2, "stats reached the other host: {stats:?}");
+    assert!(stats
+        .iter()
+        .all(|s| s["event"] == "stats" && s.get("fps").is_some()));
 }

@@ -2,10 +2,12 @@
 //! offline tools. Each subcommand lives in its own module under `cmd/`, which parses its
 //! arguments and calls the libraries; no command imports another. The supervisor that
 //! `run`, `demo` and `collect` share is this package's library (`lib.rs`), the options of
-//! the pipeline they start are in `pipeline.rs`, and the stages' processes, which the
-//! supervisor starts as `airglyph stage NAME`, are under `stage/`.
+//! the pipeline they start are in `pipeline.rs` (with `run --export`'s in `export.rs`),
+//! and the stages' processes, which the supervisor starts as `airglyph stage NAME`, are
+//! under `stage/`.
 
 mod cmd;
+mod export;
 mod interrupt;
 mod pipeline;
 mod stage;
@@ -177,6 +179,15 @@ mod tests {
         Cli::command().debug_assert();
         let lines: &[&[&str]] = &[
             &["run", "--max-restarts", "3", "--crash-window", "30"],
+            &[
+                "run",
+                "--export",
+                "zenoh",
+                "--export-listen",
+                "tcp/0.0.0.0:7447",
+                "--export-domain",
+                "lab",
+            ],
             &["demo"],
             &["top", "--json", "--wait", "1"],
             &[

@@ -1,7 +1,8 @@
 //! The pipeline the commands start (`run`, `demo`, `collect`): which stages, each with
-//! which arguments, checked by the stage's own parser before anything starts, as a
-//! [`Plan`] for the supervisor.
+//! which arguments, checked by the stage's own parser before anything starts, and the
+//! exporter of `--export`, as a [`Plan`] for the supervisor.
 
+use crate::export::{ExportArgs, Lookup};
 use crate::stage::{self, StageArgs};
 use airglyph::supervisor::{CrashRule, Plan, StagePlan};
 use airglyph_capture::SourceSpec;
@@ -60,6 +61,8 @@ pub struct PipelineArgs {
     /// gesture errors).
     #[arg(long)]
     pub truth: bool,
+    #[command(flatten)]
+    pub export: ExportArgs,
 }
 
 impl PipelineArgs {
@@ -85,8 +88,14 @@ impl PipelineArgs {
     }
 
     /// The stages to start, each with its arguments checked by its own parser: a bad
-    /// one is refused here, not by a stage dying again and again.
+    /// one is refused here, not by a stage dying again and again; and the exporter,
+    /// found beside this executable or on PATH, or refused here too.
     pub fn plan(&self) -> anyhow::Result<Plan> {
+        self.plan_with(&Lookup::here())
+    }
+
+    /// [`Self::plan`], looking for the exporter where `lookup` says.
+    fn plan_with(&self, lookup: &Lookup) -> anyhow::Result<Plan> {
         let mut names: Vec<Stage> = Vec::new();
         for name in &self.stages {
             let stage = Stage::from_name(name)
@@ -145,6 +154,7 @@ impl PipelineArgs {
         }
         Ok(Plan {
             stages,
+            companions: self.export.companion(lookup)?.into_iter().collect(),
             rule: self.crash_rule(),
         })
     }
@@ -277,5 +287,34 @@ mod tests {
         assert!(PipelineArgs::with_source(SourceSpec::Synthetic(None))
             .plan()
             .is_ok());
+    }
+
+    #[test]
+    fn export_is_planned_after_the_stages_or_refused_before_anything_starts() {
+        let empty = tempfile::tempdir().unwrap();
+        let nowhere = Lookup {
+            beside: Some(empty.path().to_path_buf()),
+            path: Some(empty.path().as_os_str().to_owned()),
+        };
+        let line = ["--export", "zenoh", "--export-listen", "tcp/0.0.0.0:7447"];
+        let err = parse(&line).plan_with(&nowhere).unwrap_err().to_string();
+        assert!(
+            err.contains("cargo build --release -p airglyph-zenoh"),
+            "{err}"
+        );
+        assert!(parse(&[])
+            .plan_with(&nowhere)
+            .unwrap()
+            .companions
+            .is_empty());
+
+        let program = empty.path().join(crate::export::PROGRAM);
+        std::fs::write(&program, "").unwrap();
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(&program, std::fs::Permissions::from_mode(0o755)).unwrap();
+        let plan = parse(&line).plan_with(&nowhere).unwrap();
+        assert_eq!(plan.stages.len(), 3);
+        assert_eq!(plan.companions.len(), 1);
+        assert_eq!(plan.companions[0].program, program);
     }
 }

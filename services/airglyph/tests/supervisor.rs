@@ -1,9 +1,11 @@
 //! The supervisor with stand-in stages (shell one-liners) on a pipeline of its own: a
-//! stage that died is restarted, one that keeps dying is given up (the viewer alone),
-//! one that finishes ends the run, a listener ends it, and every stage is stopped.
+//! stage that died is restarted, one that keeps dying is given up (the viewer alone, a
+//! companion alone), one that finishes ends the run, a listener ends it, and every
+//! stage is stopped.
 
 use airglyph::supervisor::{
-    supervise, CrashRule, Idle, Listener, ListenerError, Plan, Poll, StagePlan, SupervisorError,
+    supervise, CompanionPlan, CrashRule, Idle, Listener, ListenerError, Plan, Poll, StagePlan,
+    SupervisorError,
 };
 use airglyph_ipc::{IpcConfig, Pipeline, Stage};
 use std::path::Path;
@@ -59,6 +61,7 @@ fn sh(stage: Stage, script: &str) -> StagePlan {
 fn plan(stages: Vec<StagePlan>, max_restarts: usize) -> Plan {
     Plan {
         stages,
+        companions: Vec::new(),
         rule: CrashRule {
             max_restarts,
             window: Duration::from_secs(60),
@@ -159,6 +162,54 @@ fn a_viewer_that_keeps_dying_is_given_up_alone_and_the_others_are_stopped_at_the
     assert!(gone(&pid), "capture was stopped");
     // SIGTERM ends `sleep` at once: no 3 s grace used up.
     assert!(t.elapsed() < Duration::from_secs(10), "{:?}", t.elapsed());
+}
+
+/// A companion played by `sh -c script`.
+fn sh_companion(name: &str, script: &str) -> CompanionPlan {
+    CompanionPlan {
+        name: name.into(),
+        program: "sh".into(),
+        args: vec!["-c".into(), script.into()],
+        by_hand: format!("sh -c '{script}'"),
+    }
+}
+
+#[test]
+fn companions_never_stop_the_pipeline_and_are_stopped_with_it() {
+    let p = Isolated::new("companion");
+    let (capture, capture_pid) = sleeper(&p);
+    // One that keeps dying, telling which pipeline it was given each time; one whose
+    // program is missing; one that runs until stopped.
+    let dying_runs = p.file("dying");
+    let dying = sh_companion(
+        "dying",
+        &format!("echo \"$AIRGLYPH_IPC_ROOT $AIRGLYPH_IPC_PREFIX\" >> {dying_runs}; exit 1"),
+    );
+    let missing = CompanionPlan {
+        program: "/nonexistent/airglyph-zenoh".into(),
+        ..sh_companion("missing", "true")
+    };
+    let living_pid = p.file("living.pid");
+    let living = sh_companion("living", &format!("echo $$ > {living_pid}; exec sleep 60"));
+    let plan = Plan {
+        companions: vec![dying, missing, living],
+        ..plan(vec![capture], 1)
+    };
+    supervise(&plan, p.pipeline(), |_| {
+        Ok(DoneAfter(Instant::now(), Duration::from_secs(2)))
+    })
+    .expect("the pipeline runs on without its companions");
+    let given = std::fs::read_to_string(&dying_runs).unwrap();
+    let pipeline = format!("{} {}", p.config.root, p.config.prefix);
+    assert_eq!(
+        given.lines().collect::<Vec<_>>(),
+        [pipeline.as_str(), pipeline.as_str()],
+        "started on the supervisor's pipeline, restarted once, given up"
+    );
+    for pid_file in [capture_pid, living_pid] {
+        let pid = std::fs::read_to_string(&pid_file).unwrap();
+        assert!(gone(&pid), "{pid_file} was stopped");
+    }
 }
 
 #[test]

@@ -24,7 +24,8 @@ use clap::{Parser, Subcommand};
 /// Carry a pipeline's messages to another host over Zenoh (TCP), or take them in there.
 ///
 /// On the device: `airglyph-zenoh export --listen tcp/0.0.0.0:7447` beside the
-/// pipeline. On the other host: `airglyph-zenoh import --connect tcp/DEVICE:7447`, then
+/// pipeline, or `airglyph run --export zenoh --export-listen tcp/0.0.0.0:7447`, which
+/// starts and supervises the exporter with the stages. On the other host: `airglyph-zenoh import --connect tcp/DEVICE:7447`, then
 /// `airglyph echo gesture` (or any subscriber) as on the device. Both join the pipeline
 /// the environment names (AIRGLYPH_IPC_ROOT / AIRGLYPH_IPC_PREFIX), as every airglyph
 /// process does.

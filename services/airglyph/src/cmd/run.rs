@@ -14,6 +14,10 @@ use airglyph_ipc::Pipeline;
 /// With --view the viewer stage runs too (a web page of what the camera sees, on
 /// http://127.0.0.1:8080/ unless --listen says otherwise); it is supervised the same
 /// way, except that a viewer in a crash loop is given up alone and the pipeline runs on.
+/// With --export zenoh, `airglyph-zenoh export` starts once the stages run and carries
+/// gestures, decisions, skeletons and stats to another host (which runs `airglyph-zenoh
+/// import`): restarted as a stage is, and given up alone, like the viewer, when it keeps
+/// dying. It reads this pipeline (the same AIRGLYPH_IPC_ROOT and AIRGLYPH_IPC_PREFIX).
 /// SIGINT/SIGTERM stop every stage cleanly.
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {

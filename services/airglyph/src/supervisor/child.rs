@@ -1,6 +1,8 @@
-//! One supervised stage's process: started, reaped, restarted with backoff, stopped.
+//! One supervised stage's process (or a companion's): started, reaped, restarted with
+//! backoff, stopped.
 
-use super::{CrashRule, Deaths, HealthWatch, StagePlan, SupervisorError};
+use super::{CompanionPlan, CrashRule, Deaths, HealthWatch, StagePlan, SupervisorError};
+use airglyph_ipc::config::{ENV_PREFIX, ENV_ROOT};
 use airglyph_ipc::{Pipeline, Stage};
 use std::os::unix::process::CommandExt;
 use std::process::{Child, Command, ExitStatus};
@@ -27,9 +29,50 @@ pub(super) fn end_with_parent(cmd: &mut Command) {
     }
 }
 
-/// One supervised stage.
+/// What is supervised: a stage of the pipeline, or a companion beside it.
+#[derive(Clone, Copy)]
+enum Who<'a> {
+    Stage(&'a StagePlan),
+    Companion(&'a CompanionPlan),
+}
+
+impl<'a> Who<'a> {
+    fn name(&self) -> &'a str {
+        match self {
+            Who::Stage(p) => p.stage.name(),
+            Who::Companion(c) => &c.name,
+        }
+    }
+
+    fn by_hand(&self) -> &'a str {
+        match self {
+            Who::Stage(p) => &p.by_hand,
+            Who::Companion(c) => &c.by_hand,
+        }
+    }
+
+    fn command(&self) -> Command {
+        match self {
+            Who::Stage(p) => {
+                let mut cmd = Command::new(&p.program);
+                if let Some(arg0) = &p.arg0 {
+                    cmd.arg0(arg0);
+                }
+                cmd.args(&p.args);
+                cmd
+            }
+            Who::Companion(c) => {
+                let mut cmd = Command::new(&c.program);
+                cmd.args(&c.args);
+                cmd
+            }
+        }
+    }
+}
+
+/// One supervised process.
 pub(super) struct Supervised<'a> {
-    plan: &'a StagePlan,
+    who: Who<'a>,
     child: Option<Child>,
     started: Instant,
     backoff: Duration,
@@ -43,7 +86,7 @@ pub(super) struct Supervised<'a> {
 }
 
 impl<'a> Supervised<'a> {
-    pub(super) fn new(plan: &'a StagePlan, rule: CrashRule) -> Result<Self, SupervisorError> {
+    pub(super) fn for_stage(plan: &'a StagePlan, rule: CrashRule) -> Result<Self, SupervisorError> {
         let health = match plan.health {
             Some(addr) if addr.port() == 0 => {
                 // Any free port, which only the viewer knows; its own watchdog still
@@ -57,8 +100,16 @@ impl<'a> Supervised<'a> {
             Some(addr) => Some(HealthWatch::start(addr).map_err(SupervisorError::Health)?),
             None => None,
         };
-        Ok(Self {
-            plan,
+        Ok(Self::new(Who::Stage(plan), rule, health))
+    }
+
+    pub(super) fn for_companion(plan: &'a CompanionPlan, rule: CrashRule) -> Self {
+        Self::new(Who::Companion(plan), rule, None)
+    }
+
+    fn new(who: Who<'a>, rule: CrashRule, health: Option<HealthWatch>) -> Self {
+        Self {
+            who,
             child: None,
             started: Instant::now(),
             backoff: MIN_BACKOFF,
@@ -66,31 +117,46 @@ impl<'a> Supervised<'a> {
             deaths: Deaths::new(rule),
             finished: false,
             health,
-        })
+        }
     }
 
-    pub(super) fn stage(&self) -> Stage {
-        self.plan.stage
+    /// The stage it is; none for a companion.
+    pub(super) fn stage(&self) -> Option<Stage> {
+        match self.who {
+            Who::Stage(p) => Some(p.stage),
+            Who::Companion(_) => None,
+        }
     }
 
     pub(super) fn finished(&self) -> bool {
         self.finished
     }
 
-    pub(super) fn spawn(&mut self) -> Result<(), SupervisorError> {
-        let mut cmd = Command::new(&self.plan.program);
-        if let Some(arg0) = &self.plan.arg0 {
-            cmd.arg0(arg0);
-        }
+    /// Starts the process on `pipeline`. A stage that cannot be started is an error; a
+    /// companion's failure counts as a death (restarted after its backoff, given up
+    /// when it keeps failing), so that the stages run on without it.
+    pub(super) fn spawn(&mut self, pipeline: &Pipeline) -> Result<(), SupervisorError> {
+        let mut cmd = self.who.command();
         end_with_parent(&mut cmd);
-        let child = cmd
-            .args(&self.plan.args)
-            .spawn()
-            .map_err(|source| SupervisorError::Start {
-                by_hand: self.plan.by_hand.clone(),
-                source,
-            })?;
-        tracing::debug!(stage = self.stage().name(), pid = child.id(), "started");
+        // The pipeline the supervisor was handed, whatever named it (the environment, a
+        // config file, a test's own join): a child reads the same services.
+        let ipc = pipeline.config();
+        cmd.env(ENV_ROOT, &ipc.root).env(ENV_PREFIX, &ipc.prefix);
+        let child = match cmd.spawn() {
+            Ok(child) => child,
+            Err(source) if matches!(self.who, Who::Companion(_)) => {
+                self.started = Instant::now();
+                let how = format!("could not be started: {source}");
+                return self.died(Instant::now(), how);
+            }
+            Err(source) => {
+                return Err(SupervisorError::Start {
+                    by_hand: self.who.by_hand().to_owned(),
+                    source,
+                })
+            }
+        };
+        tracing::debug!(stage = self.who.name(), pid = child.id(), "started");
         self.child = Some(child);
         self.started = Instant::now();
         self.restart_at = None;
@@ -100,7 +166,7 @@ impl<'a> Supervised<'a> {
         Ok(())
     }
 
-    /// Looks at the stage once, at `now`: kills a viewer that stopped serving, reaps a
+    /// Looks at the process once, at `now`: kills a viewer that stopped serving, reaps a
     /// process that ended and plans its restart (or gives it up), and restarts one whose
     /// backoff is over. An essential stage in a crash loop is an error.
     pub(super) fn check(
@@ -108,28 +174,45 @@ impl<'a> Supervised<'a> {
         now: Instant,
         pipeline: &Pipeline,
     ) -> Result<(), SupervisorError> {
-        let name = self.stage().name();
         let Some(child) = self.child.as_mut() else {
             if self.restart_at.is_some_and(|t| now >= t) {
-                self.spawn()?;
-                tracing::info!(
-                    stage = name,
-                    deaths = self.deaths.count(),
-                    "stage restarted"
-                );
+                self.spawn(pipeline)?;
+                if self.child.is_some() {
+                    tracing::info!(
+                        stage = self.who.name(),
+                        deaths = self.deaths.count(),
+                        "stage restarted"
+                    );
+                }
             }
             return Ok(());
         };
-        let status = child.try_wait().map_err(|source| SupervisorError::Wait {
-            stage: self.plan.stage,
-            source,
-        })?;
+        let status = match child.try_wait() {
+            Ok(status) => status,
+            Err(source) => {
+                let Who::Stage(plan) = self.who else {
+                    // Not worth the pipeline: let it go, as one that keeps dying.
+                    tracing::error!(
+                        stage = self.who.name(),
+                        error = %source,
+                        "cannot wait for it; giving it up (the pipeline runs on)"
+                    );
+                    self.stop();
+                    self.finished = true;
+                    return Ok(());
+                };
+                return Err(SupervisorError::Wait {
+                    stage: plan.stage,
+                    source,
+                });
+            }
+        };
         let Some(status) = status else {
             if let Some(reason) = self.health.as_ref().and_then(HealthWatch::stopped_serving) {
                 // SIGKILL: a stopped process would not act on SIGTERM. Its death is then
                 // handled as any other, at the next round.
                 tracing::warn!(
-                    stage = name,
+                    stage = self.who.name(),
                     pid = child.id(),
                     %reason,
                     "the viewer lives but stopped serving; killing it to start it again"
@@ -140,12 +223,21 @@ impl<'a> Supervised<'a> {
         };
         self.child = None;
         if status.success() {
-            tracing::info!(stage = name, "finished");
+            tracing::info!(stage = self.who.name(), "finished");
             self.finished = true;
             return Ok(());
         }
-        // Free the dead stage's shared memory now, not only when it restarts.
+        // Free the dead process's shared memory now, not only when it restarts.
         pipeline.cleanup_dead_nodes();
+        self.died(now, describe(status))
+    }
+
+    /// Counts a death at `now` (`last`: how the run ended) and plans the restart, or
+    /// gives the process up: alone when it is not essential, with an error otherwise.
+    fn died(&mut self, now: Instant, last: String) -> Result<(), SupervisorError> {
+        let name = self.who.name();
+        // Planned anew below, or not at all for one given up.
+        self.restart_at = None;
         let young = self.started.elapsed() <= HEALTHY_AFTER;
         if !young {
             // It was working: restart it at once, whatever came before.
@@ -153,31 +245,34 @@ impl<'a> Supervised<'a> {
         }
         let looping = self.deaths.record(now);
         let window_s = self.deaths.rule().window.as_secs_f64();
-        if looping && !self.plan.essential() {
-            tracing::error!(
-                stage = name,
-                deaths = self.deaths.count(),
-                window_s,
-                last = %describe(status),
-                "stage keeps dying; giving it up (the pipeline runs on) — run `{}` alone to see why",
-                self.plan.by_hand
-            );
-            self.finished = true;
-            return Ok(());
-        }
-        if looping {
-            return Err(SupervisorError::CrashLoop {
-                stage: self.plan.stage,
-                deaths: self.deaths.count(),
-                window_s,
-                last: describe(status),
-                after_s: self.started.elapsed().as_secs_f64(),
-                by_hand: self.plan.by_hand.clone(),
-            });
+        match self.who {
+            Who::Stage(plan) if looping && plan.essential() => {
+                return Err(SupervisorError::CrashLoop {
+                    stage: plan.stage,
+                    deaths: self.deaths.count(),
+                    window_s,
+                    last,
+                    after_s: self.started.elapsed().as_secs_f64(),
+                    by_hand: plan.by_hand.clone(),
+                });
+            }
+            _ if looping => {
+                tracing::error!(
+                    stage = name,
+                    deaths = self.deaths.count(),
+                    window_s,
+                    %last,
+                    "stage keeps dying; giving it up (the pipeline runs on) — run `{}` alone to see why",
+                    self.who.by_hand()
+                );
+                self.finished = true;
+                return Ok(());
+            }
+            _ => {}
         }
         tracing::warn!(
             stage = name,
-            status = %describe(status),
+            status = %last,
             backoff_ms = self.backoff.as_millis() as u64,
             "stage died; restarting"
         );
@@ -205,7 +300,7 @@ impl<'a> Supervised<'a> {
                 }
                 _ => {
                     tracing::warn!(
-                        stage = self.stage().name(),
+                        stage = self.who.name(),
                         "did not stop within 3 s; killing it"
                     );
                     let _ = child.kill();

@@ -3,14 +3,16 @@
 //! sends (docs/architecture.md, "Processes").
 //!
 //! ```text
-//! Plan ──supervise──▶ start downstream stages, then capture ──▶ loop: listener.poll,
-//!                     reap, restart with backoff, crash rule, viewer health ──▶ stop all
+//! Plan ──supervise──▶ start downstream stages, then capture, then companions ──▶ loop:
+//!          listener.poll, reap, restart with backoff, crash rule, viewer health ──▶ stop all
 //! ```
 //!
 //! What to start is a [`Plan`]: one [`StagePlan`] a stage, each a program and its
 //! arguments (normally this executable's `airglyph stage NAME`, [`StagePlan::own`]),
-//! and the [`CrashRule`]. The caller joins the pipeline and hands it over, so a test can
-//! supervise stand-in processes on a pipeline of its own.
+//! the [`CompanionPlan`]s of processes that only read the stages' messages (the Zenoh
+//! exporter of `run --export zenoh`), and the [`CrashRule`]. The caller joins the
+//! pipeline and hands it over, so a test can supervise stand-in processes on a pipeline
+//! of its own; every child is given that pipeline's root and prefix.
 
 mod child;
 mod crash;
@@ -82,11 +84,29 @@ impl StagePlan {
     }
 }
 
+/// A process beside the stages that only reads what they send (the Zenoh exporter of
+/// `airglyph run --export zenoh`): started once the stages are, restarted as a stage is,
+/// stopped after them, and never a reason to stop the pipeline. One that keeps dying, or
+/// cannot be started at all, is given up alone and the stages run on.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CompanionPlan {
+    /// Its name in the supervisor's logs.
+    pub name: String,
+    /// The program to run.
+    pub program: PathBuf,
+    /// Its arguments.
+    pub args: Vec<OsString>,
+    /// How a person runs it alone, for the message that sends them there.
+    pub by_hand: String,
+}
+
 /// What the supervisor starts and how it judges deaths.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Plan {
     /// The stages, in any order: downstream ones are started first, capture last.
     pub stages: Vec<StagePlan>,
+    /// Started after the stages, in this order.
+    pub companions: Vec<CompanionPlan>,
     /// When a stage that keeps dying is given up.
     pub rule: CrashRule,
 }
@@ -161,8 +181,15 @@ pub fn supervise<L: Listener>(
     let mut stages = plan
         .stages
         .iter()
-        .map(|s| Supervised::new(s, plan.rule))
+        .map(|s| Supervised::for_stage(s, plan.rule))
         .collect::<Result<Vec<_>, _>>()?;
+    // After the stages: they are stopped in this order too, so a companion that carries
+    // their messages away is still there for the last of them.
+    stages.extend(
+        plan.companions
+            .iter()
+            .map(|c| Supervised::for_companion(c, plan.rule)),
+    );
     let mut listener = listener(&pipeline).map_err(SupervisorError::Listener)?;
     let outcome = start_in_order(&mut stages, &pipeline)
         .and_then(|()| watch(&mut stages, &pipeline, &mut listener));
@@ -188,18 +215,21 @@ pub fn supervise_gestures(
     Ok(())
 }
 
-/// Starts downstream stages first and capture last, once pose and gesture listen (and
-/// the viewer, for up to [`VIEWER_WAIT`]), so the first frames are not sent to nobody.
+/// Starts downstream stages first and capture once pose and gesture listen (and the
+/// viewer, for up to [`VIEWER_WAIT`]), so the first frames are not sent to nobody; then
+/// the companions, which are not waited for (and whose subscriptions would otherwise
+/// be taken for a stage's).
 fn start_in_order(stages: &mut [Supervised], pipeline: &Pipeline) -> Result<(), SupervisorError> {
-    let has = |st: Stage| stages.iter().any(|s| s.stage() == st) as usize;
+    let has = |st: Stage| stages.iter().any(|s| s.stage() == Some(st)) as usize;
     // The viewer subscribes to both services too, its depth subscription last.
     let (pose, gesture, viewer) = (has(Stage::Pose), has(Stage::Gesture), has(Stage::Viewer));
     let (depth0, skeleton0) = (
         pipeline.depth_subscribers()?,
         pipeline.skeleton_subscribers()?,
     );
-    for s in stages.iter_mut().filter(|s| s.stage() != Stage::Capture) {
-        s.spawn()?;
+    let downstream = |s: &&mut Supervised| s.stage().is_some_and(|st| st != Stage::Capture);
+    for s in stages.iter_mut().filter(downstream) {
+        s.spawn(pipeline)?;
     }
     let started = Instant::now();
     let ready = |p: &Pipeline| -> Result<bool, IpcError> {
@@ -218,8 +248,14 @@ fn start_in_order(stages: &mut [Supervised], pipeline: &Pipeline) -> Result<(), 
         }
         std::thread::sleep(Duration::from_millis(20));
     }
-    for s in stages.iter_mut().filter(|s| s.stage() == Stage::Capture) {
-        s.spawn()?;
+    for s in stages
+        .iter_mut()
+        .filter(|s| s.stage() == Some(Stage::Capture))
+    {
+        s.spawn(pipeline)?;
+    }
+    for s in stages.iter_mut().filter(|s| s.stage().is_none()) {
+        s.spawn(pipeline)?;
     }
     Ok(())
 }
@@ -242,7 +278,7 @@ fn watch(
         }
         if stages
             .iter()
-            .any(|s| s.stage() == Stage::Capture && s.finished())
+            .any(|s| s.stage() == Some(Stage::Capture) && s.finished())
         {
             let until = Instant::now() + DRAIN;
             while Instant::now() < until {
