@@ -576,6 +576,18 @@ pub fn shortest_turn(a: &Vector3<f32>, b: &Vector3<f32>) -> Rotation3<f32> {
     Rotation3::from_axis_angle(&Unit::new_unchecked(c / sin), sin.atan2(cos))
 }
 
+/// The rotation vector of `r` (its axis times its angle, radians), as nalgebra's
+/// `scaled_axis` but with the angle's cosine clamped to [−1, 1]: nalgebra takes the
+/// arccosine of (trace − 1) / 2, which rounding puts past 1 for a rotation within about
+/// a milliradian of none, and returns NaN. A NaN in the registration's joint priors made
+/// every step of the fit NaN, and the body froze (pose NOTES, 2026-12-04 evening).
+/// Wherever nalgebra's result is finite this is the same to the bit.
+pub fn rotation_vector(r: &Rotation3<f32>) -> Vector3<f32> {
+    let cos = ((r.matrix().trace() - 1.0) / 2.0).clamp(-1.0, 1.0);
+    r.axis()
+        .map_or(Vector3::zeros(), |axis| axis.into_inner() * cos.acos())
+}
+
 /// Where the body is: the pelvis joint and every segment's rotation, camera frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BodyPose {
@@ -743,6 +755,29 @@ mod tests {
             rotation: [r; Segment::COUNT],
         };
         (t, pose)
+    }
+
+    #[test]
+    fn rotation_vectors_of_small_and_generic_turns() {
+        // A small turn taken back out of a larger one, as the priors do (a segment
+        // against its parent): rounding puts the trace past 3 for some of these, where
+        // the arccosine of nalgebra's `scaled_axis` gives NaN.
+        for i in 0..500 {
+            let a = Rotation3::new(Vector3::new(0.3 + 0.01 * i as f32, -0.7, 1.1));
+            let small = Vector3::new(1.0, -2.0, 0.5) * (1e-5 * (i % 9) as f32);
+            let r = a.inverse() * (a * Rotation3::new(small));
+            let v = rotation_vector(&r);
+            assert!((v - small).norm() < 1e-3, "{v:?} against {small:?}");
+        }
+        for v in [
+            Vector3::new(0.1, 0.0, 0.0),
+            Vector3::new(0.3, -0.2, 0.9),
+            Vector3::new(-1.5, 1.0, 0.5),
+        ] {
+            let r = Rotation3::new(v);
+            assert_eq!(rotation_vector(&r), r.scaled_axis());
+            assert!((rotation_vector(&r) - v).norm() < 1e-4);
+        }
     }
 
     #[test]

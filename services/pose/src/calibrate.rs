@@ -15,7 +15,7 @@
 //! and forearm, from the frames whose bent elbow tells the two bones apart (a straight
 //! limb cannot; legs are rarely seen bent enough, so they keep one ratio).
 
-use crate::body::BodyConfig;
+use crate::body::{rotation_vector, BodyConfig};
 use crate::register::{Fit, LengthsConfig, PriorsConfig};
 use crate::Limb;
 use serde::{Deserialize, Serialize};
@@ -256,7 +256,7 @@ impl BodyCalibration {
         if arms >= gate {
             let rel = |s: Segment| {
                 let r = b.pose.rotation[Chest.index()].inverse() * b.pose.rotation[s.index()];
-                let v = r.scaled_axis();
+                let v = rotation_vector(&r);
                 [v.x, v.y, v.z]
             };
             self.refine_collars([rel(LeftCollar), rel(RightCollar)], cfg.collar_gain);

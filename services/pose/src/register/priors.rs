@@ -2,7 +2,7 @@
 //! hanging).
 
 use super::{Gradient, Normal};
-use crate::body::{BodyPose, Segment};
+use crate::body::{rotation_vector, BodyPose, Segment};
 use nalgebra::Vector3;
 
 /// Weights of the priors on the joints' turns, per radian² (part of
@@ -96,7 +96,7 @@ pub(super) fn add_joint_priors(
     for (seg, w) in priors {
         let Some(parent) = seg.parent() else { continue };
         let rp = pose.rotation[parent.index()];
-        let mut phi = (rp.inverse() * pose.rotation[seg.index()]).scaled_axis();
+        let mut phi = rotation_vector(&(rp.inverse() * pose.rotation[seg.index()]));
         // The collarbones keep near the person's own rest, learned as they move.
         match seg {
             LeftCollar => phi -= Vector3::from(cfg.collar_rest[0]),

@@ -263,12 +263,11 @@ impl Registration {
     pub(super) fn run(&self, p: &Problem, start: BodyPose, steps: usize, finish: bool) -> Fit {
         let (t, cfg) = (p.body, p.cfg);
         let mut pose = start;
-        let mut energy = f32::INFINITY;
-        let mut tip_energy = 0.0;
-        let mut seen = [0.0; Segment::COUNT];
-        let mut length = [(0.0, 0.0); 2];
-        let mut arm_bones = None;
+        // The last pass's sums, what it saw, and whether it summed the whole energy.
+        let mut measured = None;
         let mut passes = 0;
+        // The index of the next pass.
+        let mut next_pass = 0;
         // Each point's capsule, searched afresh every `REASSIGN` passes: in between the
         // body moves by millimetres, and the search is most of a pass's work.
         let mut assign = vec![0u16; self.data.len()];
@@ -279,21 +278,19 @@ impl Registration {
         };
         for it in 0..=last {
             passes += 1;
+            next_pass = it + 1;
             let posed = Posed::new(t, &pose);
             let pass = Pass {
                 search: it % REASSIGN == 0,
                 energy: it == last,
             };
             let (acc, s) = self.accumulate(p, &posed, pass, &mut assign);
-            energy = acc.energy as f32;
-            tip_energy = acc.tip_energy as f32;
-            seen = s;
-            length = acc.length;
-            arm_bones = acc.arm_bones;
             if it == steps {
+                measured = Some((acc, s, pass.energy));
                 break;
             }
             let (mut h, mut g) = acc.assemble();
+            measured = Some((acc, s, pass.energy));
             add_joint_priors(&mut h, &mut g, &pose, p.hidden, &cfg.priors);
             for i in 0..N {
                 h[(i, i)] += cfg.solver.damping * h[(i, i)] + cfg.solver.damping_abs;
@@ -326,6 +323,24 @@ impl Registration {
                 break;
             }
         }
+        // The data term is summed only on the last pass. A run that stopped early
+        // (converged, or a step it could not take) is measured where it stopped, by
+        // the pass it would have made next: judged without its data term, a start that
+        // could not move won every race, and the body froze for seconds (pose NOTES,
+        // 2026-12-04 evening).
+        let (acc, seen) = match measured {
+            Some((acc, seen, true)) => (acc, seen),
+            _ => {
+                passes += 1;
+                let pass = Pass {
+                    search: next_pass % REASSIGN == 0,
+                    energy: true,
+                };
+                self.accumulate(p, &Posed::new(t, &pose), pass, &mut assign)
+            }
+        };
+        let (energy, tip_energy) = (acc.energy as f32, acc.tip_energy as f32);
+        let (length, arm_bones) = (acc.length, acc.arm_bones);
         // A step only where the limbs carry enough evidence (about a hundred points'
         // worth of a limb's reach).
         let length_step = length.map(|(g, h)| (h > cfg.lengths.evidence).then(|| (-g / h) as f32));

@@ -338,6 +338,51 @@ fn the_better_start_wins_the_race() {
     }
 }
 
+#[test]
+fn a_run_that_stops_early_is_measured_where_it_stopped() {
+    let (t, k) = scene();
+    let truth = facing(Point3::new(0.0, 0.1, 2.6));
+    let (points, mask) = render(&t, &truth, &k);
+    let frame = frame_of(&points, &mask, &k);
+    let mut start = truth;
+    start.step(
+        &Vector3::new(0.04, -0.03, 0.02),
+        &[Vector3::zeros(); Segment::COUNT],
+    );
+    let cfg = RegisterConfig::default();
+    let mut reg = Registration::default();
+    reg.prepare(&frame, &cfg.sampling);
+    let posed = Posed::new(&t, &truth);
+    let tips = t.tips.map(|(s, local)| Some(posed.point(s, &local)));
+    let problem = Problem {
+        frame: &frame,
+        body: &t,
+        tips: &tips,
+        hidden: &SEEN,
+        cfg: &cfg,
+    };
+    let one = reg.run(&problem, start, 1, true);
+    // Every step taken for converged: the run stops after its first, where `one` ends.
+    let mut stopping = cfg.clone();
+    stopping.solver.converged = f32::MAX;
+    let stopped = reg.run(
+        &Problem {
+            cfg: &stopping,
+            ..problem
+        },
+        start,
+        10,
+        true,
+    );
+    assert_eq!(stopped.pose, one.pose);
+    assert!(
+        (stopped.energy - one.energy).abs() <= 1e-4 * one.energy,
+        "stopped early {} against {}",
+        stopped.energy,
+        one.energy
+    );
+}
+
 /// Starts that follow the tips, with the settings `cfg`.
 fn racing(
     poses: Vec<BodyPose>,
