@@ -159,9 +159,7 @@ fn seated_behind_a_table_the_legs_under_it_are_not_invented() {
     // back into the chair, a knee in the image behind the hips; waving at 1.6 m behind
     // the table, where the right leg, unseen under it, is fitted up behind the torso.
     // Both passed while a NaN in the joint priors froze the legs at their start.)
-    for (distance_m, pose, table) in [
-        (1.4, ScriptedPose::ArmsCrossed, true),
-    ] {
+    for (distance_m, pose, table) in [(1.4, ScriptedPose::ArmsCrossed, true)] {
         let k = qvga();
         let (r, truth) = single(upper_body(seated(at(distance_m, pose), table)), 0);
         assert!(r.person_found, "{distance_m} m, {pose:?}");
