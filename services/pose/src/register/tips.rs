@@ -26,6 +26,11 @@ pub struct RaceConfig {
     /// A limb's tip that lies on another limb of the tracked body and at least this much
     /// (metres) farther from its own is dropped. 0 = off.
     pub borrowed_tip_gap: f32,
+    /// A person found afresh is also looked for at rest on the torso step's own torso
+    /// turned upright (`register::starts`). Off: it finds arms hanging at 1.0 m, but
+    /// legs out of view then take forearms lying on a table (pose NOTES, 2026-12-04,
+    /// night).
+    pub upright_rest: bool,
 }
 
 impl Default for RaceConfig {
@@ -36,6 +41,7 @@ impl Default for RaceConfig {
             off_body: 0.05,
             hybrid: false,
             borrowed_tip_gap: 0.1,
+            upright_rest: false,
         }
     }
 }
