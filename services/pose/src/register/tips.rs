@@ -27,9 +27,8 @@ pub struct RaceConfig {
     /// (metres) farther from its own is dropped. 0 = off.
     pub borrowed_tip_gap: f32,
     /// A person found afresh is also looked for at rest on the torso step's own torso
-    /// turned upright (`register::starts`). Off: it finds arms hanging at 1.0 m, but
-    /// legs out of view then take forearms lying on a table (pose NOTES, 2026-12-04,
-    /// night).
+    /// turned upright (`register::starts`): close up, the arms merged into the torso's
+    /// silhouette tilt the torso the other starts are built on.
     pub upright_rest: bool,
 }
 
@@ -41,7 +40,7 @@ impl Default for RaceConfig {
             off_body: 0.05,
             hybrid: false,
             borrowed_tip_gap: 0.1,
-            upright_rest: false,
+            upright_rest: true,
         }
     }
 }
