@@ -350,6 +350,16 @@ impl Shape {
 }
 
 impl Segment {
+    /// The thigh of the leg this segment is part of (None: no leg's).
+    pub fn thigh(self) -> Option<Segment> {
+        use Segment::*;
+        match self {
+            LeftThigh | LeftShin => Some(LeftThigh),
+            RightThigh | RightShin => Some(RightThigh),
+            _ => None,
+        }
+    }
+
     /// The same segment on the body's other side (itself on the midline).
     pub fn mirrored(self) -> Segment {
         use Segment::*;

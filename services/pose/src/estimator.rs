@@ -391,10 +391,14 @@ impl PoseEstimator {
             let side_on = torso.side_on.then_some(seg.centroid);
             let offered = self.offered.take();
             let calib = self.cfg.calibrate.enabled.then_some(&mut self.calib);
+            let upright = (torso.detecting && cfg.register.race.upright_rest)
+                .then(|| upright_torso(&seed.skeleton, &torso.fit.pose, torso.up_hint, &tpl, cfg))
+                .flatten();
             let body = Body {
                 template: tpl,
                 side_on,
                 offered,
+                upright,
             };
             let reg = &mut s.registration;
             register_body(reg, &frame, t, &seed, &torso.pose, body, calib, cfg, d)?
@@ -813,6 +817,40 @@ fn chains(
     }
 }
 
+/// The seed's skeleton `seed` on the torso step's own torso `pose` (before the head's
+/// top and the feet moved it) turned upright (its axis along `up`), each limb carried
+/// with its root (the head with the neck), as a body. Close up, the limbs merged into
+/// the torso's silhouette tilt the torso model; people mostly sit and stand upright.
+fn upright_torso(
+    seed: &Skeleton,
+    pose: &TorsoPose,
+    up: Vector3<f32>,
+    tpl: &BodyTemplate,
+    cfg: &PoseConfig,
+) -> Option<BodyPose> {
+    use Joint::*;
+    let mut pose = *pose;
+    pose.r = nalgebra::Rotation3::rotation_between(&(pose.r * Vector3::y()), &up)? * pose.r;
+    let p = keypoints(&pose, &cfg.torso);
+    let mut s = *seed;
+    for (root, to, carried) in [
+        (Neck, p.neck, &[Head][..]),
+        (LeftShoulder, p.left_shoulder, &[LeftElbow, LeftHand]),
+        (RightShoulder, p.right_shoulder, &[RightElbow, RightHand]),
+        (LeftHip, p.left_hip, &[LeftKnee, LeftFoot]),
+        (RightHip, p.right_hip, &[RightKnee, RightFoot]),
+        (Pelvis, p.pelvis, &[]),
+        (Torso, p.torso, &[]),
+    ] {
+        let by = to - seed[root];
+        s.set(root, to);
+        for &j in carried {
+            s.set(j, seed[j] + by);
+        }
+    }
+    BodyPose::from_skeleton(tpl, &s)
+}
+
 /// What step 7 fits besides the frame and the seed's estimate.
 struct Body {
     /// This frame's body template (the person's limb lengths).
@@ -821,6 +859,9 @@ struct Body {
     side_on: Option<Point3<f32>>,
     /// A start offered from outside.
     offered: Option<OfferedStart>,
+    /// At a detection, the seed's estimate on the torso step's own torso turned
+    /// upright ([`upright_torso`]).
+    upright: Option<BodyPose>,
 }
 
 /// Step 7: the whole body registered to the frame; its skeleton, with the hands placed
@@ -849,6 +890,7 @@ fn register_body(
         &tpl,
         t.body,
         geodesic,
+        geodesic.and(body.upright),
         &seed.tips,
         body.side_on,
         body.offered,

@@ -86,6 +86,26 @@ impl Frame<'_> {
         })
     }
 
+    /// How far the leg's surface of radius `radius` around `x`, a point of a leg whose
+    /// hip is at `hip`, rises into the table top the segmentation took for the floor,
+    /// metres (None: no such top, or the hip is not under it). A seated person's knees stay under the table their hips are under;
+    /// with nothing else holding a leg out of view, it would fold up through the top to
+    /// explain the forearms lying on it.
+    pub(crate) fn through_the_table_top(
+        &self,
+        hip: &Point3<f32>,
+        x: &Point3<f32>,
+        radius: f32,
+    ) -> Option<f32> {
+        let top = self.floor.filter(|pl| pl.d > 0.0)?;
+        (top.height(hip) < -UNDER_THE_FLOOR).then(|| top.height(x) + radius + UNDER_THE_FLOOR)
+    }
+
+    /// The table top's (or floor's) upward normal, camera frame.
+    pub(crate) fn up(&self) -> Option<nalgebra::Vector3<f32>> {
+        self.floor.map(|pl| pl.n)
+    }
+
     /// Whether the camera could see any of `points`.
     pub(crate) fn sees_any(&self, points: impl IntoIterator<Item = Point3<f32>>) -> bool {
         points.into_iter().any(|p| self.sees(&p))
@@ -148,5 +168,40 @@ mod tests {
         // A camera under the plane (a ceiling, not a floor) is not looking at its top.
         let ceiling = Plane { n: top.n, d: -0.3 };
         assert!(frame(Some(ceiling)).sees(&Point3::new(0.0, -0.4, 1.6)));
+    }
+
+    #[test]
+    fn a_leg_whose_hip_is_under_the_table_top_stays_under_it() {
+        let (points, mask, k, top) = under_a_table_top();
+        let f = Frame {
+            points: &points,
+            mask: &mask,
+            width: k.width as usize,
+            height: k.height as usize,
+            k: &k,
+            floor: Some(top),
+        };
+        let r = 0.06;
+        // Seated: the hip 0.2 m under the top (y = 0.5).
+        let hip = Point3::new(0.1, 0.5, 1.5);
+        // A knee under the top with room for its surface: nothing to undo.
+        let under = f.through_the_table_top(&hip, &Point3::new(0.1, 0.45, 1.1), r);
+        assert!(under.is_some_and(|d| d < 0.0), "{under:?}");
+        // A knee folded up onto the top, as if to explain a forearm lying on it: its
+        // surface is inside the top by its radius, the margin and 2 cm above it.
+        let through = f.through_the_table_top(&hip, &Point3::new(0.1, 0.28, 1.1), r);
+        assert!(through.is_some_and(|d| (d - (0.02 + r + UNDER_THE_FLOOR)).abs() < 1e-5));
+        // Standing behind a low table, the hip above it: the legs are not held.
+        let standing = Point3::new(0.1, 0.25, 1.5);
+        assert_eq!(
+            f.through_the_table_top(&standing, &Point3::new(0.1, 0.28, 1.1), r),
+            None
+        );
+        // No floor or table top taken out: nothing holds the legs.
+        let bare = Frame { floor: None, ..f };
+        assert_eq!(
+            bare.through_the_table_top(&hip, &Point3::new(0.1, 0.28, 1.1), r),
+            None
+        );
     }
 }

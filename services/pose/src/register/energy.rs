@@ -26,6 +26,8 @@ pub struct EnergyConfig {
     pub silhouette_scale: f32,
     /// How far the body's front may lie before the surface seen, metres.
     pub free_space_margin: f32,
+    /// Weight of a leg's point above the table top its hip is under (a point every 4 cm).
+    pub table_top_weight: f32,
     /// Weight of a limb tip's distance to its geodesic maximum...
     pub tip_weight: f32,
     /// ...and its Cauchy scale, metres.
@@ -42,6 +44,7 @@ impl Default for EnergyConfig {
 
             silhouette_scale: 0.05,
             free_space_margin: 0.03,
+            table_top_weight: 4.0,
             tip_weight: 10.0,
             tip_sigma: 0.1,
         }
@@ -187,6 +190,27 @@ impl Registration {
             }
         }
 
+        // Legs under a table top stay under it (their points may rise to just under it).
+        if let Some(up) = f.up() {
+            for c in &placed {
+                let Some(thigh) = c.segment.thigh() else {
+                    continue;
+                };
+                let hip = posed.joint[thigh.index()];
+                for (x, radius) in axis_points(c) {
+                    let Some(r) = f
+                        .through_the_table_top(&hip, &x, radius)
+                        .filter(|r| *r > 0.0)
+                    else {
+                        continue;
+                    };
+                    let (wc, cost) = huber(r, cfg.energy.silhouette_scale);
+                    acc.energy += (cfg.energy.table_top_weight * cost) as f64;
+                    acc.add(c.segment, &x, &up, r, cfg.energy.table_top_weight * wc);
+                }
+            }
+        }
+
         // Tips near their geodesic maxima.
         for (tip, target) in t.tips.iter().zip(tips) {
             let Some(m) = target else { continue };
@@ -219,6 +243,15 @@ impl Registration {
         }
         (acc, seen)
     }
+}
+
+/// Points of a capsule's axis every 4 cm, with its radius there.
+fn axis_points(c: &Placed) -> impl Iterator<Item = (Point3<f32>, f32)> + '_ {
+    let k = ((c.len2.sqrt() / 0.04).ceil() as usize + 1).max(2);
+    (0..k).map(move |i| {
+        let t = i as f32 / (k - 1) as f32;
+        (c.a + c.ab * t, c.ra + (c.rb - c.ra) * t)
+    })
 }
 
 /// Points of a capsule's front as the camera sees it: along its axis every 4 cm, each

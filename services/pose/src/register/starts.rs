@@ -40,11 +40,15 @@ pub struct Starts<'a> {
 /// strayed taken from the geodesic estimate ([`super::RaceConfig::hybrid`]), and,
 /// for a person perhaps side-on (`side_on`: the person's centroid), standing side-on
 /// bodies, raced for every step and without the tips (they were assigned to the limbs
-/// of the frontal body). An `offered` start is added, or replaces them all.
+/// of the frontal body). A person found afresh is also looked for at rest on the
+/// geodesic estimate's torso and on `upright` (the torso step's own, upright), if any. An
+/// `offered` start is added, or replaces them all.
+#[allow(clippy::too_many_arguments)]
 pub fn starts<'a>(
     tpl: &BodyTemplate,
     tracked: Option<BodyPose>,
     geodesic: Option<BodyPose>,
+    upright: Option<BodyPose>,
     tips: &[Option<Point3<f32>>; 5],
     side_on: Option<Point3<f32>>,
     offered: Option<OfferedStart>,
@@ -58,11 +62,16 @@ pub fn starts<'a>(
     // estimate sends them after whatever maximum there is; a leg's maximum may be its
     // knee, or the legs may be out of view. So a person found afresh is also looked for
     // standing straight, with either arm or both hanging. (Raced against a tracked
-    // body, these won frames they should not: tracking keeps its own starts.)
+    // body, these won frames they should not: tracking keeps its own starts.) Close
+    // up, with the arms merged into the torso's silhouette, the estimate's torso is
+    // tilted, and no local step from there reaches arms hanging: so, when asked
+    // ([`super::RaceConfig::upright_rest`]), at rest on an upright torso too.
     let mut free = Vec::new();
     if let Some(geo) = geodesic.filter(|_| tracked.is_none()) {
-        for arms in [[false, false], [true, true], [true, false], [false, true]] {
-            free.extend(resting(tpl, &geo, arms));
+        for body in [Some(geo), upright].iter().flatten() {
+            for arms in [[false, false], [true, true], [true, false], [false, true]] {
+                free.extend(resting(tpl, body, arms));
+            }
         }
     }
     let (register_cfg, tips_now) = match geodesic.zip(side_on) {

@@ -26,6 +26,10 @@ pub struct RaceConfig {
     /// A limb's tip that lies on another limb of the tracked body and at least this much
     /// (metres) farther from its own is dropped. 0 = off.
     pub borrowed_tip_gap: f32,
+    /// A person found afresh is also looked for at rest on the torso step's own torso
+    /// turned upright (`register::starts`): close up, the arms merged into the torso's
+    /// silhouette tilt the torso the other starts are built on.
+    pub upright_rest: bool,
 }
 
 impl Default for RaceConfig {
@@ -36,6 +40,7 @@ impl Default for RaceConfig {
             off_body: 0.05,
             hybrid: false,
             borrowed_tip_gap: 0.1,
+            upright_rest: true,
         }
     }
 }
