@@ -1,9 +1,9 @@
 //! Is the viewer serving? A process that lives on with a server that stopped answering
 //! (as tiny_http's did once its accept thread ran out of file descriptors) looks
 //! healthy to a supervisor that only watches processes. [`probe`] asks the way a
-//! browser would, for a supervisor; [`Watchdog`] asks the viewer's own server the same
-//! from inside, so a viewer whose server stopped ends with an error (and is restarted
-//! by `airglyph run` or systemd alike).
+//! browser would; [`HealthWatch`] asks every few seconds, the viewer's own server from
+//! inside (so a viewer whose server stopped ends with an error, and is restarted by
+//! `airglyph run` or systemd alike) and a viewer process from `airglyph run`.
 
 use crate::routes::HEALTH_PATH;
 use std::io::{Read, Write};
@@ -84,38 +84,69 @@ pub const TIMEOUT: Duration = Duration::from_secs(2);
 /// Probes failed in a row after which the viewer has stopped serving.
 pub const FAILURES: u32 = 3;
 
-/// Probes the viewer's own server from a thread of its own.
-pub(crate) struct Watchdog {
-    verdict: Arc<Mutex<Option<HealthError>>>,
+/// The probes' verdict on the viewer process started last.
+#[derive(Debug)]
+struct Verdict {
+    /// Which start of the viewer the probes are about: a probe begun before a restart
+    /// says nothing about the new process.
+    generation: u64,
+    started: Instant,
+    served: bool,
+    failures: u32,
+    last_error: Option<HealthError>,
+}
+
+/// Probes a viewer's [`HEALTH_PATH`] every [`EVERY`] from a thread of its own, as a
+/// browser would: the viewer's own server from inside (a viewer whose server stopped
+/// ends with an error), or a viewer process from its supervisor (a process that is
+/// stopped or hung whole can only be noticed from outside). A thread, because a probe
+/// waits up to [`TIMEOUT`] and its owner's loop must go on meanwhile.
+pub struct HealthWatch {
+    verdict: Arc<Mutex<Verdict>>,
     stop: Arc<AtomicBool>,
     thread: Option<JoinHandle<()>>,
 }
 
-impl Watchdog {
-    pub fn start(addr: SocketAddr) -> std::io::Result<Self> {
-        let verdict = Arc::new(Mutex::new(None));
+impl HealthWatch {
+    /// Probes `addr` from now on, until dropped. Failures count once the viewer has
+    /// answered, or once `grace` has passed: a viewer just started joins the pipeline
+    /// and binds its port first.
+    pub fn start(addr: SocketAddr, grace: Duration) -> std::io::Result<Self> {
+        let verdict = Arc::new(Mutex::new(Verdict {
+            generation: 0,
+            started: Instant::now(),
+            served: false,
+            failures: 0,
+            last_error: None,
+        }));
         let stop = Arc::new(AtomicBool::new(false));
         let thread = {
             let (verdict, stop) = (verdict.clone(), stop.clone());
             std::thread::Builder::new()
-                .name("web-watchdog".into())
+                .name("viewer-health".into())
                 .spawn(move || {
-                    let mut failures = 0;
                     while !stop.load(Ordering::Relaxed) {
-                        let started = Instant::now();
-                        match probe(addr, TIMEOUT) {
-                            Ok(()) => failures = 0,
-                            Err(e) => {
-                                failures += 1;
-                                tracing::warn!(error = %e, failures, "viewer health check");
-                                if failures >= FAILURES {
-                                    *verdict.lock().unwrap_or_else(|e| e.into_inner()) = Some(e);
-                                    return;
+                        let asked = Instant::now();
+                        let generation = lock(&verdict).generation;
+                        let result = probe(addr, TIMEOUT);
+                        let mut v = lock(&verdict);
+                        if v.generation == generation {
+                            match result {
+                                Ok(()) => {
+                                    v.served = true;
+                                    v.failures = 0;
                                 }
+                                Err(e) if v.served || v.started.elapsed() >= grace => {
+                                    v.failures += 1;
+                                    tracing::warn!(error = %e, failures = v.failures, "viewer health check");
+                                    v.last_error = Some(e);
+                                }
+                                Err(_) => {}
                             }
                         }
+                        drop(v);
                         // Sleeps in short steps so that stopping is quick.
-                        while started.elapsed() < EVERY && !stop.load(Ordering::Relaxed) {
+                        while asked.elapsed() < EVERY && !stop.load(Ordering::Relaxed) {
                             std::thread::sleep(Duration::from_millis(50));
                         }
                     }
@@ -128,16 +159,27 @@ impl Watchdog {
         })
     }
 
-    /// The failure that ended the watch, if one did.
-    pub fn verdict(&self) -> Option<HealthError> {
-        self.verdict
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .clone()
+    /// A new viewer process was started at the same address: the probes start over.
+    pub fn restarted(&self) {
+        let mut v = lock(&self.verdict);
+        v.generation += 1;
+        v.started = Instant::now();
+        v.served = false;
+        v.failures = 0;
+        v.last_error = None;
+    }
+
+    /// Why the viewer started last has stopped serving: [`FAILURES`] probes in a row
+    /// failed.
+    pub fn stopped_serving(&self) -> Option<HealthError> {
+        let v = lock(&self.verdict);
+        (v.failures >= FAILURES)
+            .then(|| v.last_error.clone())
+            .flatten()
     }
 }
 
-impl Drop for Watchdog {
+impl Drop for HealthWatch {
     fn drop(&mut self) {
         self.stop.store(true, Ordering::Relaxed);
         if let Some(t) = self.thread.take() {
@@ -146,10 +188,67 @@ impl Drop for Watchdog {
     }
 }
 
+fn lock(v: &Mutex<Verdict>) -> std::sync::MutexGuard<'_, Verdict> {
+    v.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use std::net::TcpListener;
+
+    /// Answers every request with "200 OK" while `serving`, then accepts and never
+    /// answers (a stopped process).
+    fn server() -> (SocketAddr, Arc<AtomicBool>) {
+        let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+        let addr = listener.local_addr().unwrap();
+        let serving = Arc::new(AtomicBool::new(true));
+        let on = serving.clone();
+        std::thread::spawn(move || {
+            for mut s in listener.incoming().map_while(Result::ok) {
+                if !on.load(Ordering::Relaxed) {
+                    std::mem::forget(s);
+                    continue;
+                }
+                let mut buf = [0u8; 1024];
+                let _ = s.read(&mut buf);
+                let _ = write!(s, "HTTP/1.1 200 OK\r\nContent-Length: 2\r\n\r\nok");
+            }
+        });
+        (addr, serving)
+    }
+
+    #[test]
+    fn a_server_that_stops_answering_is_reported_after_three_failures_in_a_row() {
+        let (addr, serving) = server();
+        let watch = HealthWatch::start(addr, Duration::ZERO).unwrap();
+        std::thread::sleep(EVERY / 2);
+        assert_eq!(watch.stopped_serving(), None, "it serves");
+        serving.store(false, Ordering::Relaxed);
+        let t = Instant::now();
+        while watch.stopped_serving().is_none() {
+            assert!(t.elapsed() < (EVERY + TIMEOUT) * 5, "never reported");
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        let e = watch.stopped_serving().unwrap();
+        assert_eq!(e.addr, addr);
+        assert!(e.to_string().contains("health check"), "{e}");
+        // A new process starts the count over.
+        watch.restarted();
+        assert_eq!(watch.stopped_serving(), None);
+    }
+
+    #[test]
+    fn a_viewer_still_starting_is_given_its_grace() {
+        // Nothing listens: every probe fails at once, but within the grace none counts.
+        let closed = TcpListener::bind("127.0.0.1:0")
+            .unwrap()
+            .local_addr()
+            .unwrap();
+        let watch = HealthWatch::start(closed, Duration::from_secs(600)).unwrap();
+        std::thread::sleep(EVERY * 2 + EVERY / 2);
+        assert_eq!(watch.stopped_serving(), None);
+    }
 
     #[test]
     fn a_server_that_does_not_answer_fails_the_probe_within_its_timeout() {

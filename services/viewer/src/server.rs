@@ -15,10 +15,10 @@
 //!   accept that fails (no descriptor left) frees one and goes on: the server never
 //!   stops accepting.
 //! - Threads: one for the runtime, [`PICTURE_THREADS`] for drawing and encoding, one
-//!   for the [`Watchdog`]. A request waiting for the next frame costs no thread.
+//!   for the [`HealthWatch`]. A request waiting for the next frame costs no thread.
 
 use crate::connections::{Connections, Ticket};
-use crate::health::{HealthError, Watchdog};
+use crate::health::{HealthError, HealthWatch};
 use crate::idle::Idle;
 use crate::pictures::Shared;
 use crate::routes::route;
@@ -73,7 +73,7 @@ pub struct Server {
     addr: SocketAddr,
     stop: Option<oneshot::Sender<()>>,
     thread: Option<JoinHandle<()>>,
-    watchdog: Option<Watchdog>,
+    watchdog: Option<HealthWatch>,
     connections: Arc<Connections>,
 }
 
@@ -134,7 +134,9 @@ impl Server {
                 .map_err(|e| fail(format!("cannot start the web thread: {e}")))?
         };
         let watchdog =
-            Watchdog::start(bound).map_err(|e| fail(format!("cannot start the watchdog: {e}")))?;
+            // Started once the port is bound: every failure counts.
+            HealthWatch::start(bound, Duration::ZERO)
+                .map_err(|e| fail(format!("cannot start the watchdog: {e}")))?;
         tracing::debug!(%bound, connections = limit, "web server");
         Ok(Self {
             addr: bound,
@@ -170,7 +172,11 @@ impl Server {
                 reason: "the web server's thread has ended".into(),
             });
         }
-        match self.watchdog.as_ref().and_then(Watchdog::verdict) {
+        match self
+            .watchdog
+            .as_ref()
+            .and_then(HealthWatch::stopped_serving)
+        {
             Some(HealthError { reason, .. }) => Err(ServeError {
                 addr: self.addr,
                 reason: format!("stopped answering its health check: {reason}"),

@@ -1,13 +1,18 @@
 //! One supervised stage's process (or a companion's): started, reaped, restarted with
 //! backoff, stopped.
 
-use super::{CompanionPlan, CrashRule, Deaths, HealthWatch, StagePlan, SupervisorError};
+use super::{CompanionPlan, CrashRule, Deaths, StagePlan, SupervisorError};
 use airglyph_ipc::config::{ENV_PREFIX, ENV_ROOT};
 use airglyph_ipc::{Pipeline, Stage};
+use airglyph_viewer::health::HealthWatch;
 use std::os::unix::process::CommandExt;
 use std::process::{Child, Command, ExitStatus};
 use std::time::{Duration, Instant};
 
+/// How long a viewer just started may take to answer before a failed probe counts: it
+/// joins the pipeline and binds its port first (well under a second on an idle
+/// machine, longer on a loaded one). A viewer that never binds exits by itself.
+const STARTUP_GRACE: Duration = Duration::from_secs(30);
 /// The first restart waits this long; each further one twice as long, up to `MAX_BACKOFF`.
 const MIN_BACKOFF: Duration = Duration::from_millis(100);
 const MAX_BACKOFF: Duration = Duration::from_secs(5);
@@ -97,7 +102,9 @@ impl<'a> Supervised<'a> {
                 );
                 None
             }
-            Some(addr) => Some(HealthWatch::start(addr).map_err(SupervisorError::Health)?),
+            Some(addr) => {
+                Some(HealthWatch::start(addr, STARTUP_GRACE).map_err(SupervisorError::Health)?)
+            }
             None => None,
         };
         Ok(Self::new(Who::Stage(plan), rule, health))

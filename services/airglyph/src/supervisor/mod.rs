@@ -16,11 +16,9 @@
 
 mod child;
 mod crash;
-mod health;
 mod listen;
 
 pub use crash::{CrashRule, Deaths};
-pub use health::HealthWatch;
 pub use listen::{Gestures, Idle, Listener, ListenerError, Listening, Poll};
 
 use airglyph_ipc::{shutdown, GestureEventMsg, IpcError, Pipeline, Stage};
