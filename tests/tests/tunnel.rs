@@ -10,18 +10,34 @@ use airglyph_ipc::clock::monotonic_ns;
 use airglyph_system_tests::{json_lines, one_at_a_time, signal, start_probe, stop, Isolated};
 use std::io::{Read, Write};
 use std::net::{Shutdown, SocketAddr, TcpListener, TcpStream};
-use std::path::PathBuf;
-use std::process::Stdio;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Stdio};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 /// `airglyph-zenoh`, when it was built (`cargo build -p airglyph-zenoh`, a step of its
-/// own in scripts/test: Zenoh is heavy to build).
+/// own in scripts/test: Zenoh is heavy to build); else None, the test saying it skips.
 fn bridge() -> Option<PathBuf> {
-    let exe = std::env::current_exe().ok()?;
-    let path = exe.parent()?.parent()?.join("airglyph-zenoh");
-    path.exists().then_some(path)
+    let path = std::env::current_exe()
+        .ok()
+        .and_then(|exe| Some(exe.parent()?.parent()?.join("airglyph-zenoh")))
+        .filter(|path| path.exists());
+    if path.is_none() {
+        eprintln!("skipped: airglyph-zenoh is not built (cargo build -p airglyph-zenoh; scripts/test does)");
+    }
+    path
+}
+
+/// `airglyph-zenoh import --json` on `host` for `domain`, its connection `args`
+/// (`--connect E` or `--listen E`), its stdout piped.
+fn importer(host: &Isolated, bridge: &Path, domain: &str, args: &[&str]) -> Child {
+    host.command_at(bridge)
+        .args(["import", "--json", "--domain", domain])
+        .args(args)
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap()
 }
 
 fn free_port() -> u16 {
@@ -103,7 +119,6 @@ fn gestures_cross_to_another_host_and_losses_are_counted() {
     // this one's bursts.
     let _one = one_at_a_time();
     let Some(bridge) = bridge() else {
-        eprintln!("skipped: airglyph-zenoh is not built (cargo build -p airglyph-zenoh; scripts/test does)");
         return;
     };
     let (device, other) = (Isolated::new(), Isolated::new());
@@ -123,19 +138,8 @@ fn gestures_cross_to_another_host_and_losses_are_counted() {
         ])
         .spawn()
         .unwrap();
-    let mut importer = other
-        .command_at(&bridge)
-        .args([
-            "import",
-            "--json",
-            "--domain",
-            &domain,
-            "--connect",
-            &format!("tcp/{}", network.addr),
-        ])
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let relay = format!("tcp/{}", network.addr);
+    let mut importer = importer(&other, &bridge, &domain, &["--connect", &relay]);
     let reports = json_lines(importer.stdout.take().unwrap());
     let (receiver, received) = start_probe(&other, &["--stream", "gesture", "--idle", "60"]);
     // The two sessions find each other through the relay.
@@ -267,7 +271,6 @@ fn exporters(p: &Isolated) -> Vec<u32> {
 fn run_export_zenoh_carries_gestures_and_stats_to_another_host_across_a_restart() {
     let _one = one_at_a_time();
     let Some(bridge) = bridge() else {
-        eprintln!("skipped: airglyph-zenoh is not built (cargo build -p airglyph-zenoh; scripts/test does)");
         return;
     };
     let (device, other) = (Isolated::new(), Isolated::new());
@@ -276,19 +279,7 @@ fn run_export_zenoh_carries_gestures_and_stats_to_another_host_across_a_restart(
 
     // The other host first: an importer that connects (and keeps trying until the
     // device listens), and `echo` reading what it republishes.
-    let mut importer = other
-        .command_at(&bridge)
-        .args([
-            "import",
-            "--json",
-            "--domain",
-            &domain,
-            "--connect",
-            &endpoint,
-        ])
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let mut importer = importer(&other, &bridge, &domain, &["--connect", &endpoint]);
     let reports = json_lines(importer.stdout.take().unwrap());
     let mut gestures_echo = other
         .command("airglyph")
