@@ -115,6 +115,8 @@ fn main() {
     let (mut npass, mut npts, mut nrace) = (0usize, 0usize, 0usize);
     let mut ncpu = 0usize;
     let mut bias = [nalgebra::Vector3::<f32>::zeros(); Joint::COUNT];
+    // Per joint: frames it was hidden, and of those the frames it was reported visible.
+    let mut hidden = [(0usize, 0usize); Joint::COUNT];
     let mut series = std::env::var("SERIES")
         .ok()
         .map(|f| std::io::BufWriter::new(std::fs::File::create(f).unwrap()));
@@ -231,6 +233,10 @@ fn main() {
             }
             for j in 0..Joint::COUNT {
                 bias[j] += (r.skeleton.joints[j] - truth.skeleton.joints[j]) / n as f32;
+                if !truth.skeleton.visible[j] {
+                    hidden[j].0 += 1;
+                    hidden[j].1 += usize::from(r.skeleton.visible[j]);
+                }
             }
         }
         if let Some(d) = &out {
@@ -346,6 +352,19 @@ fn main() {
             d.z
         );
     }
+    let shown: Vec<String> = Joint::ALL
+        .iter()
+        .filter(|j| hidden[j.index()].1 > 0)
+        .map(|j| {
+            format!(
+                "{} {}/{}",
+                j.name(),
+                hidden[j.index()].1,
+                hidden[j.index()].0
+            )
+        })
+        .collect();
+    eprintln!("hidden but reported visible: {}", shown.join(", "));
     eprintln!(
         "visible joints: {} mean {:.2} cm, {:.1} % beyond 10 cm; hidden: {} mean {:.2} cm, {:.1} % beyond",
         vis_n[0],
