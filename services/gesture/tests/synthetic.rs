@@ -71,6 +71,7 @@ fn samples_of(classes: usize, per_class: usize, seed: u64) -> Vec<Sample> {
                 label: name.to_string(),
                 subject: format!("w{}", i % 5),
                 strokes: vec![shape(k, &mut rng)],
+                depth: None,
             });
         }
     }
