@@ -17,11 +17,14 @@ fn lines(path: &Path) -> Vec<serde_json::Value> {
         .collect()
 }
 
-/// One collected repetition: the label, and a path of [x, y, ms] points of about a
-/// symbol's size (shoulder widths) and duration (the synthetic person takes 1–1.5 s).
+/// One collected repetition: the label, and a path of [x, y, z, ms] points (3-D,
+/// `"dims":3`) of about a symbol's size (shoulder widths) and duration (the synthetic
+/// person takes 1–1.5 s), drawn on a pane in front of the body (z: the hand well in
+/// front of the shoulders, and flat: a symbol is drawn in a plane).
 fn check_repetition(v: &serde_json::Value, label: &str) {
     assert_eq!(v["label"], label);
     assert_eq!(v["subject"], "me");
+    assert_eq!(v["dims"], 3, "{v}");
     let strokes = v["strokes"].as_array().unwrap();
     assert_eq!(strokes.len(), 1, "{v}");
     let pts: Vec<Vec<f64>> = strokes[0]
@@ -37,9 +40,9 @@ fn check_repetition(v: &serde_json::Value, label: &str) {
         })
         .collect();
     assert!(pts.len() >= 20, "{} points", pts.len());
-    assert!(pts.iter().all(|p| p.len() == 3));
-    assert!(pts.windows(2).all(|w| w[1][2] > w[0][2]), "times increase");
-    let secs = pts[pts.len() - 1][2] / 1000.0;
+    assert!(pts.iter().all(|p| p.len() == 4));
+    assert!(pts.windows(2).all(|w| w[1][3] > w[0][3]), "times increase");
+    let secs = pts[pts.len() - 1][3] / 1000.0;
     assert!((0.8..2.0).contains(&secs), "{secs} s");
     let span = |k: usize| {
         let v: Vec<f64> = pts.iter().map(|p| p[k]).collect();
@@ -47,6 +50,8 @@ fn check_repetition(v: &serde_json::Value, label: &str) {
     };
     let size = span(0).max(span(1));
     assert!((0.5..1.6).contains(&size), "size {size}");
+    assert!(pts.iter().all(|p| p[2] > 0.5), "in front of the shoulders");
+    assert!(span(2) < 0.5 * size, "depth {} for a size {size}", span(2));
 }
 
 #[test]

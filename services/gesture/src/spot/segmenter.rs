@@ -22,6 +22,11 @@ pub struct Segmenter {
     base: usize,
     /// Hand points (gesture-size units) with their frame sequence and time.
     pts: Vec<([f32; 2], u64, u64)>,
+    /// The depth of every point of `pts` (0 when the model reads none).
+    depth: Vec<f32>,
+    /// Whether the hand's speed counts its depth: for a model of 3-D gestures, for
+    /// which a push towards the camera is a movement and not a rest.
+    in_depth: bool,
     /// `speed[k]`: the speed of point k − 2 (gesture sizes a second), centred over
     /// five points, so known two points late.
     speed: Vec<f32>,
@@ -36,6 +41,8 @@ impl Segmenter {
             cfg: *cfg,
             base: 0,
             pts: Vec::new(),
+            depth: Vec::new(),
+            in_depth: false,
             speed: Vec::new(),
             breaks: Vec::new(),
             rest_from: None,
@@ -46,6 +53,7 @@ impl Segmenter {
     pub fn reset(&mut self) {
         self.base += self.pts.len();
         self.pts.clear();
+        self.depth.clear();
         self.speed.clear();
         self.breaks.clear();
         self.rest_from = None;
@@ -59,12 +67,28 @@ impl Segmenter {
     /// Adds a point (gesture-size units); returns the point where a gesture may end,
     /// when one was found (a few points back).
     pub fn push(&mut self, p: [f32; 2], seq: u64, time_ns: u64) -> Option<usize> {
+        self.push_deep(p, 0.0, seq, time_ns)
+    }
+
+    /// Counts the depth in the hand's speed from now on (see `in_depth`).
+    pub fn set_in_depth(&mut self, on: bool) {
+        self.in_depth = on;
+    }
+
+    /// [`Self::push`] with the point's depth `z`.
+    pub fn push_deep(&mut self, p: [f32; 2], z: f32, seq: u64, time_ns: u64) -> Option<usize> {
         self.pts.push((p, seq, time_ns));
+        self.depth.push(z);
         let k = self.pts.len() - 1;
         if k >= 4 {
             let (a, b) = (self.pts[k - 4], self.pts[k]);
             let dt = (b.2.saturating_sub(a.2) as f64 * 1e-9).max(1e-4) as f32;
-            let d = ((b.0[0] - a.0[0]).powi(2) + (b.0[1] - a.0[1]).powi(2)).sqrt();
+            let d = if self.in_depth {
+                let dz = self.depth[k] - self.depth[k - 4];
+                ((b.0[0] - a.0[0]).powi(2) + (b.0[1] - a.0[1]).powi(2) + dz * dz).sqrt()
+            } else {
+                ((b.0[0] - a.0[0]).powi(2) + (b.0[1] - a.0[1]).powi(2)).sqrt()
+            };
             self.speed.push(d / dt);
         } else {
             self.speed.push(f32::NAN);
@@ -163,6 +187,12 @@ impl Segmenter {
 
     /// The verifier's input for the segment s..=e: its points, and the hand's path just
     /// before and after it ([`VerifierInput::cut`]; as far as kept).
+    /// The depths of the points s..=e.
+    pub fn depths(&self, s: usize, e: usize) -> Option<Vec<f32>> {
+        let (a, b) = (s.checked_sub(self.base)?, e.checked_sub(self.base)?);
+        (a <= b && b < self.depth.len()).then(|| self.depth[a..=b].to_vec())
+    }
+
     pub fn input(&self, s: usize, e: usize, fps: f64) -> Option<VerifierInput> {
         let (i0, i1) = (s.checked_sub(self.base)?, e.checked_sub(self.base)?);
         if i0 > i1 || i1 >= self.pts.len() {
@@ -200,6 +230,7 @@ impl Segmenter {
             return;
         }
         self.pts.drain(..cut);
+        self.depth.drain(..cut);
         self.speed.drain(..cut.min(self.speed.len()));
         self.base += cut;
         let base = self.base;
