@@ -278,4 +278,43 @@ mod tests {
             assert!((last[2] - 27.0 * 33.333).abs() < 100.0, "{last:?}");
         }
     }
+
+    /// A push towards the camera from a hand held out in front: a repetition of its
+    /// own, whose depth says how far the hand went.
+    #[test]
+    fn a_push_towards_the_camera_is_a_repetition_with_its_depth() {
+        let mut seg = RepetitionSegmenter::new(RepetitionConfig::default());
+        let mut frames: Vec<HandPoint> = Vec::new();
+        let (low, held) = ([0.8, 1.7, 0.2], [0.2, 0.0, 0.8]);
+        let go = |f: &mut Vec<HandPoint>, a: [f32; 3], b: [f32; 3], n: usize| {
+            for i in 1..=n {
+                let t = i as f32 / n as f32;
+                let s = t * t * t * (10.0 - 15.0 * t + 6.0 * t * t);
+                f.push(point(
+                    a[0] + s * (b[0] - a[0]),
+                    a[1] + s * (b[1] - a[1]),
+                    a[2] + s * (b[2] - a[2]),
+                ));
+            }
+        };
+        frames.extend((0..20).map(|_| point(low[0], low[1], low[2])));
+        go(&mut frames, low, held, 15);
+        let pushed = [held[0], held[1], held[2] + 0.7];
+        go(&mut frames, held, pushed, 15);
+        go(&mut frames, pushed, low, 15);
+        frames.extend((0..20).map(|_| point(low[0], low[1], low[2])));
+        let mut reps = Vec::new();
+        for (i, p) in frames.iter().enumerate() {
+            reps.extend(seg.push_point(*p, i as u64, i as u64 * 33_333_333));
+        }
+        reps.extend(seg.finish());
+        assert_eq!(reps.len(), 1, "{reps:?}");
+        let r = &reps[0];
+        assert_eq!(r.depth.len(), r.points.len());
+        let (lo, hi) = r
+            .depth
+            .iter()
+            .fold((f32::MAX, f32::MIN), |(a, b), &z| (a.min(z), b.max(z)));
+        assert!(hi - lo > 0.5, "{lo}..{hi}");
+    }
 }

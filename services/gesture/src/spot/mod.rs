@@ -333,6 +333,10 @@ impl Spotter {
             if !size_ok_in_depth(&input.segment, &z, &self.cfg) {
                 return None;
             }
+            let held_out = self.cfg.min_forward * self.inverse_size();
+            if !self.has_verifier() && z.iter().any(|&v| v < held_out) {
+                return None;
+            }
             Some(z)
         } else {
             if !size_ok(&input.segment, &self.cfg) {
@@ -415,6 +419,13 @@ impl Spotter {
             VerifierInput::cut(&window, s - from, e - from, times, fps),
             None,
         ))
+    }
+
+    fn has_verifier(&self) -> bool {
+        self.model
+            .spotting
+            .as_ref()
+            .is_some_and(|s| s.verifier.is_some())
     }
 
     /// Gesture sizes a shoulder width: the segmenter's unit.

@@ -285,4 +285,29 @@ mod tests {
         let starts = seg.starts(64, 0, 10, 100);
         assert!(starts.iter().any(|&s| s.abs_diff(19) <= 2), "{starts:?}");
     }
+
+    /// Rest, a push towards the camera (depth only), rest: the break points found.
+    fn push_breaks(in_depth: bool) -> Vec<usize> {
+        let mut seg = Segmenter::new(&SpotterConfig::default());
+        seg.set_in_depth(in_depth);
+        let mut z = vec![0.0f32; 20];
+        z.extend(stroke([0.0, 0.0], [1.0, 0.0], 20).iter().map(|p| p[0]));
+        z.extend(vec![1.0; 30]);
+        let mut ends = Vec::new();
+        for (i, &d) in z.iter().enumerate() {
+            ends.extend(seg.push_deep([0.0, 0.0], d, i as u64, i as u64 * 33_333_333));
+        }
+        ends
+    }
+
+    #[test]
+    fn a_push_is_a_movement_in_depth_and_a_rest_in_the_plane() {
+        // In depth: the rest before it is cut where the push starts, and the rest after
+        // it where it ends: a stretch that can be a gesture.
+        let deep = push_breaks(true);
+        assert!(deep.iter().any(|&e| e.abs_diff(40) <= 3), "{deep:?}");
+        // In the plane the hand never moved: one rest from the first frame on.
+        let flat = push_breaks(false);
+        assert!(flat.iter().all(|&e| e < 10), "{flat:?}");
+    }
 }
