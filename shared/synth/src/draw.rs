@@ -78,10 +78,10 @@ enum Shape {
     Deep(String, Vec<Point3<f32>>),
 }
 
-/// The symbols of a draw script: names separated by commas (`push,circle-up,7`), or
-/// without a comma one a character (`0123ABC`).
+/// The symbols of a draw script: names separated by commas (`push,circle-up,7`), one
+/// gesture of the 3-D vocabulary (`push`), or else one a character (`0123ABC`).
 pub(crate) fn script_names(symbols: &str) -> Vec<String> {
-    if symbols.contains(',') {
+    if symbols.contains(',') || shapes3d::shape(symbols.trim()).is_some() {
         symbols
             .split(',')
             .map(str::trim)
@@ -135,8 +135,10 @@ impl Drawing {
                     let mut chars = name.chars();
                     let c = chars.next().filter(|_| chars.next().is_none());
                     c.and_then(glyphs::template).ok_or_else(|| {
+                        // A character as a character ('#'), a name as a string.
+                        let shown = c.map_or(format!("{name:?}"), |c| format!("{c:?}"));
                         SynthError::Config(format!(
-                            "no built-in template for symbol {name:?} (built in: {} and the 3-D gestures {}); give a trajectory JSONL",
+                            "no built-in template for symbol {shown} (built in: {} and the 3-D gestures {}); give a trajectory JSONL",
                             glyphs::BUILT_IN,
                             shapes3d::VOCABULARY.join(",")
                         ))
@@ -317,5 +319,52 @@ impl Drawing {
 
     pub(crate) fn gestures(&self) -> Vec<GestureTruth> {
         self.gestures.clone()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scripts_name_symbols_by_character_or_by_comma() {
+        assert_eq!(script_names("07 A"), ["0", "7", "A"]);
+        assert_eq!(script_names("push"), ["push"]);
+        assert_eq!(
+            script_names("push, circle-up,,7"),
+            ["push", "circle-up", "7"]
+        );
+    }
+
+    #[test]
+    fn a_push_goes_towards_the_camera_and_a_symbol_stays_on_its_pane() {
+        let body = crate::body::Body::procedural(&crate::body::ProceduralBody::default()).unwrap();
+        let sk = body.tpose();
+        let spec = |symbols: &str| DrawSpec {
+            symbols: symbols.into(),
+            samples: None,
+            repeat: false,
+            rest: None,
+        };
+        let depth = |symbols: &str| {
+            let d = Drawing::new(&spec(symbols), sk, Setting::default(), 30.0, 1).unwrap();
+            let g = &d.gestures()[0];
+            let z: Vec<f32> = (g.start_frame..=g.end_frame)
+                .map(|i| d.targets[i].z)
+                .collect();
+            (
+                z[0],
+                z[z.len() - 1],
+                z.iter().cloned().fold(f32::MIN, f32::max),
+            )
+        };
+        let (first, last, _) = depth("push");
+        assert!(last - first > 0.2, "{first} → {last}");
+        let (first, last, deepest) = depth("7");
+        assert_eq!((first, last), (deepest, deepest));
+        assert!(matches!(
+            Drawing::new(&spec("nudge,7"), sk, Setting::default(), 30.0, 1),
+            Err(SynthError::Config(_))
+        ));
     }
 }
