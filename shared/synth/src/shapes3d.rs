@@ -66,7 +66,7 @@ pub fn shape(name: &str) -> Option<Vec<Point3<f32>>> {
         "circle-up" => turn(|c, s, _| p(c, 0.5, 1.0 - s)),
         // Facing the right: in the plane of the body's side.
         "circle-side" => turn(|c, s, _| p(0.5, s, c)),
-        "helix-in" => turn(|c, s, f| p(c, s, f)),
+        "helix-in" => turn(p),
         "helix-out" => turn(|c, s, f| p(c, s, 1.0 - f)),
         "right-push" => vec![p(0.0, 0.5, 0.0), p(1.0, 0.5, 0.0), p(1.0, 0.5, 1.0)],
         "right-pull" => vec![p(0.0, 0.5, 1.0), p(1.0, 0.5, 1.0), p(1.0, 0.5, 0.0)],

@@ -142,14 +142,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let source = match args.source.clone() {
         Some(s) => s,
+        // A gesture of the 3-D vocabulary, drawn in depth by the synthetic person.
+        None if airglyph_synth::shapes3d::shape(&args.label).is_some() => {
+            let script = vec![args.label.as_str(); args.count].join(",");
+            SourceSpec::Synthetic(Some(format!("draw:{script}")))
+        }
         None => {
             let c = args.label.chars().next().unwrap_or(' ');
             if args.label.chars().count() != 1
                 || !airglyph_synth::glyphs::BUILT_IN.contains(c.to_ascii_uppercase())
             {
                 bail!(
-                    "--label {:?} has no built-in synthetic drawing; give --source (e.g. v4l2:/dev/video0)",
-                    args.label
+                    "--label {:?} has no built-in synthetic drawing (0–9, A–Z, or a gesture of the 3-D vocabulary: {}); give --source (e.g. v4l2:/dev/video0)",
+                    args.label,
+                    airglyph_synth::shapes3d::VOCABULARY.join(", ")
                 );
             }
             let script: String = std::iter::repeat_n(c, args.count).collect();
