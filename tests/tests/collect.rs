@@ -76,20 +76,44 @@ fn collect_writes_each_repetition_and_train_takes_the_file() {
     for (v, label) in samples.iter().zip(["7", "7", "L", "L"]) {
         check_repetition(v, label);
     }
-    let model = tmp.path().join("mine.json");
-    succeed(
+    let read = |path: &std::path::Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+    };
+    // The 3-D points make a model that reads depth, whose spotting part has no
+    // verifier yet (gesture README, "Gestures in three dimensions").
+    let deep = tmp.path().join("deep.json");
+    let out = succeed(
         p.command("airglyph")
             .args(["train", "--ensemble", "1", "--epochs", "5"])
             .arg("--data")
             .arg(&data)
             .arg("--out")
+            .arg(&deep),
+    );
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("4 samples drawn in 3-D"),
+        "{out:?}"
+    );
+    let d = read(&deep);
+    assert_eq!(
+        d["classifier"]["features"]["depth"], true,
+        "{}",
+        d["classifier"]["features"]
+    );
+    assert!(d["spotting"]["verifier"].is_null());
+    // --flat: what a 2-D camera sees, with a verifier.
+    let model = tmp.path().join("mine.json");
+    succeed(
+        p.command("airglyph")
+            .args(["train", "--ensemble", "1", "--epochs", "5", "--flat"])
+            .arg("--data")
+            .arg(&data)
+            .arg("--out")
             .arg(&model),
     );
-    let read = |path: &std::path::Path| -> serde_json::Value {
-        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
-    };
     let mut m = read(&model);
     assert_eq!(m["labels"], serde_json::json!(["7", "L"]));
+    assert!(m["classifier"]["features"].get("depth").is_none());
 
     // Calibrating the label bars again keeps everything else of the model.
     let again = tmp.path().join("again.json");
@@ -98,6 +122,7 @@ fn collect_writes_each_repetition_and_train_takes_the_file() {
             .arg("train")
             .arg("--recalibrate")
             .arg(&model)
+            .arg("--flat")
             .arg("--data")
             .arg(&data)
             .arg("--out")
