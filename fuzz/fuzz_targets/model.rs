@@ -62,6 +62,7 @@ fuzz_target!(|data: &[u8]| {
             x,
             y,
             forward: 0.3,
+            z: 0.3,
             hand: Hand::Right,
         };
         let _ = spotter.push_point(p, i as u64, i as u64 * 33_333_333);

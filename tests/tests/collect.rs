@@ -17,11 +17,14 @@ fn lines(path: &Path) -> Vec<serde_json::Value> {
         .collect()
 }
 
-/// One collected repetition: the label, and a path of [x, y, ms] points of about a
-/// symbol's size (shoulder widths) and duration (the synthetic person takes 1–1.5 s).
+/// One collected repetition: the label, and a path of [x, y, z, ms] points (3-D,
+/// `"dims":3`) of about a symbol's size (shoulder widths) and duration (the synthetic
+/// person takes 1–1.5 s), drawn on a pane in front of the body (z: the hand well in
+/// front of the shoulders, and flat: a symbol is drawn in a plane).
 fn check_repetition(v: &serde_json::Value, label: &str) {
     assert_eq!(v["label"], label);
     assert_eq!(v["subject"], "me");
+    assert_eq!(v["dims"], 3, "{v}");
     let strokes = v["strokes"].as_array().unwrap();
     assert_eq!(strokes.len(), 1, "{v}");
     let pts: Vec<Vec<f64>> = strokes[0]
@@ -37,9 +40,9 @@ fn check_repetition(v: &serde_json::Value, label: &str) {
         })
         .collect();
     assert!(pts.len() >= 20, "{} points", pts.len());
-    assert!(pts.iter().all(|p| p.len() == 3));
-    assert!(pts.windows(2).all(|w| w[1][2] > w[0][2]), "times increase");
-    let secs = pts[pts.len() - 1][2] / 1000.0;
+    assert!(pts.iter().all(|p| p.len() == 4));
+    assert!(pts.windows(2).all(|w| w[1][3] > w[0][3]), "times increase");
+    let secs = pts[pts.len() - 1][3] / 1000.0;
     assert!((0.8..2.0).contains(&secs), "{secs} s");
     let span = |k: usize| {
         let v: Vec<f64> = pts.iter().map(|p| p[k]).collect();
@@ -47,6 +50,8 @@ fn check_repetition(v: &serde_json::Value, label: &str) {
     };
     let size = span(0).max(span(1));
     assert!((0.5..1.6).contains(&size), "size {size}");
+    assert!(pts.iter().all(|p| p[2] > 0.5), "in front of the shoulders");
+    assert!(span(2) < 0.5 * size, "depth {} for a size {size}", span(2));
 }
 
 #[test]
@@ -71,20 +76,44 @@ fn collect_writes_each_repetition_and_train_takes_the_file() {
     for (v, label) in samples.iter().zip(["7", "7", "L", "L"]) {
         check_repetition(v, label);
     }
-    let model = tmp.path().join("mine.json");
-    succeed(
+    let read = |path: &std::path::Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+    };
+    // The 3-D points make a model that reads depth, whose spotting part has no
+    // verifier yet (gesture README, "Gestures in three dimensions").
+    let deep = tmp.path().join("deep.json");
+    let out = succeed(
         p.command("airglyph")
             .args(["train", "--ensemble", "1", "--epochs", "5"])
             .arg("--data")
             .arg(&data)
             .arg("--out")
+            .arg(&deep),
+    );
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("4 samples drawn in 3-D"),
+        "{out:?}"
+    );
+    let d = read(&deep);
+    assert_eq!(
+        d["classifier"]["features"]["depth"], true,
+        "{}",
+        d["classifier"]["features"]
+    );
+    assert!(d["spotting"]["verifier"].is_null());
+    // --flat: what a 2-D camera sees, with a verifier.
+    let model = tmp.path().join("mine.json");
+    succeed(
+        p.command("airglyph")
+            .args(["train", "--ensemble", "1", "--epochs", "5", "--flat"])
+            .arg("--data")
+            .arg(&data)
+            .arg("--out")
             .arg(&model),
     );
-    let read = |path: &std::path::Path| -> serde_json::Value {
-        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
-    };
     let mut m = read(&model);
     assert_eq!(m["labels"], serde_json::json!(["7", "L"]));
+    assert!(m["classifier"]["features"].get("depth").is_none());
 
     // Calibrating the label bars again keeps everything else of the model.
     let again = tmp.path().join("again.json");
@@ -93,6 +122,7 @@ fn collect_writes_each_repetition_and_train_takes_the_file() {
             .arg("train")
             .arg("--recalibrate")
             .arg(&model)
+            .arg("--flat")
             .arg("--data")
             .arg(&data)
             .arg("--out")

@@ -77,6 +77,9 @@ enum Command {
     EvalGestures(cmd::eval_gestures::Args),
     #[cfg(feature = "lab")]
     EvalSpotting(cmd::eval_spotting::Args),
+    #[cfg(feature = "lab")]
+    /// Write the 3-D vocabulary drawn by synthetic people as trajectory JSONL.
+    SynthGestures(cmd::synth_gestures::Args),
     /// Estimate the skeleton of every frame of a recording.
     Pose(cmd::pose::Args),
     #[cfg(feature = "lab")]
@@ -158,6 +161,8 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
         Command::EvalGestures(a) => cmd::eval_gestures::run(a),
         #[cfg(feature = "lab")]
         Command::EvalSpotting(a) => cmd::eval_spotting::run(a),
+        #[cfg(feature = "lab")]
+        Command::SynthGestures(a) => cmd::synth_gestures::run(a),
         Command::Pose(a) => cmd::pose::run(a),
         #[cfg(feature = "lab")]
         Command::EvalPose(a) => cmd::eval_pose::run(a),

@@ -1,6 +1,7 @@
 //! Observations beyond the seed: the trajectory normalized in position and scale,
 //! resampled to equal arc length, and fixed-length feature vectors (normalized x/y,
-//! direction as sin/cos, pen-up flag, 8-direction feature maps on a coarse grid).
+//! direction as sin/cos, pen-up flag, 8-direction feature maps on a coarse grid); with
+//! depth, their 3-D counterparts (`features3d`).
 
 use crate::trajectory::{Point, Trajectory};
 use serde::{Deserialize, Serialize};
@@ -111,6 +112,10 @@ pub struct FeatureConfig {
     pub grid: usize,
     /// Use the pen-up flag (false for air-drawn gestures without pen information).
     pub pen_up: bool,
+    /// Read the trajectory's depth (`features3d`): what a model trained on 3-D data
+    /// sees. Absent from model files of 2-D models, which stay as they were.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub depth: bool,
 }
 
 impl Default for FeatureConfig {
@@ -119,6 +124,7 @@ impl Default for FeatureConfig {
             points: 32,
             grid: 6,
             pen_up: false,
+            depth: false,
         }
     }
 }
@@ -127,6 +133,9 @@ impl FeatureConfig {
     /// The feature vector's length. Saturates instead of wrapping: a size that
     /// overflows never matches a network's input count (see [`FeatureConfig::validate`]).
     pub fn dim(&self) -> usize {
+        if self.depth {
+            return crate::features3d::dim(self.points, self.grid);
+        }
         self.points
             .saturating_mul(5)
             .saturating_add(8usize.saturating_mul(self.grid).saturating_mul(self.grid))
@@ -149,6 +158,9 @@ impl FeatureConfig {
 
 /// The feature vector of a trajectory (length `cfg.dim()`).
 pub fn feature_vector(t: &Trajectory, cfg: &FeatureConfig, out: &mut Vec<f32>) {
+    if cfg.depth {
+        return crate::features3d::feature_vector3(t, cfg.points, cfg.grid, cfg.pen_up, out);
+    }
     out.clear();
     let r = resample(t, cfg.points);
     let n = r.points.len();

@@ -31,6 +31,7 @@ mod bezier;
 mod body_frame;
 mod crf;
 mod features;
+mod features3d;
 mod hmm;
 pub mod limits;
 mod mlp;
@@ -49,4 +50,4 @@ pub use spot::{
     Candidate, Judgement, RankBy, SettingsError, SpotError, SpottedGesture, Spotter, SpotterConfig,
 };
 pub use tracker::{Hand, HandPoint, HandTracker, TrackerConfig};
-pub use trajectory::{Point, Trajectory};
+pub use trajectory::{Point, Point3, Trajectory};

@@ -82,7 +82,8 @@ impl Default for TrackerConfig {
 
 /// A point of the hand trajectory in the body frame: x to the person's right, y down,
 /// in shoulder widths from the point between the shoulders; and how far the hand is in
-/// front of the shoulders (towards where the person faces, shoulder widths, unfiltered).
+/// front of the shoulders (towards where the person faces, shoulder widths), unfiltered
+/// and filtered: the depth of a gesture drawn in 3-D.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HandPoint {
     /// Towards the person's right shoulder…
@@ -91,6 +92,10 @@ pub struct HandPoint {
     pub y: f32,
     /// In front of the shoulders, unfiltered.
     pub forward: f32,
+    /// In front of the shoulders, filtered (z towards where the person faces: the
+    /// camera, for a person facing it). Its own One Euro filter, with the plane's
+    /// settings, so the plane's path is what it was before depth was kept.
+    pub z: f32,
     /// The hand it is.
     pub hand: Hand,
 }
@@ -102,6 +107,7 @@ pub struct HandTracker {
     hand: Hand,
     lead: u32,
     filter: HandFilter,
+    depth: OneEuro,
     frame: FrameSmoother,
 }
 
@@ -113,6 +119,7 @@ impl HandTracker {
             cfg,
             lead: 0,
             filter: HandFilter::new(&cfg),
+            depth: OneEuro::new(cfg.min_cutoff, cfg.beta, cfg.d_cutoff),
             frame: FrameSmoother::new(cfg.frame),
         }
     }
@@ -126,6 +133,7 @@ impl HandTracker {
     /// follows stays.
     pub fn reset(&mut self) {
         self.filter.reset();
+        self.depth.reset();
         self.lead = 0;
         self.frame.reset();
     }
@@ -173,6 +181,7 @@ impl HandTracker {
                     };
                     self.lead = 0;
                     self.filter.reset();
+                    self.depth.reset();
                 }
             } else {
                 self.lead = 0;
@@ -187,10 +196,12 @@ impl HandTracker {
         }
         let [x, y, forward] = frame.project(s[hj].coords);
         let [x, y] = self.filter.filter([x as f64, y as f64], t);
+        let z = self.depth.filter(forward as f64, t);
         Some(HandPoint {
             x: x as f32,
             y: y as f32,
             forward,
+            z: z as f32,
             hand: self.hand,
         })
     }
@@ -249,7 +260,31 @@ mod tests {
         );
         // skeleton_with_hand holds the hand 0.35 m in front of 0.36 m wide shoulders.
         assert!((pa.forward - 0.35 / 0.36).abs() < 1e-3, "{pa:?}");
+        // The first point passes the filter unchanged.
+        assert_eq!(pa.z, pa.forward);
         assert!((pa.x - pb.x).abs() < 1e-4 && (pa.y - pb.y).abs() < 1e-4);
+    }
+
+    #[test]
+    fn a_push_towards_the_camera_is_tracked_in_depth_not_in_the_plane() {
+        let mut t = HandTracker::new(TrackerConfig::default());
+        let mut s = skeleton_with_hand(0.2, 0.1, 2.5);
+        let hand = Joint::RightHand.index();
+        let at_rest = s.joints[hand].coords;
+        let mut last = None;
+        // 0.3 m towards the camera (−z in the camera frame) over a second, then held.
+        for i in 0..60u64 {
+            let f = (i as f32 / 30.0).min(1.0);
+            s.joints[hand].coords = at_rest - nalgebra::Vector3::new(0.0, 0.0, 0.3 * f);
+            last = t.update(&s, i * 33_333_333);
+        }
+        let p = last.unwrap();
+        let first_z = 0.35 / 0.36;
+        assert!((p.z - (first_z + 0.3 / 0.36)).abs() < 0.01, "{p:?}");
+        assert!(
+            (p.x - 0.2).abs() < 1e-3 && (p.y - 0.1).abs() < 1e-3,
+            "{p:?}"
+        );
     }
 
     #[test]

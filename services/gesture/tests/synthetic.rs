@@ -71,6 +71,7 @@ fn samples_of(classes: usize, per_class: usize, seed: u64) -> Vec<Sample> {
                 label: name.to_string(),
                 subject: format!("w{}", i % 5),
                 strokes: vec![shape(k, &mut rng)],
+                depth: None,
             });
         }
     }
@@ -277,4 +278,71 @@ fn a_symbol_ordinary_movement_passes_for_gets_a_higher_bar() {
         after.correct + 1 >= before.correct && after.insertions <= before.insertions,
         "without the bars {before:?}, with {after:?}"
     );
+}
+
+/// Pushes and pulls (straight towards and away from the camera, with a little sideways
+/// wobble) and swipes: pushes and pulls differ in depth only.
+fn deep_samples(per_class: usize, seed: u64) -> Vec<Sample> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut v = Vec::new();
+    for i in 0..per_class {
+        for (label, dir) in [
+            ("push", [0.0, 0.0, 1.0]),
+            ("pull", [0.0, 0.0, -1.0]),
+            ("swipe", [1.0, 0.0, 0.0]),
+        ] {
+            let n = rng.gen_range(15..30);
+            let w = [rng.gen_range(-0.2..0.2f32), rng.gen_range(-0.2..0.2f32)];
+            let pts: Vec<[f32; 3]> = (0..n)
+                .map(|k| {
+                    let t = k as f32 / (n - 1) as f32;
+                    let wob = (t * 3.0).sin();
+                    [
+                        dir[0] * t + w[0] * wob + rng.gen_range(-0.02..0.02),
+                        dir[1] * t + w[1] * wob + rng.gen_range(-0.02..0.02),
+                        dir[2] * t + rng.gen_range(-0.02..0.02),
+                    ]
+                })
+                .collect();
+            v.push(Sample {
+                label: label.to_string(),
+                subject: format!("w{}", i % 5),
+                strokes: vec![pts.iter().map(|p| [p[0], p[1]]).collect()],
+                depth: Some(vec![pts.iter().map(|p| p[2]).collect()]),
+            });
+        }
+    }
+    v
+}
+
+#[test]
+fn classifiers_trained_on_depth_tell_a_push_from_a_pull_and_2d_ones_cannot() {
+    let (tr, te) = (deep_samples(20, 1), deep_samples(20, 2));
+    let flat = |s: &[Sample]| -> Vec<Sample> { s.iter().map(Sample::flattened).collect() };
+    for kind in [
+        ClassifierKind::Mlp,
+        ClassifierKind::Hmm,
+        ClassifierKind::Crf,
+    ] {
+        let mut cfg = small_config(kind);
+        cfg.spotting = false;
+        let deep = train(&tr, &cfg, &|_, _| {}).unwrap();
+        assert!(deep.reads_depth(), "{kind:?}");
+        let acc = accuracy(&deep, &te);
+        assert!(acc >= 0.95, "{kind:?} in 3-D: accuracy {acc}");
+        let back = Model::from_json_str(&deep.to_json(), Path::new("m.json")).unwrap();
+        assert_eq!(accuracy(&back, &te), acc);
+        // Without depth, a push and a pull are the same wobble: at most the swipes and
+        // about half of the rest.
+        let shadow = train(&flat(&tr), &cfg, &|_, _| {}).unwrap();
+        assert!(!shadow.reads_depth());
+        let acc2 = accuracy(&shadow, &flat(&te));
+        assert!(acc2 < 0.85, "{kind:?} in 2-D: accuracy {acc2}");
+        // A model of 2-D data writes no field of depth: its file is what it was.
+        let json = shadow.to_json();
+        assert!(
+            !json.contains("\"depth\"") && !json.contains("directions"),
+            "{kind:?}"
+        );
+    }
 }

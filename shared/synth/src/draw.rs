@@ -12,6 +12,7 @@ use crate::error::SynthError;
 use crate::glyphs::{self, Glyph};
 use crate::motion::{DrawSpec, Setting};
 use crate::poses::{self, Side};
+use crate::shapes3d;
 use airglyph_core::gestures::GestureTruth;
 use airglyph_core::Joint;
 use nalgebra::{Point2, Point3, Vector3};
@@ -52,6 +53,50 @@ fn along(path: &[Point2<f32>], s: f32) -> Point2<f32> {
     *path.last().unwrap()
 }
 
+/// Points along a 3-D polyline at arc-length fractions.
+fn along3(path: &[Point3<f32>], s: f32) -> Point3<f32> {
+    let total: f32 = path.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+    if path.len() < 2 || total <= 0.0 {
+        return path[0];
+    }
+    let mut want = s.clamp(0.0, 1.0) * total;
+    for w in path.windows(2) {
+        let l = (w[1] - w[0]).norm();
+        if want <= l && l > 0.0 {
+            return w[0] + (w[1] - w[0]) * (want / l);
+        }
+        want -= l;
+    }
+    *path.last().unwrap()
+}
+
+/// What the person draws: a symbol on a pane (a glyph's strokes), or a gesture of the
+/// 3-D vocabulary, which goes towards and away from the camera too.
+enum Shape {
+    Flat(Glyph),
+    /// Its name and path in a unit box (x right, y down, z towards the camera).
+    Deep(String, Vec<Point3<f32>>),
+}
+
+/// The symbols of a draw script: names separated by commas (`push,circle-up,7`), one
+/// gesture of the 3-D vocabulary (`push`), or else one a character (`0123ABC`).
+pub(crate) fn script_names(symbols: &str) -> Vec<String> {
+    if symbols.contains(',') || shapes3d::shape(symbols.trim()).is_some() {
+        symbols
+            .split(',')
+            .map(str::trim)
+            .filter(|n| !n.is_empty())
+            .map(str::to_string)
+            .collect()
+    } else {
+        symbols
+            .chars()
+            .filter(|c| !c.is_whitespace())
+            .map(String::from)
+            .collect()
+    }
+}
+
 impl Drawing {
     pub(crate) fn new(
         d: &DrawSpec,
@@ -66,10 +111,14 @@ impl Drawing {
         };
         let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0xA1B2_C3D4);
         let mut glyph_list = Vec::new();
-        for c in d.symbols.chars().filter(|c| !c.is_whitespace()) {
+        for name in script_names(&d.symbols) {
+            if let (None, Some(path)) = (&samples, shapes3d::shape(&name)) {
+                glyph_list.push(Shape::Deep(name, path));
+                continue;
+            }
             let g = match &samples {
                 Some((path, all)) => {
-                    let label = c.to_string();
+                    let label = name.clone();
                     let pool: Vec<&Glyph> = all
                         .iter()
                         .filter(|g| g.label.eq_ignore_ascii_case(&label))
@@ -82,14 +131,21 @@ impl Drawing {
                     }
                     pool[rng.gen_range(0..pool.len())].clone()
                 }
-                None => glyphs::template(c).ok_or_else(|| {
-                    SynthError::Config(format!(
-                        "no built-in template for symbol {c:?} (built in: {}); give a trajectory JSONL",
-                        glyphs::BUILT_IN
-                    ))
-                })?,
+                None => {
+                    let mut chars = name.chars();
+                    let c = chars.next().filter(|_| chars.next().is_none());
+                    c.and_then(glyphs::template).ok_or_else(|| {
+                        // A character as a character ('#'), a name as a string.
+                        let shown = c.map_or(format!("{name:?}"), |c| format!("{c:?}"));
+                        SynthError::Config(format!(
+                            "no built-in template for symbol {shown} (built in: {} and the 3-D gestures {}); give a trajectory JSONL",
+                            glyphs::BUILT_IN,
+                            shapes3d::VOCABULARY.join(",")
+                        ))
+                    })?
+                }
             };
-            glyph_list.push(g);
+            glyph_list.push(Shape::Flat(g));
         }
         if glyph_list.is_empty() {
             return Err(SynthError::Config(
@@ -162,19 +218,49 @@ impl Drawing {
             let place = |p: Point2<f32>| {
                 centre + Vector3::new(-(p.x - 0.5) * size, -(p.y - 0.5) * size, 0.0)
             };
-            let path = g.path();
-            let start = place(path[0]);
-            move_to(&mut targets, at, start, frames(rng.gen_range(0.35..0.5)));
-            let length: f32 = path.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
-            let secs = (0.75 + 0.2 * length).clamp(1.0, 1.5) * rng.gen_range(0.92..1.08);
-            let n = frames(secs);
-            let first = targets.len();
-            for i in 0..n {
-                let s = min_jerk(i as f32 / (n - 1).max(1) as f32);
-                targets.push(place(along(&path, s)));
+            // A 3-D gesture's depth: 0.8 of its size towards and away from the camera
+            // (z up towards the camera), around the pane.
+            let place3 = |p: Point3<f32>| {
+                centre
+                    + Vector3::new(
+                        -(p.x - 0.5) * size,
+                        -(p.y - 0.5) * size,
+                        (p.z - 0.5) * size * 0.8,
+                    )
+            };
+            let first;
+            match g {
+                Shape::Flat(g) => {
+                    let path = g.path();
+                    let start = place(path[0]);
+                    move_to(&mut targets, at, start, frames(rng.gen_range(0.35..0.5)));
+                    let length: f32 = path.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+                    let secs = (0.75 + 0.2 * length).clamp(1.0, 1.5) * rng.gen_range(0.92..1.08);
+                    let n = frames(secs);
+                    first = targets.len();
+                    for i in 0..n {
+                        let s = min_jerk(i as f32 / (n - 1).max(1) as f32);
+                        targets.push(place(along(&path, s)));
+                    }
+                }
+                Shape::Deep(_, path) => {
+                    let start = place3(path[0]);
+                    move_to(&mut targets, at, start, frames(rng.gen_range(0.35..0.5)));
+                    let length: f32 = path.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+                    let secs = (0.75 + 0.2 * length).clamp(1.0, 1.5) * rng.gen_range(0.92..1.08);
+                    let n = frames(secs);
+                    first = targets.len();
+                    for i in 0..n {
+                        let s = min_jerk(i as f32 / (n - 1).max(1) as f32);
+                        targets.push(place3(along3(path, s)));
+                    }
+                }
             }
             gestures.push(GestureTruth {
-                label: g.label.clone(),
+                label: match g {
+                    Shape::Flat(g) => g.label.clone(),
+                    Shape::Deep(name, _) => name.clone(),
+                },
                 start_frame: first,
                 end_frame: targets.len() - 1,
             });
@@ -233,5 +319,52 @@ impl Drawing {
 
     pub(crate) fn gestures(&self) -> Vec<GestureTruth> {
         self.gestures.clone()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scripts_name_symbols_by_character_or_by_comma() {
+        assert_eq!(script_names("07 A"), ["0", "7", "A"]);
+        assert_eq!(script_names("push"), ["push"]);
+        assert_eq!(
+            script_names("push, circle-up,,7"),
+            ["push", "circle-up", "7"]
+        );
+    }
+
+    #[test]
+    fn a_push_goes_towards_the_camera_and_a_symbol_stays_on_its_pane() {
+        let body = crate::body::Body::procedural(&crate::body::ProceduralBody::default()).unwrap();
+        let sk = body.tpose();
+        let spec = |symbols: &str| DrawSpec {
+            symbols: symbols.into(),
+            samples: None,
+            repeat: false,
+            rest: None,
+        };
+        let depth = |symbols: &str| {
+            let d = Drawing::new(&spec(symbols), sk, Setting::default(), 30.0, 1).unwrap();
+            let g = &d.gestures()[0];
+            let z: Vec<f32> = (g.start_frame..=g.end_frame)
+                .map(|i| d.targets[i].z)
+                .collect();
+            (
+                z[0],
+                z[z.len() - 1],
+                z.iter().cloned().fold(f32::MIN, f32::max),
+            )
+        };
+        let (first, last, _) = depth("push");
+        assert!(last - first > 0.2, "{first} → {last}");
+        let (first, last, deepest) = depth("7");
+        assert_eq!((first, last), (deepest, deepest));
+        assert!(matches!(
+            Drawing::new(&spec("nudge,7"), sk, Setting::default(), 30.0, 1),
+            Err(SynthError::Config(_))
+        ));
     }
 }

@@ -71,6 +71,7 @@
 
 #![warn(missing_docs)]
 
+pub mod air3d;
 pub mod body;
 pub mod bvh;
 pub mod canon;
@@ -83,6 +84,7 @@ pub mod poses;
 pub mod raster;
 pub mod room;
 pub mod sensor;
+pub mod shapes3d;
 
 pub use airglyph_core::gestures::GestureTruth;
 pub use body::{Affine, Body, ProceduralBody};

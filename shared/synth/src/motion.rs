@@ -76,7 +76,8 @@ impl MotionSpec {
 #[derive(Debug, Clone, PartialEq)]
 pub struct DrawSpec {
     /// The symbols to draw, in order (0–9, A–Z with the built-in templates; any label
-    /// present in `samples`).
+    /// present in `samples`): one a character, or names separated by commas, which may
+    /// be gestures of the 3-D vocabulary (`push,circle-up,7`; [`crate::shapes3d`]).
     pub symbols: String,
     /// A trajectory JSONL file (docs/architecture.md, "Trajectory JSONL") to take the
     /// symbols' shapes from instead of the built-in templates.

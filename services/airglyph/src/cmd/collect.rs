@@ -74,19 +74,23 @@ struct Collector<'a> {
 }
 
 impl Writer {
-    fn write(&mut self, points: &[[f32; 3]]) -> anyhow::Result<()> {
-        let stroke: Vec<[f64; 3]> = points
+    /// Appends one repetition: x, y and t of each point in `points`, with the depth of
+    /// each in `depth`, as 3-D points `[x, y, z, t]` (`"dims":3`).
+    fn write(&mut self, points: &[[f32; 3]], depth: &[f32]) -> anyhow::Result<()> {
+        let stroke: Vec<[f64; 4]> = points
             .iter()
-            .map(|p| {
+            .zip(depth)
+            .map(|(p, z)| {
                 // Millimetre-level rounding keeps the lines short.
                 let r = |v: f32, k: f64| (v as f64 * k).round() / k;
-                [r(p[0], 1e4), r(p[1], 1e4), r(p[2], 10.0)]
+                [r(p[0], 1e4), r(p[1], 1e4), r(*z, 1e4), r(p[2], 10.0)]
             })
             .collect();
         let line = serde_json::json!({
             "label": self.label,
             "subject": self.subject,
             "source": self.source,
+            "dims": 3,
             "strokes": [stroke],
         });
         writeln!(self.file, "{line}")?;
@@ -115,7 +119,7 @@ impl Listener for Collector<'_> {
             .skeleton()
             .and_then(|s| w.seg.push(&s, msg.sequence, msg.chain.capture_ns))
         {
-            w.write(&rep.points)?;
+            w.write(&rep.points, &rep.depth)?;
         }
         Ok(if w.written >= w.count {
             Poll::Done
@@ -138,14 +142,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let source = match args.source.clone() {
         Some(s) => s,
+        // A gesture of the 3-D vocabulary, drawn in depth by the synthetic person.
+        None if airglyph_synth::shapes3d::shape(&args.label).is_some() => {
+            let script = vec![args.label.as_str(); args.count].join(",");
+            SourceSpec::Synthetic(Some(format!("draw:{script}")))
+        }
         None => {
             let c = args.label.chars().next().unwrap_or(' ');
             if args.label.chars().count() != 1
                 || !airglyph_synth::glyphs::BUILT_IN.contains(c.to_ascii_uppercase())
             {
                 bail!(
-                    "--label {:?} has no built-in synthetic drawing; give --source (e.g. v4l2:/dev/video0)",
-                    args.label
+                    "--label {:?} has no built-in synthetic drawing (0–9, A–Z, or a gesture of the 3-D vocabulary: {}); give --source (e.g. v4l2:/dev/video0)",
+                    args.label,
+                    airglyph_synth::shapes3d::VOCABULARY.join(", ")
                 );
             }
             let script: String = std::iter::repeat_n(c, args.count).collect();
@@ -196,7 +206,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // A finished source may stop in the middle of the last movement.
     if c.written < c.count {
         if let Some(rep) = c.seg.finish() {
-            c.write(&rep.points)?;
+            c.write(&rep.points, &rep.depth)?;
         }
     }
     if c.written < args.count {

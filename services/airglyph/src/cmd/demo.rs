@@ -12,6 +12,21 @@ use airglyph_synth::Synthesizer;
 use anyhow::Context;
 use std::io::Write;
 
+/// The 3-D vocabulary's model (`models/air3d-14.json`, trained on synthetic people's
+/// 3-D gestures; models/README.md says how), built in like the 36-symbol one.
+const AIR3D_JSON: &str = include_str!("../../../../models/air3d-14.json");
+
+/// What the person draws.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+enum Vocabulary {
+    /// The symbols 0–9 and A–Z, on a pane in front of the body.
+    Symbols,
+    /// Gestures in three dimensions (push, pull, circles facing up and sideways,
+    /// helices, 3-D zigzag and corners), with their own model.
+    #[value(name = "3d")]
+    ThreeD,
+}
+
 /// A synthetic person draws symbols; the full pipeline names them (no camera needed).
 ///
 /// The synthetic person draws symbols in the air, with ordinary movement between them,
@@ -20,9 +35,14 @@ use std::io::Write;
 /// Each recognized symbol is printed beside the one drawn, then a summary.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// The symbols to draw, in order (0–9, A–Z).
-    #[arg(long, default_value = DEMO_SYMBOLS)]
-    symbols: String,
+    /// The symbols to draw, in order (0–9, A–Z; with --vocabulary 3d, names separated
+    /// by commas; default: the whole vocabulary).
+    #[arg(long)]
+    symbols: Option<String>,
+    /// `symbols` (0–9, A–Z) or `3d` (gestures towards and away from the camera and in
+    /// other planes, with the built-in 3-D model unless --model is given).
+    #[arg(long, value_enum, default_value = "symbols")]
+    vocabulary: Vocabulary,
     /// One JSON object a line: each gesture ({"event":"gesture","label":…,"drawn":…,…};
     /// README, "JSON output"), then the summary {"event":"summary","drawn":N,"correct":…}.
     #[arg(long)]
@@ -42,8 +62,32 @@ pub struct Args {
     truth: bool,
 }
 
-pub fn run(args: Args) -> anyhow::Result<()> {
-    let script = format!("draw:{}", args.symbols);
+pub fn run(mut args: Args) -> anyhow::Result<()> {
+    let symbols = match (&args.symbols, args.vocabulary) {
+        (Some(s), _) => s.clone(),
+        (None, Vocabulary::Symbols) => DEMO_SYMBOLS.to_string(),
+        (None, Vocabulary::ThreeD) => airglyph_synth::shapes3d::VOCABULARY.join(","),
+    };
+    // The stages load the model from a file: the built-in 3-D one goes to a temporary
+    // file for as long as the demo runs.
+    let mut written = None;
+    if args.vocabulary == Vocabulary::ThreeD && args.model.is_none() {
+        let path =
+            std::env::temp_dir().join(format!("airglyph-air3d-14-{}.json", std::process::id()));
+        std::fs::write(&path, AIR3D_JSON)
+            .with_context(|| format!("{}: cannot write the 3-D model", path.display()))?;
+        args.model = Some(path.clone());
+        written = Some(path);
+    }
+    let outcome = demo(args, &symbols);
+    if let Some(path) = written {
+        let _ = std::fs::remove_file(path);
+    }
+    outcome
+}
+
+fn demo(args: Args, symbols: &str) -> anyhow::Result<()> {
+    let script = format!("draw:{symbols}");
     let truth = Synthesizer::new(scene(Some(&script), false)?)
         .context("cannot build the synthetic scene")?
         .gestures();

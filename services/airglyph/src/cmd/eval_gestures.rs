@@ -6,8 +6,8 @@
 
 use crate::interrupt::unless_interrupted;
 use airglyph_gesture::lab::{
-    folds_by_subject, labels_of, load_many, train, ClassifierKind, Confusion, DtwClassifier,
-    Sample, TrainConfig,
+    folds_by_subject, labels_of, load_many, train, ClassifierKind, Confusion, Dtw3dClassifier,
+    DtwClassifier, Sample, TrainConfig,
 };
 use airglyph_gesture::Model;
 use airglyph_ipc::options;
@@ -90,6 +90,7 @@ impl Method {
 enum Predictor {
     Model(Box<Model>, Vec<usize>),
     Dtw(DtwClassifier),
+    Dtw3d(Dtw3dClassifier),
 }
 
 impl Predictor {
@@ -97,6 +98,7 @@ impl Predictor {
         match self {
             Predictor::Model(m, map) => map[m.classify(&s.trajectory()).class],
             Predictor::Dtw(d) => d.classify(&s.trajectory()).unwrap_or(0),
+            Predictor::Dtw3d(d) => d.classify(&s.trajectory()).unwrap_or(0),
         }
     }
 }
@@ -109,6 +111,15 @@ fn fit(method: &Method, train_set: &[Sample], labels: &[String]) -> anyhow::Resu
         ..TrainConfig::default()
     };
     let cfg = match method {
+        // Data with depth: the same baseline on points in space.
+        Method::Dtw if train_set.iter().any(Sample::has_depth) => {
+            let mut d = Dtw3dClassifier::new(32, 4);
+            for s in train_set {
+                let c = labels.iter().position(|l| *l == s.label).unwrap_or(0);
+                d.add(&s.trajectory(), c);
+            }
+            return Ok(Predictor::Dtw3d(d));
+        }
         Method::Dtw => {
             let mut d = DtwClassifier::new(32, 4);
             for s in train_set {

@@ -282,6 +282,14 @@ fn evaluate(args: &Args) -> anyhow::Result<Evaluation> {
         );
     }
     let samples = load_many(&args.data)?;
+    // The streams move in the frontal plane: a 3-D gesture would be drawn as its shadow
+    // and a model that reads depth would see none.
+    if samples.iter().any(Sample::has_depth) || model.reads_depth() {
+        bail!(
+            "{}: eval-spotting draws its streams in the frontal plane and cannot yet measure gestures in three dimensions (data with \"dims\":3, or a model trained on it); `airglyph demo --vocabulary 3d` spots them through the pipeline",
+            args.data[0].display()
+        );
+    }
     let pool: Vec<&Sample> = samples
         .iter()
         .filter(|s| model.label_index(&s.label).is_some())

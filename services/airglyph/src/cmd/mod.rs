@@ -22,6 +22,8 @@ pub mod run;
 pub mod snapshot;
 pub mod spot;
 pub mod synth;
+#[cfg(feature = "lab")]
+pub mod synth_gestures;
 pub mod top;
 #[cfg(feature = "lab")]
 pub mod train;

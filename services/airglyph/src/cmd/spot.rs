@@ -118,7 +118,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut spotted = 0;
     // The hand as the spotter sees it, by frame, for --alone.
     let mut tracker = airglyph_gesture::HandTracker::new(scfg.tracker);
-    let mut hand: Vec<Option<[f32; 2]>> = Vec::new();
+    let mut hand: Vec<Option<[f32; 3]>> = Vec::new();
     let mut found = Vec::new();
     let poses = args.poses.as_deref().map(read_poses).transpose()?;
     eprintln!(
@@ -150,7 +150,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             hand.push(None);
             continue;
         };
-        hand.push(tracker.update(&s, rec.capture_ns(i)).map(|p| [p.x, p.y]));
+        hand.push(
+            tracker
+                .update(&s, rec.capture_ns(i))
+                .map(|p| [p.x, p.y, p.z]),
+        );
         found.extend(spotter.push(&s, i as u64, rec.capture_ns(i)));
         trace(&spotter.take_trace(), spotter.model());
     }
@@ -200,15 +204,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     if args.alone {
         for t in &truth {
-            let pts: Vec<[f32; 2]> = (t.start_frame..=t.end_frame)
+            let pts: Vec<[f32; 3]> = (t.start_frame..=t.end_frame)
                 .filter_map(|i| hand.get(i).copied().flatten())
                 .collect();
             if pts.len() < 2 {
                 continue;
             }
+            // With its depth: a model of 2-D gestures does not read it.
             let c = spotter
                 .model()
-                .classify(&airglyph_gesture::Trajectory::from_points(pts));
+                .classify(&airglyph_gesture::Trajectory::from_points3(&pts));
             let label = &spotter.model().labels[c.class];
             if args.json {
                 println!(

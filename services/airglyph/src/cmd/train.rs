@@ -45,6 +45,11 @@ pub struct Args {
     /// Use the pen-up flag of the data (off: treat every sample as one air-drawn path).
     #[arg(long)]
     pub pen_up: bool,
+    /// Drop the depth of 3-D samples (`"dims":3`, as `collect` records them) and train
+    /// on what a 2-D camera would see: the classifiers of 2-D data, and a spotting part
+    /// with its verifier (which a model of 3-D data does not have yet).
+    #[arg(long)]
+    pub flat: bool,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Fraction of the network's augmented training samples that are also drawn in a
@@ -122,13 +127,29 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
 /// The model the arguments ask for, from their data.
 fn model(args: &Args, cfg: &TrainConfig) -> anyhow::Result<Model> {
-    let samples = load_many(&args.data)?;
+    let mut samples = load_many(&args.data)?;
+    let deep = samples.iter().filter(|s| s.has_depth()).count();
+    if args.flat {
+        samples = samples.iter().map(|s| s.flattened()).collect();
+    }
     eprintln!(
         "training {} on {} samples from {} file(s)",
         cfg.classifier.name(),
         samples.len(),
         args.data.len()
     );
+    if deep > 0 && args.flat {
+        eprintln!("{deep} samples drawn in 3-D, trained without their depth (--flat)");
+    } else if deep > 0 {
+        eprintln!(
+            "{deep} samples drawn in 3-D: the classifier reads depth (codes on the sphere, 3-D features){}",
+            if cfg.spotting {
+                "; the spotting part has no verifier (its streams are drawn in the plane): the spotter takes stretches the classifier is sure of, drawn with the hand held out in front (--flat trains on the 2-D shadow with one)"
+            } else {
+                ""
+            }
+        );
+    }
     let bar = ProgressBar::new(1);
     bar.set_style(
         ProgressStyle::with_template("{spinner} {msg} [{bar:40}] {pos}/{len} {elapsed}")

@@ -1,5 +1,5 @@
 //! Writer variation for training: a trajectory a little rotated, sheared, stretched and
-//! jittered.
+//! jittered; one with depth also turned a little out of its plane.
 
 use crate::features::bbox;
 use crate::trajectory::Trajectory;
@@ -37,8 +37,46 @@ pub fn augment<R: Rng>(t: &Trajectory, rng: &mut R, strength: f32) -> Trajectory
             [x + jx, y + jy]
         })
         .collect();
-    Trajectory {
+    let mut out = Trajectory {
         points,
         pen_up: t.pen_up.clone(),
+        depth: None,
+    };
+    if let Some(z) = &t.depth {
+        // After the 2-D draws, so that 2-D data draws what it drew before depth.
+        turn_in_depth(&mut out, z, rng, strength, (sx + sy) / 2.0, jitter);
     }
+    out
+}
+
+/// Depth for the augmented points: `z` scaled like the plane, the whole turned a little
+/// about the vertical axis and the horizontal one (people do not draw exactly facing
+/// the camera), jittered like the plane.
+fn turn_in_depth<R: Rng>(
+    t: &mut Trajectory,
+    z: &[f32],
+    rng: &mut R,
+    strength: f32,
+    scale: f32,
+    jitter: f32,
+) {
+    let yaw = rng.gen_range(-0.25..0.25f32) * strength;
+    let pitch = rng.gen_range(-0.25..0.25f32) * strength;
+    let z0 = z.iter().copied().fold(f32::MAX, f32::min);
+    let (cy, sy) = (yaw.cos(), yaw.sin());
+    let (cp, sp) = (pitch.cos(), pitch.sin());
+    let mut depth = Vec::with_capacity(z.len());
+    for (p, &zi) in t.points.iter_mut().zip(z) {
+        let zi = (zi - z0) * scale;
+        let (x, zi) = (cy * p[0] - sy * zi, sy * p[0] + cy * zi);
+        let (y, zi) = (cp * p[1] - sp * zi, sp * p[1] + cp * zi);
+        let jz = if jitter > 0.0 {
+            rng.gen_range(-jitter..jitter)
+        } else {
+            0.0
+        };
+        *p = [x, y];
+        depth.push(zi + jz);
+    }
+    t.depth = Some(depth);
 }

@@ -48,11 +48,15 @@ impl Default for RepetitionConfig {
 }
 
 /// One repetition: the drawn path in the body frame (shoulder widths, x right, y down)
-/// with the time of each point in milliseconds from its start, and the frames it spans.
+/// with the time of each point in milliseconds from its start, its depth, and the
+/// frames it spans.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Repetition {
     /// x, y (shoulder widths) and t (ms) of each point.
     pub points: Vec<[f32; 3]>,
+    /// The depth of each point: how far in front of the shoulders the hand was
+    /// (shoulder widths, filtered as x and y are).
+    pub depth: Vec<f32>,
     /// The frame sequence numbers of its first and last point.
     pub start_seq: u64,
     /// See `start_seq`.
@@ -64,8 +68,8 @@ pub struct Repetition {
 pub struct RepetitionSegmenter {
     cfg: RepetitionConfig,
     tracker: HandTracker,
-    /// The movement going on: (x, y, forward, frame, time ns).
-    moving: Vec<([f32; 3], u64, u64)>,
+    /// The movement going on: (x, y, forward, filtered forward; frame, time ns).
+    moving: Vec<([f32; 4], u64, u64)>,
     /// Whether the hand rests (it does at the start).
     resting: bool,
     /// Since when the hand has been slow (index into `moving`).
@@ -95,13 +99,14 @@ impl RepetitionSegmenter {
         if !(p.x.is_finite() && p.y.is_finite() && p.forward.is_finite()) {
             return None;
         }
-        self.moving.push(([p.x, p.y, p.forward], seq, time_ns));
+        self.moving.push(([p.x, p.y, p.forward, p.z], seq, time_ns));
         let n = self.moving.len();
-        // Speed over the last two frames (the points are already smoothed).
+        // Speed over the last two frames (the points are already smoothed), in space:
+        // a push towards the camera is a movement, not a rest.
         let speed = if n >= 3 {
             let (a, b) = (self.moving[n - 3], self.moving[n - 1]);
             let dt = (b.2.saturating_sub(a.2) as f64 * 1e-9).max(1e-4) as f32;
-            ((b.0[0] - a.0[0]).powi(2) + (b.0[1] - a.0[1]).powi(2)).sqrt() / dt
+            distance(&a.0, &b.0) / dt
         } else {
             0.0
         };
@@ -142,7 +147,7 @@ impl RepetitionSegmenter {
     }
 
     /// The drawing within one movement, if there is one.
-    fn drawing(&self, m: &[([f32; 3], u64, u64)]) -> Option<Repetition> {
+    fn drawing(&self, m: &[([f32; 4], u64, u64)]) -> Option<Repetition> {
         let forward: Vec<usize> = (0..m.len())
             .filter(|&i| m[i].0[2] >= self.cfg.min_forward)
             .collect();
@@ -150,7 +155,7 @@ impl RepetitionSegmenter {
         let speed = |i: usize| {
             let (p, q) = (m[i.saturating_sub(1)], m[(i + 1).min(m.len() - 1)]);
             let dt = (q.2.saturating_sub(p.2) as f64 * 1e-9).max(1e-4) as f32;
-            ((q.0[0] - p.0[0]).powi(2) + (q.0[1] - p.0[1]).powi(2)).sqrt() / dt
+            distance(&p.0, &q.0) / dt
         };
         // The hand reaches the pane before the drawing starts and leaves it after it
         // ends: start and end where it is slowest just inside.
@@ -167,17 +172,16 @@ impl RepetitionSegmenter {
         }
         let part = &m[start..=end];
         let secs = part[part.len() - 1].2.saturating_sub(part[0].2) as f64 * 1e-9;
-        let (mut x0, mut y0, mut x1, mut y1) = (f32::MAX, f32::MAX, f32::MIN, f32::MIN);
+        let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
         for p in part {
-            x0 = x0.min(p.0[0]);
-            y0 = y0.min(p.0[1]);
-            x1 = x1.max(p.0[0]);
-            y1 = y1.max(p.0[1]);
+            for (k, v) in [p.0[0], p.0[1], p.0[3]].into_iter().enumerate() {
+                lo[k] = lo[k].min(v);
+                hi[k] = hi[k].max(v);
+            }
         }
-        if (x1 - x0).max(y1 - y0) < self.cfg.min_size
-            || secs < self.cfg.min_seconds
-            || secs > self.cfg.max_seconds
-        {
+        // Its size in space: a push is as much a drawing as a stroke across.
+        let size = (0..3).map(|k| hi[k] - lo[k]).fold(0.0f32, f32::max);
+        if size < self.cfg.min_size || secs < self.cfg.min_seconds || secs > self.cfg.max_seconds {
             return None;
         }
         let t0 = part[0].2;
@@ -186,10 +190,16 @@ impl RepetitionSegmenter {
                 .iter()
                 .map(|p| [p.0[0], p.0[1], (p.2 - t0) as f32 * 1e-6])
                 .collect(),
+            depth: part.iter().map(|p| p.0[3]).collect(),
             start_seq: part[0].1,
             end_seq: part[part.len() - 1].1,
         })
     }
+}
+
+/// How far apart two points of a movement are in space (x, y and the filtered depth).
+fn distance(a: &[f32; 4], b: &[f32; 4]) -> f32 {
+    ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2) + (b[3] - a[3]).powi(2)).sqrt()
 }
 
 #[cfg(test)]
@@ -202,6 +212,7 @@ mod tests {
             x,
             y,
             forward,
+            z: forward,
             hand: Hand::Right,
         }
     }
@@ -266,5 +277,44 @@ mod tests {
             assert_eq!(first[2], 0.0);
             assert!((last[2] - 27.0 * 33.333).abs() < 100.0, "{last:?}");
         }
+    }
+
+    /// A push towards the camera from a hand held out in front: a repetition of its
+    /// own, whose depth says how far the hand went.
+    #[test]
+    fn a_push_towards_the_camera_is_a_repetition_with_its_depth() {
+        let mut seg = RepetitionSegmenter::new(RepetitionConfig::default());
+        let mut frames: Vec<HandPoint> = Vec::new();
+        let (low, held) = ([0.8, 1.7, 0.2], [0.2, 0.0, 0.8]);
+        let go = |f: &mut Vec<HandPoint>, a: [f32; 3], b: [f32; 3], n: usize| {
+            for i in 1..=n {
+                let t = i as f32 / n as f32;
+                let s = t * t * t * (10.0 - 15.0 * t + 6.0 * t * t);
+                f.push(point(
+                    a[0] + s * (b[0] - a[0]),
+                    a[1] + s * (b[1] - a[1]),
+                    a[2] + s * (b[2] - a[2]),
+                ));
+            }
+        };
+        frames.extend((0..20).map(|_| point(low[0], low[1], low[2])));
+        go(&mut frames, low, held, 15);
+        let pushed = [held[0], held[1], held[2] + 0.7];
+        go(&mut frames, held, pushed, 15);
+        go(&mut frames, pushed, low, 15);
+        frames.extend((0..20).map(|_| point(low[0], low[1], low[2])));
+        let mut reps = Vec::new();
+        for (i, p) in frames.iter().enumerate() {
+            reps.extend(seg.push_point(*p, i as u64, i as u64 * 33_333_333));
+        }
+        reps.extend(seg.finish());
+        assert_eq!(reps.len(), 1, "{reps:?}");
+        let r = &reps[0];
+        assert_eq!(r.depth.len(), r.points.len());
+        let (lo, hi) = r
+            .depth
+            .iter()
+            .fold((f32::MAX, f32::MIN), |(a, b), &z| (a.min(z), b.max(z)));
+        assert!(hi - lo > 0.5, "{lo}..{hi}");
     }
 }

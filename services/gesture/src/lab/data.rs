@@ -21,12 +21,57 @@ pub struct Sample {
     pub subject: String,
     /// Pen-down ink, one list of points a stroke.
     pub strokes: Vec<Vec<Point>>,
+    /// For a sample drawn in 3-D, the depth of every point (z towards the camera), one
+    /// list a stroke as `strokes`; None for 2-D data.
+    pub depth: Option<Vec<Vec<f32>>>,
 }
 
 impl Sample {
-    /// The strokes joined by the hand's travel between them.
+    /// The strokes joined by the hand's travel between them, with their depth if the
+    /// sample has one.
     pub fn trajectory(&self) -> Trajectory {
-        Trajectory::from_strokes(&self.strokes)
+        let t = Trajectory::from_strokes(&self.strokes);
+        match &self.depth {
+            Some(d) => t.with_depth(d.concat()),
+            None => t,
+        }
+    }
+
+    /// Whether it was drawn in 3-D.
+    pub fn has_depth(&self) -> bool {
+        self.depth.is_some()
+    }
+
+    /// The same sample without its depth (as a 2-D camera would have seen it).
+    pub fn flattened(&self) -> Sample {
+        Sample {
+            depth: None,
+            ..self.clone()
+        }
+    }
+
+    /// The sample as a line of trajectory JSONL (without the line's end): points
+    /// `[x, y]`, or with depth `"dims":3` and points `[x, y, z]`.
+    pub fn to_jsonl(&self) -> String {
+        let strokes: Vec<Vec<Vec<f32>>> = match &self.depth {
+            None => self
+                .strokes
+                .iter()
+                .map(|s| s.iter().map(|p| p.to_vec()).collect())
+                .collect(),
+            Some(d) => self
+                .strokes
+                .iter()
+                .zip(d)
+                .map(|(s, z)| s.iter().zip(z).map(|(p, z)| vec![p[0], p[1], *z]).collect())
+                .collect(),
+        };
+        let mut v = serde_json::json!({"label": self.label, "subject": self.subject});
+        if self.depth.is_some() {
+            v["dims"] = 3.into();
+        }
+        v["strokes"] = serde_json::json!(strokes);
+        v.to_string()
     }
 }
 
@@ -76,6 +121,10 @@ struct RawSample {
     label: String,
     #[serde(default)]
     subject: Option<String>,
+    /// 3 for points `[x, y, z]` or `[x, y, z, t]`; 2 (the default) for `[x, y]` or
+    /// `[x, y, t]`: a third value is a time unless the sample says it is in 3-D.
+    #[serde(default)]
+    dims: Option<u8>,
     strokes: Vec<Vec<Vec<f64>>>,
 }
 
@@ -92,7 +141,18 @@ fn validate(raw: RawSample, path: &Path, line: usize) -> Result<Sample, DataErro
     if raw.strokes.is_empty() {
         return Err(invalid(format!("sample {:?} has no strokes", raw.label)));
     }
+    let dims = match raw.dims {
+        None | Some(2) => 2,
+        Some(3) => 3,
+        Some(d) => {
+            return Err(invalid(format!(
+                "sample {:?}: \"dims\" is {d}; it is 2 (points [x, y] or [x, y, t]) or 3 ([x, y, z] or [x, y, z, t])",
+                raw.label
+            )))
+        }
+    };
     let mut strokes = Vec::with_capacity(raw.strokes.len());
+    let mut depth = Vec::new();
     for (si, s) in raw.strokes.iter().enumerate() {
         if s.is_empty() {
             return Err(invalid(format!(
@@ -101,10 +161,18 @@ fn validate(raw: RawSample, path: &Path, line: usize) -> Result<Sample, DataErro
             )));
         }
         let mut pts = Vec::with_capacity(s.len());
+        let mut zs = Vec::new();
         for (pi, p) in s.iter().enumerate() {
-            if p.len() < 2 || p.len() > 3 {
+            if dims == 2 && (p.len() < 2 || p.len() > 3) {
                 return Err(invalid(format!(
                     "sample {:?}: stroke {si} point {pi} has {} values, expected [x, y] or [x, y, t]",
+                    raw.label,
+                    p.len()
+                )));
+            }
+            if dims == 3 && (p.len() < 3 || p.len() > 4) {
+                return Err(invalid(format!(
+                    "sample {:?}: stroke {si} point {pi} has {} values, expected [x, y, z] or [x, y, z, t] (\"dims\":3)",
                     raw.label,
                     p.len()
                 )));
@@ -116,13 +184,18 @@ fn validate(raw: RawSample, path: &Path, line: usize) -> Result<Sample, DataErro
                 )));
             }
             pts.push([p[0] as f32, p[1] as f32]);
+            if dims == 3 {
+                zs.push(p[2] as f32);
+            }
         }
         strokes.push(pts);
+        depth.push(zs);
     }
     Ok(Sample {
         label: raw.label,
         subject: raw.subject.unwrap_or_default(),
         strokes,
+        depth: (dims == 3).then_some(depth),
     })
 }
 
@@ -246,6 +319,33 @@ mod tests {
     }
 
     #[test]
+    fn three_values_are_a_time_unless_the_sample_is_in_3d() {
+        let v = parse(concat!(
+            "{\"label\":\"a\",\"strokes\":[[[0,0,5],[1,1,9]]]}\n",
+            "{\"label\":\"b\",\"dims\":3,\"strokes\":[[[0,0,5],[1,1,9,40]],[[2,2,7]]]}\n",
+        ))
+        .unwrap();
+        assert!(!v[0].has_depth());
+        assert!(v[0].trajectory().depth.is_none());
+        let t = v[1].trajectory();
+        assert_eq!(t.depth, Some(vec![5.0, 9.0, 7.0]));
+        assert_eq!(t.pen_up, vec![false, false, true]);
+        // Written and read back, the same sample.
+        for s in &v {
+            assert_eq!(&parse(&s.to_jsonl()).unwrap()[0], s);
+        }
+        assert_eq!(v[1].flattened().trajectory(), t.flattened());
+        let e = parse("{\"label\":\"b\",\"dims\":3,\"strokes\":[[[0,0]]]}")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("mem.jsonl:1") && e.contains("[x, y, z]"), "{e}");
+        let e = parse("{\"label\":\"b\",\"dims\":4,\"strokes\":[[[0,0]]]}")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("dims"), "{e}");
+    }
+
+    #[test]
     fn empty_stroke_is_an_error_with_line() {
         let e =
             parse("{\"label\":\"1\",\"strokes\":[[[0,0]]]}\n{\"label\":\"7\",\"strokes\":[[]]}")
@@ -277,6 +377,7 @@ mod tests {
             label: "a".into(),
             subject: s.into(),
             strokes: vec![vec![[0.0, 0.0]]],
+            depth: None,
         };
         let samples: Vec<Sample> = (0..40).map(|i| mk(&format!("w{}", i % 7))).collect();
         let f = folds_by_subject(&samples, 3, 1);

@@ -12,6 +12,7 @@ mod augment;
 mod collect;
 mod data;
 mod dtw;
+mod dtw3d;
 mod eval;
 mod scoring;
 mod stream;
@@ -23,6 +24,7 @@ pub use data::{
     folds_by_subject, labels_of, load_jsonl, load_many, parse_jsonl, DataError, Sample,
 };
 pub use dtw::DtwClassifier;
+pub use dtw3d::Dtw3dClassifier;
 pub use eval::{plot_timeline, Confusion, Span};
 pub use scoring::{matched, score, Matching, SpottingScore};
 pub use stream::{

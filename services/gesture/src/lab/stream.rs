@@ -538,10 +538,15 @@ pub fn drawn_in_stream<R: Rng>(
     tracker: &TrackerConfig,
     rng: &mut R,
 ) -> Trajectory {
+    if t.has_depth() {
+        // The streams are drawn in the frontal plane: a stream would lose the depth.
+        return t.clone();
+    }
     let sample = Sample {
         label: String::new(),
         subject: String::new(),
         strokes: vec![t.points.clone()],
+        depth: None,
     };
     // No ordinary movement before the approach: the filter forgets within a few frames.
     let cfg = StreamConfig {

@@ -6,6 +6,7 @@ mod source;
 pub(crate) mod spotting;
 pub(crate) mod verifier;
 
+pub use crate::bezier::Directions;
 pub use crate::crf::Crf;
 pub use crate::features::FeatureConfig;
 pub use crate::hmm::{DiscreteHmm, LogHmm};
@@ -14,7 +15,7 @@ pub use source::{ModelSource, MODEL_ENV};
 pub use spotting::SpottingModel;
 pub use verifier::{Verifier, VerifierInput};
 
-use crate::bezier::bezier_codes;
+use crate::bezier::trajectory_codes;
 use crate::features::feature_vector;
 use crate::limits;
 use crate::trajectory::Trajectory;
@@ -119,6 +120,9 @@ pub enum Classifier {
         bezier_points: usize,
         /// Resting code threshold (fraction of the diagonal; 0 = no resting code).
         zero_frac: f64,
+        /// The directions the codes name (the circle unless trained on depth).
+        #[serde(default, skip_serializing_if = "Directions::is_circle")]
+        directions: Directions,
         /// One a label.
         models: Vec<LabelledHmm>,
         /// The models in logarithms, made on first use (not in the file).
@@ -131,6 +135,9 @@ pub enum Classifier {
         bezier_points: usize,
         /// Resting code threshold, as the HMMs'.
         zero_frac: f64,
+        /// The directions the codes name, as the HMMs'.
+        #[serde(default, skip_serializing_if = "Directions::is_circle")]
+        directions: Directions,
         /// Label of each CRF class, in order.
         classes: Vec<String>,
         /// The CRF.
@@ -239,6 +246,16 @@ impl Model {
         airglyph_core::file::write_whole(path, self.to_json())
     }
 
+    /// Whether its classifier reads the depth of trajectories (trained on 3-D data).
+    pub fn reads_depth(&self) -> bool {
+        match &self.classifier {
+            Classifier::Hmm { directions, .. } | Classifier::Crf { directions, .. } => {
+                !directions.is_circle()
+            }
+            Classifier::Mlp { features, .. } => features.depth,
+        }
+    }
+
     /// Index of a label.
     pub fn label_index(&self, label: &str) -> Option<usize> {
         self.labels.iter().position(|l| l == label)
@@ -292,14 +309,15 @@ impl Model {
             Classifier::Hmm {
                 bezier_points,
                 zero_frac,
+                directions,
                 models,
                 ..
             } => {
                 check_codes(*bezier_points, *zero_frac)?;
                 let names: Vec<&str> = models.iter().map(|m| m.label.as_str()).collect();
                 check_classes(&names, "the HMM classifier")?;
-                // With a resting code the descriptor emits code 8 too.
-                let symbols = if *zero_frac > 0.0 { 9 } else { 8 };
+                // With a resting code the descriptor emits one code more.
+                let symbols = code_count(*directions, *zero_frac);
                 for m in models {
                     m.hmm
                         .validate()
@@ -316,6 +334,7 @@ impl Model {
             Classifier::Crf {
                 bezier_points,
                 zero_frac,
+                directions,
                 classes,
                 crf,
             } => {
@@ -323,7 +342,7 @@ impl Model {
                 let names: Vec<&str> = classes.iter().map(String::as_str).collect();
                 check_classes(&names, "the CRF classifier")?;
                 crf.validate()?;
-                if crf.labels != classes.len() || crf.symbols < 8 {
+                if crf.labels != classes.len() || crf.symbols < directions.count() {
                     return Err("CRF dimensions do not match its classes".into());
                 }
             }
@@ -384,11 +403,12 @@ impl Model {
             Classifier::Hmm {
                 bezier_points,
                 zero_frac,
+                directions,
                 models,
                 cache,
             } => {
                 let logs = cache.get_or_init(|| models.iter().map(|m| m.hmm.to_log()).collect());
-                let codes = bezier_codes(&t.points, *bezier_points, *zero_frac);
+                let codes = trajectory_codes(t, *bezier_points, *zero_frac, *directions);
                 let mut buf = Vec::new();
                 let ll: Vec<f64> = logs
                     .iter()
@@ -403,10 +423,11 @@ impl Model {
             Classifier::Crf {
                 bezier_points,
                 zero_frac,
+                directions,
                 classes,
                 crf,
             } => {
-                let codes = bezier_codes(&t.points, *bezier_points, *zero_frac);
+                let codes = trajectory_codes(t, *bezier_points, *zero_frac, *directions);
                 let (_, marg) = crf.classify(&codes);
                 let idx = classes
                     .iter()
@@ -450,6 +471,11 @@ fn check_codes(bezier_points: usize, zero_frac: f64) -> Result<(), String> {
     limits::within("bezier_points", bezier_points, 2, limits::MAX_BEZIER_POINTS)?;
     limits::finite_within("zero_frac", zero_frac, 0.0, 1.0)?;
     Ok(())
+}
+
+/// The codes the seed's descriptor emits: a direction each, and the resting code.
+pub fn code_count(directions: Directions, zero_frac: f64) -> usize {
+    directions.count() + usize::from(zero_frac > 0.0)
 }
 
 fn softmax(ll: &[f64]) -> Vec<f64> {

@@ -261,6 +261,7 @@ pub(crate) mod tests {
         pen_up: false,
         points: 12,
         grid: 3,
+        depth: false,
     };
     const TIMING_POINTS: usize = 4;
 

@@ -72,6 +72,12 @@ pub struct SpotterConfig {
     pub rank_by: RankBy,
     /// How the drawing hand is followed.
     pub tracker: TrackerConfig,
+    /// For a model of 3-D gestures without a verifier (its streams are drawn in the
+    /// plane; `SpottingModel::train`): a stretch is a gesture only if the hand stays
+    /// this far in front of the shoulders all along it (shoulder widths), as one draws
+    /// in the air and as `collect` cuts repetitions; reaches from and back to a rest are
+    /// not. Unused otherwise.
+    pub min_forward: f32,
 }
 
 impl Default for SpotterConfig {
@@ -97,6 +103,7 @@ impl Default for SpotterConfig {
             rest_seconds: 0.4,
             rank_by: RankBy::default(),
             tracker: TrackerConfig::default(),
+            min_forward: 0.7,
         }
     }
 }

@@ -41,6 +41,16 @@ pub(crate) fn size_ok(pts: &[[f32; 2]], cfg: &SpotterConfig) -> bool {
     size >= cfg.min_size && size <= cfg.max_size
 }
 
+/// [`size_ok`] in space: the larger of the frontal size and the depth's extent.
+fn size_ok_in_depth(pts: &[[f32; 2]], depth: &[f32], cfg: &SpotterConfig) -> bool {
+    let (x0, y0, x1, y1) = crate::features::bbox(pts);
+    let (z0, z1) = depth
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(a, b), &z| (a.min(z), b.max(z)));
+    let size = (x1 - x0).max(y1 - y0).max(z1 - z0);
+    size >= cfg.min_size && size <= cfg.max_size
+}
+
 /// A gesture found in the stream.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SpottedGesture {
@@ -141,6 +151,9 @@ pub struct Spotter {
     trace: Option<Vec<Candidate>>,
     /// The smallest verifier probability of a whole gesture accepted, per label.
     bars: Vec<f64>,
+    /// Whether the model reads depth: then the hand's depth is kept, counts in its
+    /// speed and size, and goes to the classifier.
+    in_depth: bool,
 }
 
 impl Spotter {
@@ -162,10 +175,14 @@ impl Spotter {
                 })
             })
             .collect();
+        let in_depth = model.reads_depth();
+        let mut seg = Segmenter::new(&cfg);
+        seg.set_in_depth(in_depth);
         Ok(Spotter {
             bars,
+            in_depth,
             tracker: HandTracker::new(cfg.tracker),
-            seg: Segmenter::new(&cfg),
+            seg,
             lee_kim,
             model,
             cfg,
@@ -253,8 +270,13 @@ impl Spotter {
         }
         let inv = self.inverse_size();
         let now = self.seg.next_index();
+        let z = if self.in_depth && p.z.is_finite() {
+            p.z * inv
+        } else {
+            0.0
+        };
         self.waiting
-            .extend(self.seg.push([p.x * inv, p.y * inv], seq, time_ns));
+            .extend(self.seg.push_deep([p.x * inv, p.y * inv], z, seq, time_ns));
         let mut out = None;
         // A break's candidates are judged once the context after it is in.
         let after = context_steps(self.seg.fps());
@@ -306,10 +328,23 @@ impl Spotter {
     /// Scores the segment of points s..=e.
     fn score(&mut self, s: usize, e: usize) -> Option<Candidate> {
         let input = self.seg.input(s, e, self.seg.fps())?;
-        if !size_ok(&input.segment, &self.cfg) {
-            return None;
-        }
-        let j = self.judge(input);
+        let depth = if self.in_depth {
+            let z = self.seg.depths(s, e)?;
+            if !size_ok_in_depth(&input.segment, &z, &self.cfg) {
+                return None;
+            }
+            let held_out = self.cfg.min_forward * self.inverse_size();
+            if !self.has_verifier() && z.iter().any(|&v| v < held_out) {
+                return None;
+            }
+            Some(z)
+        } else {
+            if !size_ok(&input.segment, &self.cfg) {
+                return None;
+            }
+            None
+        };
+        let j = self.judge(input, depth);
         let accepted = self.cfg.margin.is_none_or(|m| j.ratio > m)
             && j.score >= self.cfg.min_score
             && j.p_gesture >= self.bars.get(j.class).copied().unwrap_or(0.0);
@@ -330,8 +365,12 @@ impl Spotter {
 
     /// The evidence on one segment with its context: the classifier's posterior, Lee &
     /// Kim's ratio, and the verifier, which sees both.
-    fn judge(&self, mut input: VerifierInput) -> Judgement {
-        let t = Trajectory::from_points(input.segment.clone());
+    /// `depth`: the segment's depth, for a model that reads it.
+    fn judge(&self, mut input: VerifierInput, depth: Option<Vec<f32>>) -> Judgement {
+        let mut t = Trajectory::from_points(input.segment.clone());
+        if let Some(z) = depth {
+            t = t.with_depth(z);
+        }
         let post = self.model.posterior(&t);
         input.posterior = post.iter().map(|&p| p as f32).collect();
         let ratio = self.lee_kim.ratio(&input.segment);
@@ -376,7 +415,17 @@ impl Spotter {
             .map(|p| [p[0] * inv, p[1] * inv])
             .collect();
         let times = (0..=e - s).map(|i| i as f32 / fps as f32).collect();
-        Some(self.judge(VerifierInput::cut(&window, s - from, e - from, times, fps)))
+        Some(self.judge(
+            VerifierInput::cut(&window, s - from, e - from, times, fps),
+            None,
+        ))
+    }
+
+    fn has_verifier(&self) -> bool {
+        self.model
+            .spotting
+            .as_ref()
+            .is_some_and(|s| s.verifier.is_some())
     }
 
     /// Gesture sizes a shoulder width: the segmenter's unit.

@@ -22,6 +22,11 @@ pub struct Segmenter {
     base: usize,
     /// Hand points (gesture-size units) with their frame sequence and time.
     pts: Vec<([f32; 2], u64, u64)>,
+    /// The depth of every point of `pts` (0 when the model reads none).
+    depth: Vec<f32>,
+    /// Whether the hand's speed counts its depth: for a model of 3-D gestures, for
+    /// which a push towards the camera is a movement and not a rest.
+    in_depth: bool,
     /// `speed[k]`: the speed of point k − 2 (gesture sizes a second), centred over
     /// five points, so known two points late.
     speed: Vec<f32>,
@@ -36,6 +41,8 @@ impl Segmenter {
             cfg: *cfg,
             base: 0,
             pts: Vec::new(),
+            depth: Vec::new(),
+            in_depth: false,
             speed: Vec::new(),
             breaks: Vec::new(),
             rest_from: None,
@@ -46,6 +53,7 @@ impl Segmenter {
     pub fn reset(&mut self) {
         self.base += self.pts.len();
         self.pts.clear();
+        self.depth.clear();
         self.speed.clear();
         self.breaks.clear();
         self.rest_from = None;
@@ -59,12 +67,28 @@ impl Segmenter {
     /// Adds a point (gesture-size units); returns the point where a gesture may end,
     /// when one was found (a few points back).
     pub fn push(&mut self, p: [f32; 2], seq: u64, time_ns: u64) -> Option<usize> {
+        self.push_deep(p, 0.0, seq, time_ns)
+    }
+
+    /// Counts the depth in the hand's speed from now on (see `in_depth`).
+    pub fn set_in_depth(&mut self, on: bool) {
+        self.in_depth = on;
+    }
+
+    /// [`Self::push`] with the point's depth `z`.
+    pub fn push_deep(&mut self, p: [f32; 2], z: f32, seq: u64, time_ns: u64) -> Option<usize> {
         self.pts.push((p, seq, time_ns));
+        self.depth.push(z);
         let k = self.pts.len() - 1;
         if k >= 4 {
             let (a, b) = (self.pts[k - 4], self.pts[k]);
             let dt = (b.2.saturating_sub(a.2) as f64 * 1e-9).max(1e-4) as f32;
-            let d = ((b.0[0] - a.0[0]).powi(2) + (b.0[1] - a.0[1]).powi(2)).sqrt();
+            let d = if self.in_depth {
+                let dz = self.depth[k] - self.depth[k - 4];
+                ((b.0[0] - a.0[0]).powi(2) + (b.0[1] - a.0[1]).powi(2) + dz * dz).sqrt()
+            } else {
+                ((b.0[0] - a.0[0]).powi(2) + (b.0[1] - a.0[1]).powi(2)).sqrt()
+            };
             self.speed.push(d / dt);
         } else {
             self.speed.push(f32::NAN);
@@ -163,6 +187,12 @@ impl Segmenter {
 
     /// The verifier's input for the segment s..=e: its points, and the hand's path just
     /// before and after it ([`VerifierInput::cut`]; as far as kept).
+    /// The depths of the points s..=e.
+    pub fn depths(&self, s: usize, e: usize) -> Option<Vec<f32>> {
+        let (a, b) = (s.checked_sub(self.base)?, e.checked_sub(self.base)?);
+        (a <= b && b < self.depth.len()).then(|| self.depth[a..=b].to_vec())
+    }
+
     pub fn input(&self, s: usize, e: usize, fps: f64) -> Option<VerifierInput> {
         let (i0, i1) = (s.checked_sub(self.base)?, e.checked_sub(self.base)?);
         if i0 > i1 || i1 >= self.pts.len() {
@@ -200,6 +230,7 @@ impl Segmenter {
             return;
         }
         self.pts.drain(..cut);
+        self.depth.drain(..cut);
         self.speed.drain(..cut.min(self.speed.len()));
         self.base += cut;
         let base = self.base;
@@ -253,5 +284,30 @@ mod tests {
         // The first rest ended where the first stroke starts: a gesture may start there.
         let starts = seg.starts(64, 0, 10, 100);
         assert!(starts.iter().any(|&s| s.abs_diff(19) <= 2), "{starts:?}");
+    }
+
+    /// Rest, a push towards the camera (depth only), rest: the break points found.
+    fn push_breaks(in_depth: bool) -> Vec<usize> {
+        let mut seg = Segmenter::new(&SpotterConfig::default());
+        seg.set_in_depth(in_depth);
+        let mut z = vec![0.0f32; 20];
+        z.extend(stroke([0.0, 0.0], [1.0, 0.0], 20).iter().map(|p| p[0]));
+        z.extend(vec![1.0; 30]);
+        let mut ends = Vec::new();
+        for (i, &d) in z.iter().enumerate() {
+            ends.extend(seg.push_deep([0.0, 0.0], d, i as u64, i as u64 * 33_333_333));
+        }
+        ends
+    }
+
+    #[test]
+    fn a_push_is_a_movement_in_depth_and_a_rest_in_the_plane() {
+        // In depth: the rest before it is cut where the push starts, and the rest after
+        // it where it ends: a stretch that can be a gesture.
+        let deep = push_breaks(true);
+        assert!(deep.iter().any(|&e| e.abs_diff(40) <= 3), "{deep:?}");
+        // In the plane the hand never moved: one rest from the first frame on.
+        let flat = push_breaks(false);
+        assert!(flat.iter().all(|&e| e < 10), "{flat:?}");
     }
 }

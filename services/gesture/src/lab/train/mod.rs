@@ -16,7 +16,7 @@ pub use mlp::MlpTrainConfig;
 pub use reuse::{recalibrate, retrain_spotting, Recalibrated};
 pub use spotting::CALIBRATION_SEED;
 
-use crate::bezier::bezier_codes;
+use crate::bezier::{trajectory_codes, Directions};
 use crate::crf::Crf;
 use crate::features::{feature_vector, FeatureConfig};
 use crate::hmm::DiscreteHmm;
@@ -25,8 +25,8 @@ use crate::lab::data::{labels_of, Sample};
 use crate::lab::stream::{drawn_in_stream, training_stream};
 use crate::mlp::Mlp;
 use crate::model::{
-    Classifier, LabelledHmm, Model, SpottingModel, TrainingInfo, MAX_LABEL_BYTES, MODEL_FORMAT,
-    MODEL_VERSION,
+    code_count, Classifier, LabelledHmm, Model, SpottingModel, TrainingInfo, MAX_LABEL_BYTES,
+    MODEL_FORMAT, MODEL_VERSION,
 };
 use crate::tracker::TrackerConfig;
 use rand::{Rng, SeedableRng};
@@ -244,13 +244,17 @@ pub fn train(
         .map(|s| labels.iter().position(|l| *l == s.label).unwrap_or(0))
         .collect();
     let subjects: BTreeSet<&str> = samples.iter().map(|s| s.subject.as_str()).collect();
+    // Data with depth gets classifiers that read it; pen data the 2-D ones, unchanged.
+    let depth = samples.iter().any(Sample::has_depth);
+    let directions = if depth {
+        Directions::Sphere26
+    } else {
+        Directions::Circle8
+    };
     let classifier = match cfg.classifier {
         ClassifierKind::Hmm => {
-            let codes: Vec<Vec<usize>> = samples
-                .par_iter()
-                .map(|s| bezier_codes(&s.trajectory().points, cfg.bezier_points, cfg.zero_frac))
-                .collect();
-            let symbols = if cfg.zero_frac > 0.0 { 9 } else { 8 };
+            let codes = seed_codes(samples, cfg, directions);
+            let symbols = code_count(directions, cfg.zero_frac);
             let hcfg = HmmTrainConfig { symbols, ..cfg.hmm };
             let done = std::sync::atomic::AtomicU64::new(0);
             let models = labels
@@ -275,16 +279,14 @@ pub fn train(
             Classifier::Hmm {
                 bezier_points: cfg.bezier_points,
                 zero_frac: cfg.zero_frac,
+                directions,
                 models,
                 cache: OnceLock::new(),
             }
         }
         ClassifierKind::Crf => {
-            let codes: Vec<Vec<usize>> = samples
-                .par_iter()
-                .map(|s| bezier_codes(&s.trajectory().points, cfg.bezier_points, cfg.zero_frac))
-                .collect();
-            let symbols = if cfg.zero_frac > 0.0 { 9 } else { 8 };
+            let codes = seed_codes(samples, cfg, directions);
+            let symbols = code_count(directions, cfg.zero_frac);
             let total = cfg.crf.iterations as u64;
             let crf = Crf::train(&codes, &class_of, labels.len(), symbols, &cfg.crf, |it| {
                 progress(it as u64 + 1, total)
@@ -292,13 +294,17 @@ pub fn train(
             Classifier::Crf {
                 bezier_points: cfg.bezier_points,
                 zero_frac: cfg.zero_frac,
+                directions,
                 classes: labels.clone(),
                 crf,
             }
         }
         ClassifierKind::Mlp => {
             let trajs: Vec<_> = samples.iter().map(|s| s.trajectory()).collect();
-            let fcfg = cfg.features;
+            let fcfg = FeatureConfig {
+                depth,
+                ..cfg.features
+            };
             let tracker = TrackerConfig::default();
             let total = (cfg.mlp.epochs * cfg.ensemble.max(1)) as u64;
             let mut nets = Vec::new();
@@ -362,4 +368,19 @@ pub fn train(
         model.spotting = Some(SpottingModel::train(samples, &model, cfg));
     }
     Ok(model)
+}
+
+/// The seed's codes of every sample, with the directions `directions`.
+fn seed_codes(samples: &[Sample], cfg: &TrainConfig, directions: Directions) -> Vec<Vec<usize>> {
+    samples
+        .par_iter()
+        .map(|s| {
+            trajectory_codes(
+                &s.trajectory(),
+                cfg.bezier_points,
+                cfg.zero_frac,
+                directions,
+            )
+        })
+        .collect()
 }

@@ -96,6 +96,7 @@ mod tests {
                 label: l.clone(),
                 subject: String::new(),
                 strokes: vec![vec![[0.0, 0.0], [1.0, 1.0]]],
+                depth: None,
             })
             .collect()
     }

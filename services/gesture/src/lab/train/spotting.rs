@@ -52,6 +52,12 @@ impl SpottingModel {
             models,
             verifier: None,
         };
+        if samples.iter().any(Sample::has_depth) {
+            // The verifier learns from synthetic streams, which are drawn in the frontal
+            // plane: it would judge 3-D gestures by a shadow of them. Without it the
+            // spotter takes what the classifier is sure of (`Spotter::new`).
+            return model;
+        }
         // Seed 7 first: a one-network verifier is the one trained before ensembles.
         let seeds: Vec<u64> = (7..).take(verifiers.max(1)).collect();
         model.verifier = Some(Verifier::train(samples, classifier, &model, &seeds));

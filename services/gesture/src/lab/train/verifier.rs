@@ -23,6 +23,7 @@ const SHAPE: FeatureConfig = FeatureConfig {
     pen_up: false,
     points: 12,
     grid: 3,
+    depth: false,
 };
 
 /// Training examples for every drawn gesture (each sample is drawn this many times, in
@@ -160,6 +161,7 @@ pub fn stream_examples(
                         label: s.label.clone(),
                         subject: s.subject.clone(),
                         strokes: vec![t.points],
+                        depth: None,
                     }
                 })
                 .collect();

@@ -1,0 +1,117 @@
+//! The template baseline for trajectories with depth: DTW 1-nearest-neighbour over every
+//! training sample, as [`super::dtw`] but on points in space (resampled to equal arc
+//! length in space, centred on their box and divided by its largest side).
+
+use crate::features::FeatureConfig;
+use crate::trajectory::{Point3, Trajectory};
+
+/// Templates: resampled, normalized 3-D point sequences with their class index.
+#[derive(Debug, Clone, Default)]
+pub struct Dtw3dClassifier {
+    /// Points every trajectory is resampled to.
+    pub points: usize,
+    /// Sakoe–Chiba band half-width in samples.
+    pub band: usize,
+    /// Every training sample, resampled, with its class.
+    pub templates: Vec<(Vec<Point3>, usize)>,
+}
+
+impl Dtw3dClassifier {
+    /// A classifier without templates yet.
+    pub fn new(points: usize, band: usize) -> Self {
+        Self {
+            points,
+            band,
+            templates: Vec::new(),
+        }
+    }
+
+    /// Adds a training sample of class `class`.
+    pub fn add(&mut self, t: &Trajectory, class: usize) {
+        self.templates.push((self.resampled(t), class));
+    }
+
+    /// The points as the templates hold them: the 3-D features' normalized points.
+    fn resampled(&self, t: &Trajectory) -> Vec<Point3> {
+        // The 3-D feature vector starts with the resampled points (×2) and their
+        // directions: one computation of the resampling for both.
+        let cfg = FeatureConfig {
+            points: self.points,
+            grid: 0,
+            pen_up: false,
+            depth: true,
+        };
+        let mut f = Vec::new();
+        crate::features::feature_vector(t, &cfg, &mut f);
+        f.chunks(7)
+            .take(self.points)
+            .map(|c| [c[0], c[1], c[2]])
+            .collect()
+    }
+
+    /// The class of the nearest template (None without templates).
+    pub fn classify(&self, t: &Trajectory) -> Option<usize> {
+        let q = self.resampled(t);
+        let mut best = f32::INFINITY;
+        let mut arg = None;
+        let mut buf = Vec::new();
+        for (tpl, c) in &self.templates {
+            let d = dtw3(&q, tpl, self.band, best, &mut buf);
+            if d < best {
+                best = d;
+                arg = Some(*c);
+            }
+        }
+        arg
+    }
+}
+
+/// DTW distance in space with a band and early abandoning once a row exceeds `cutoff`.
+fn dtw3(a: &[Point3], b: &[Point3], band: usize, cutoff: f32, buf: &mut Vec<f32>) -> f32 {
+    let (n, m) = (a.len(), b.len());
+    if n == 0 || m == 0 {
+        return f32::INFINITY;
+    }
+    let w = band.max(n.abs_diff(m));
+    buf.clear();
+    buf.resize(2 * (m + 1), f32::INFINITY);
+    let (prev, cur) = buf.split_at_mut(m + 1);
+    let (mut prev, mut cur) = (prev, cur);
+    prev[0] = 0.0;
+    for i in 1..=n {
+        cur.iter_mut().for_each(|v| *v = f32::INFINITY);
+        let (lo, hi) = (i.saturating_sub(w).max(1), (i + w).min(m));
+        let mut row_min = f32::INFINITY;
+        for j in lo..=hi {
+            let (p, q) = (a[i - 1], b[j - 1]);
+            let c = ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt();
+            let v = c + prev[j - 1].min(prev[j]).min(cur[j - 1]);
+            cur[j] = v;
+            row_min = row_min.min(v);
+        }
+        if row_min > cutoff {
+            return f32::INFINITY;
+        }
+        std::mem::swap(&mut prev, &mut cur);
+    }
+    prev[m]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_push_and_a_pull_are_told_apart_by_depth_alone() {
+        let line = |dz: f32| -> Trajectory {
+            let pts: Vec<Point3> = (0..20).map(|i| [0.0, 0.0, dz * i as f32]).collect();
+            Trajectory::from_points3(&pts)
+        };
+        let mut d = Dtw3dClassifier::new(16, 3);
+        d.add(&line(1.0), 0);
+        d.add(&line(-1.0), 1);
+        assert_eq!(d.classify(&line(0.5)), Some(0));
+        assert_eq!(d.classify(&line(-2.0)), Some(1));
+        assert_eq!(Dtw3dClassifier::new(16, 3).classify(&line(1.0)), None);
+    }
+}
