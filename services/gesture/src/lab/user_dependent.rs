@@ -38,7 +38,7 @@ impl WriterGroup {
 
     /// Whether the writer is in the group.
     pub fn holds(self, subject: &str) -> bool {
-        let tune = writer_hash(subject) % 3 == 0;
+        let tune = writer_hash(subject).is_multiple_of(3);
         match self {
             Self::All => true,
             Self::Tune => tune,

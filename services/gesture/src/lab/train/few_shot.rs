@@ -38,6 +38,9 @@ pub struct FewShotConfig {
     pub min_epoch_samples: usize,
 }
 
+// Chosen on the user-dependent protocol's tune writers (`eval-gestures --per-writer 3,9
+// --writers tune --few-shot …`), never on the writers reported; the NOTES say what each
+// alternative gave.
 impl Default for FewShotConfig {
     fn default() -> Self {
         Self {
@@ -47,7 +50,7 @@ impl Default for FewShotConfig {
             band: 4,
             direction_weight: 0.5,
             temperature: 0.05,
-            weight: 0.5,
+            weight: 0.7,
             min_epoch_samples: 1024,
         }
     }
