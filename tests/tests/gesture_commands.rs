@@ -166,3 +166,95 @@ fn eval_spotting_refuses_data_without_a_label_the_model_knows() {
         "{err}"
     );
 }
+
+/// One writer's glyphs, `copies` of each label, each copy slanted and stretched a
+/// little differently.
+fn write_one_writer(path: &Path, labels: &str, copies: usize) {
+    let mut lines = Vec::new();
+    for c in labels.chars() {
+        let glyph = airglyph_synth::glyphs::template(c).expect("a built-in glyph");
+        for k in 0..copies {
+            let slant = 0.04 * k as f32 - 0.1;
+            let stretch = 1.0 + 0.05 * (k % 3) as f32;
+            let strokes: Vec<Vec<[f32; 2]>> = glyph
+                .strokes
+                .iter()
+                .map(|s| {
+                    s.iter()
+                        .map(|p| [p.x + slant * p.y, p.y * stretch])
+                        .collect()
+                })
+                .collect();
+            lines.push(
+                serde_json::json!({"label": c.to_string(), "subject": "me", "strokes": strokes})
+                    .to_string(),
+            );
+        }
+    }
+    std::fs::write(path, lines.join("\n") + "\n").unwrap();
+}
+
+#[test]
+fn eval_gestures_per_writer_trains_on_each_writers_own_samples() {
+    let p = Isolated::new();
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("mine.jsonl");
+    write_one_writer(&data, "0123456789", 6);
+    let out = succeed(
+        p.command("airglyph")
+            .args([
+                "eval-gestures",
+                "--json",
+                "--baselines",
+                "--per-writer",
+                "3",
+                "--model",
+            ])
+            .arg(shipped_model())
+            .arg("--data")
+            .arg(&data),
+    );
+    let lines = json_lines(&out.stdout);
+    assert_eq!(lines.len(), 2, "{lines:?}");
+    for (r, name) in lines.iter().zip(["mlp", "dtw"]) {
+        assert_eq!(r["classifier"], name, "{r}");
+        assert_eq!(r["protocol"], "per-writer", "{r}");
+        assert_eq!(r["train_per_label"], 3, "{r}");
+        assert_eq!(r["subjects"], 1, "{r}");
+        // Three of six copies of each of ten labels to train on, the other three to test.
+        assert_eq!(r["samples"], 30, "{r}");
+        let acc = r["accuracy"].as_f64().unwrap();
+        assert!(acc >= 0.9, "{r}");
+    }
+    // The default says what it chose for three samples a label.
+    let plan = lines[0]["plan"].as_str().unwrap();
+    assert!(plan.contains("templates"), "{plan}");
+}
+
+#[test]
+fn train_says_it_adds_templates_for_a_few_samples_a_label() {
+    let p = Isolated::new();
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("mine.jsonl");
+    write_one_writer(&data, "0123456789", 3);
+    let model = tmp.path().join("mine.json");
+    let out = succeed(
+        p.command("airglyph")
+            .args(["train", "--no-spotting", "--data"])
+            .arg(&data)
+            .arg("--out")
+            .arg(&model),
+    );
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        said.contains("networks and templates") && said.contains("has 3 samples"),
+        "{said}"
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap();
+    let n = json["classifier"]["templates"]["templates"]
+        .as_array()
+        .unwrap()
+        .len();
+    assert_eq!(n, 30);
+}

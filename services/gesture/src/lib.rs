@@ -37,6 +37,7 @@ pub mod limits;
 mod mlp;
 pub mod model;
 mod spot;
+mod templates;
 mod tracker;
 mod trajectory;
 

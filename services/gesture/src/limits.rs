@@ -39,6 +39,8 @@ pub const MAX_TIMING: usize = 1024;
 pub const MAX_EPOCHS: usize = 100_000;
 /// Samples of a training mini-batch.
 pub const MAX_BATCH: usize = 1 << 16;
+/// Templates of a model's template member (each is matched at every decision).
+pub const MAX_TEMPLATES: usize = 1 << 16;
 
 /// `value` in `min..=max`, or a message naming `what`.
 pub fn within(what: &str, value: usize, min: usize, max: usize) -> Result<usize, String> {

@@ -2,9 +2,10 @@
 //! files needed), and the model loader's errors.
 
 use airglyph_gesture::lab::{
-    build_stream, random_movement, score, train, ClassifierKind, Sample, StreamConfig,
-    SyntheticStream, TrainConfig,
+    build_stream, few_shot_plan, random_movement, score, train, ClassifierKind, FewShotPlan,
+    Sample, StreamConfig, SyntheticStream, TrainConfig,
 };
+use airglyph_gesture::model::Classifier;
 use airglyph_gesture::{Model, Spotter, SpotterConfig};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -117,6 +118,79 @@ fn every_classifier_learns_synthetic_shapes() {
         let back = Model::from_json_str(&model.to_json(), Path::new("m.json")).unwrap();
         assert_eq!(accuracy(&back, &te), acc);
     }
+}
+
+#[test]
+fn a_vocabulary_from_three_samples_a_label_gets_templates_and_is_read_well() {
+    // Three samples of each of four shapes, one of them (the stroke) nearly a side of
+    // the square.
+    let tr = samples_of(4, 3, 11);
+    let te = samples_of(4, 40, 12);
+    let mut cfg = small_config(ClassifierKind::Mlp);
+    cfg.spotting = false;
+    let plan = few_shot_plan(&tr, &cfg);
+    assert!(
+        matches!(plan, FewShotPlan::WithTemplates { samples: 3, .. }),
+        "{plan}"
+    );
+    assert!(plan.to_string().contains("templates"), "{plan}");
+    let model = train(&tr, &cfg, &|_, _| {}).unwrap();
+    let Classifier::Mlp {
+        templates: Some(t), ..
+    } = &model.classifier
+    else {
+        panic!("no template member in a model from three samples a label");
+    };
+    assert_eq!(t.templates.len(), 12);
+    let acc = accuracy(&model, &te);
+    assert!(acc >= 0.95, "accuracy {acc}");
+    // The member is in the file: the model read back decides alike.
+    let back = Model::from_json_str(&model.to_json(), Path::new("m.json")).unwrap();
+    assert_eq!(accuracy(&back, &te), acc);
+}
+
+#[test]
+fn a_vocabulary_of_many_samples_a_label_trains_networks_only() {
+    let tr = samples(30, 1);
+    let mut cfg = small_config(ClassifierKind::Mlp);
+    cfg.spotting = false;
+    let plan = few_shot_plan(&tr, &cfg);
+    assert!(
+        matches!(plan, FewShotPlan::NetworksOnly { samples: 30, .. }),
+        "{plan}"
+    );
+    let model = train(&tr, &cfg, &|_, _| {}).unwrap();
+    assert!(matches!(
+        model.classifier,
+        Classifier::Mlp {
+            templates: None,
+            ..
+        }
+    ));
+    // And a model file without the member writes none.
+    assert!(!model.to_json().contains("\"templates\""));
+}
+
+#[test]
+fn the_shipped_model_file_loads_and_writes_back_unchanged() {
+    // A model file from before the template member: read, it has none, and written
+    // again it is the same JSON (nothing added, nothing lost).
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/unipen-36.json");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let model = Model::from_json_str(&text, &path).unwrap();
+    assert!(matches!(
+        model.classifier,
+        Classifier::Mlp {
+            templates: None,
+            ..
+        }
+    ));
+    let before: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let after: serde_json::Value = serde_json::from_str(&model.to_json()).unwrap();
+    assert!(
+        before == after,
+        "the shipped model's JSON changed on a round trip"
+    );
 }
 
 fn tiny_model_json() -> serde_json::Value {

@@ -2,12 +2,16 @@
 //! time of a gesture model; with `--folds K`, writer-independent cross-validation
 //! (retraining the model's classifier with its recorded parameters on the other folds);
 //! with `--baselines`, the template baseline (DTW 1-NN), the seed's pipeline and the CRF
-//! trained on the same data in the same run.
+//! trained on the same data in the same run; with `--per-writer K`, the user-dependent
+//! protocol of the $1 recognizer (each writer's own K samples a label, tested on that
+//! writer's other samples; `per_writer`).
+
+mod per_writer;
 
 use crate::interrupt::unless_interrupted;
 use airglyph_gesture::lab::{
     folds_by_subject, labels_of, load_many, train, ClassifierKind, Confusion, Dtw3dClassifier,
-    DtwClassifier, Sample, TrainConfig,
+    DtwClassifier, FewShotConfig, Sample, TrainConfig,
 };
 use airglyph_gesture::Model;
 use airglyph_ipc::options;
@@ -47,13 +51,59 @@ pub struct Args {
     /// Skip the CRF among the baselines.
     #[arg(long)]
     pub no_crf: bool,
-    /// Fold assignment seed.
+    /// Fold assignment seed (with --per-writer: the draws' seed).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// The user-dependent protocol instead of cross-validation: for every writer, K of
+    /// its own samples of each label to train on, the rest of its samples to test (one
+    /// run for each K given).
+    #[arg(long, value_delimiter = ',', value_parser = options::within(1usize, 1000), allow_negative_numbers = true, conflicts_with = "folds")]
+    pub per_writer: Vec<usize>,
+    /// --per-writer: a writer takes part when it wrote at least K + 1 samples of this
+    /// many labels (its vocabulary).
+    #[arg(long, default_value_t = 10, value_parser = options::within(2usize, 10_000), allow_negative_numbers = true)]
+    pub min_labels: usize,
+    /// --per-writer: which writers, by a fixed hash of their names: all, tune (one in
+    /// three, to choose settings on) or report (the others).
+    #[arg(long, default_value = "all", value_parser = ["all", "tune", "report"])]
+    pub writers: String,
+    /// --per-writer: random draws of the training samples per writer.
+    #[arg(long, default_value_t = 1, value_parser = options::within(1usize, 1000), allow_negative_numbers = true)]
+    pub draws: usize,
+    /// Settings for vocabularies with few samples a label, as a JSON object whose fields
+    /// replace the model's (e.g. '{"weight":0.7}'; see `FewShotConfig`).
+    #[arg(long, value_name = "JSON")]
+    pub few_shot: Option<String>,
+}
+
+/// The few-shot settings of `cfg` with the fields of the JSON object `over` replaced
+/// (an unknown field is an error).
+fn with_few_shot(cfg: &mut TrainConfig, over: Option<&str>) -> anyhow::Result<()> {
+    let Some(over) = over else { return Ok(()) };
+    let mut v = serde_json::to_value(cfg.few_shot)?;
+    let o: serde_json::Value =
+        serde_json::from_str(over).context("--few-shot: not a JSON object")?;
+    let (Some(fields), Some(obj)) = (v.as_object_mut(), o.as_object()) else {
+        bail!("--few-shot: not a JSON object");
+    };
+    for (k, x) in obj {
+        if !fields.contains_key(k) {
+            bail!(
+                "--few-shot: unknown field {k:?} (fields: {})",
+                fields.keys().cloned().collect::<Vec<_>>().join(", ")
+            );
+        }
+        fields.insert(k.clone(), x.clone());
+    }
+    cfg.few_shot = serde_json::from_value::<FewShotConfig>(v).context("--few-shot")?;
+    cfg.few_shot
+        .validate()
+        .map_err(|e| anyhow::anyhow!("--few-shot: {e}"))?;
+    Ok(())
 }
 
 #[derive(Clone)]
-enum Method {
+pub(crate) enum Method {
     Model(Box<TrainConfig>),
     Dtw,
     Seed(usize),
@@ -87,14 +137,14 @@ impl Method {
 }
 
 /// A trained predictor of class indices into `labels`.
-enum Predictor {
+pub(crate) enum Predictor {
     Model(Box<Model>, Vec<usize>),
     Dtw(DtwClassifier),
     Dtw3d(Dtw3dClassifier),
 }
 
 impl Predictor {
-    fn predict(&self, s: &Sample) -> usize {
+    pub(crate) fn predict(&self, s: &Sample) -> usize {
         match self {
             Predictor::Model(m, map) => map[m.classify(&s.trajectory()).class],
             Predictor::Dtw(d) => d.classify(&s.trajectory()).unwrap_or(0),
@@ -171,12 +221,25 @@ fn test(p: &Predictor, test_set: &[Sample], labels: &[String], stride: usize, ou
 type Scored = (String, String, usize, Outcome);
 
 pub fn run(args: Args) -> anyhow::Result<()> {
+    if !args.per_writer.is_empty() {
+        return per_writer::run(args);
+    }
     // The evaluation writes nothing until it is done: a signal leaves it where it is.
     let results = unless_interrupted("nothing was printed or drawn", {
         let args = args.clone();
         move || evaluate(&args)
     })??;
     print_and_plot(&args, &results)
+}
+
+/// The model's recorded training parameters, to retrain with.
+fn model_config(model: &Model, args: &Args) -> anyhow::Result<TrainConfig> {
+    serde_json::from_value(model.training.parameters.clone()).with_context(|| {
+        format!(
+            "{}: the model's training parameters cannot be read back for retraining",
+            args.model.display()
+        )
+    })
 }
 
 /// Trains and tests what the arguments ask for.
@@ -196,13 +259,8 @@ fn evaluate(args: &Args) -> anyhow::Result<Vec<Scored>> {
     let model_n = model.training.bezier_points;
     let mut methods = Vec::new();
     if args.folds.is_some() {
-        let cfg: TrainConfig = serde_json::from_value(model.training.parameters.clone())
-            .with_context(|| {
-                format!(
-                    "{}: the model's training parameters cannot be read back for retraining",
-                    args.model.display()
-                )
-            })?;
+        let mut cfg = model_config(&model, args)?;
+        with_few_shot(&mut cfg, args.few_shot.as_deref())?;
         methods.push(Method::Model(Box::new(cfg)));
     }
     if args.baselines {

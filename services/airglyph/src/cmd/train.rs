@@ -2,7 +2,7 @@
 
 use crate::interrupt::unless_interrupted;
 use airglyph_gesture::lab::{
-    load_many, recalibrate, retrain_spotting, train, ClassifierKind, TrainConfig,
+    few_shot_plan, load_many, recalibrate, retrain_spotting, train, ClassifierKind, TrainConfig,
 };
 use airglyph_gesture::limits;
 use airglyph_gesture::Model;
@@ -149,6 +149,14 @@ fn model(args: &Args, cfg: &TrainConfig) -> anyhow::Result<Model> {
                 ""
             }
         );
+    }
+    // Which members the ensemble gets, and why: what a user training a vocabulary of
+    // their own from a few samples needs to know.
+    if cfg.classifier == ClassifierKind::Mlp
+        && args.reuse_classifier.is_none()
+        && args.recalibrate.is_none()
+    {
+        eprintln!("{}", few_shot_plan(&samples, cfg));
     }
     let bar = ProgressBar::new(1);
     bar.set_style(

@@ -17,6 +17,7 @@ mod eval;
 mod scoring;
 mod stream;
 mod train;
+mod user_dependent;
 
 pub use crate::features::{resample, Resampled};
 pub use collect::{Repetition, RepetitionConfig, RepetitionSegmenter};
@@ -32,7 +33,8 @@ pub use stream::{
     TruthGesture,
 };
 pub use train::{
-    calibrate_label_bars, recalibrate, retrain_spotting, train, ClassifierKind, CrfTrainConfig,
-    HmmTrainConfig, MlpTrainConfig, Progress, Recalibrated, TrainConfig, TrainError, BAR_STEPS,
-    CALIBRATION_SEED,
+    calibrate_label_bars, few_shot_plan, recalibrate, retrain_spotting, train, ClassifierKind,
+    CrfTrainConfig, FewShotConfig, FewShotPlan, HmmTrainConfig, MlpTrainConfig, Progress,
+    Recalibrated, TrainConfig, TrainError, BAR_STEPS, CALIBRATION_SEED,
 };
+pub use user_dependent::{writer_hash, writer_splits, WriterGroup, WriterSplit};

@@ -11,6 +11,7 @@ pub use crate::crf::Crf;
 pub use crate::features::FeatureConfig;
 pub use crate::hmm::{DiscreteHmm, LogHmm};
 pub use crate::mlp::{Layer, Mlp};
+pub use crate::templates::{Template, Templates};
 pub use source::{ModelSource, MODEL_ENV};
 pub use spotting::SpottingModel;
 pub use verifier::{Verifier, VerifierInput};
@@ -152,6 +153,11 @@ pub enum Classifier {
         classes: Vec<String>,
         /// The ensemble, whose probabilities are averaged.
         nets: Vec<Mlp>,
+        /// The template member, for vocabularies trained from a few samples a label:
+        /// its posterior mixed with the networks' by its weight. Absent in models
+        /// trained from many (and in every model before it), which decide as they did.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        templates: Option<Templates>,
     },
 }
 
@@ -350,7 +356,12 @@ impl Model {
                 features,
                 classes,
                 nets,
+                templates,
             } => {
+                if let Some(t) = templates {
+                    t.validate(classes.len())
+                        .map_err(|e| format!("the template member: {e}"))?;
+                }
                 let names: Vec<&str> = classes.iter().map(String::as_str).collect();
                 check_classes(&names, "the network classifier")?;
                 if nets.is_empty() {
@@ -439,13 +450,24 @@ impl Model {
                 features,
                 classes,
                 nets,
+                templates,
             } => {
-                let mut f = Vec::with_capacity(features.dim());
-                feature_vector(t, features, &mut f);
                 let mut acc = vec![0.0f64; classes.len()];
-                for n in nets {
-                    for (a, lp) in acc.iter_mut().zip(n.log_probs(&f)) {
-                        *a += (lp as f64).exp() / nets.len() as f64;
+                // The networks' share: all of it without templates, and none when the
+                // templates decide alone (their weight 1: no network is run).
+                let nets_share = templates.as_ref().map_or(1.0, |m| 1.0 - m.weight as f64);
+                if nets_share > 0.0 {
+                    let mut f = Vec::with_capacity(features.dim());
+                    feature_vector(t, features, &mut f);
+                    for n in nets {
+                        for (a, lp) in acc.iter_mut().zip(n.log_probs(&f)) {
+                            *a += (lp as f64).exp() / nets.len() as f64;
+                        }
+                    }
+                }
+                if let Some(m) = templates {
+                    for (a, p) in acc.iter_mut().zip(m.posterior(t, classes.len())) {
+                        *a = nets_share * *a + m.weight as f64 * p;
                     }
                 }
                 let idx = classes

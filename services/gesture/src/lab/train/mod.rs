@@ -3,6 +3,7 @@
 
 mod calibrate;
 mod crf;
+mod few_shot;
 mod hmm;
 mod mlp;
 mod reuse;
@@ -11,6 +12,7 @@ mod verifier;
 
 pub use calibrate::{calibrate_label_bars, BAR_STEPS};
 pub use crf::CrfTrainConfig;
+pub use few_shot::{FewShotConfig, FewShotPlan};
 pub use hmm::HmmTrainConfig;
 pub use mlp::MlpTrainConfig;
 pub use reuse::{recalibrate, retrain_spotting, Recalibrated};
@@ -105,6 +107,11 @@ pub struct TrainConfig {
     /// Networks in the spotting verifier, each trained on streams of its own.
     #[serde(default = "one")]
     pub verifiers: usize,
+    /// What a vocabulary with few samples a label gets (network classifier). Models
+    /// trained before it get the defaults, which change nothing for vocabularies of
+    /// more than a few samples a label.
+    #[serde(default)]
+    pub few_shot: FewShotConfig,
     /// Every random draw of training follows from it.
     pub seed: u64,
     /// Data file names, recorded in the model.
@@ -133,6 +140,7 @@ impl Default for TrainConfig {
             spotting_step: 0.1,
             spotting_states: 10,
             verifiers: 3,
+            few_shot: FewShotConfig::default(),
             seed: 1,
             data: Vec::new(),
         }
@@ -181,6 +189,7 @@ impl TrainConfig {
         }
         within("the spotting states", self.spotting_states, 1, MAX_STATES)?;
         within("--verifiers", self.verifiers, 1, MAX_NETS)?;
+        self.few_shot.validate()?;
         Ok(())
     }
 }
@@ -218,6 +227,12 @@ pub enum TrainError {
 
 /// Progress of training: (units done, units total).
 pub type Progress<'a> = &'a (dyn Fn(u64, u64) + Sync);
+
+/// What training the network classifier on these samples does for their smallest
+/// label, and why ([`FewShotPlan`]'s text).
+pub fn few_shot_plan(samples: &[Sample], cfg: &TrainConfig) -> FewShotPlan {
+    FewShotPlan::new(samples, &labels_of(samples), &cfg.few_shot)
+}
 
 /// Trains a model on the samples.
 pub fn train(
@@ -301,6 +316,12 @@ pub fn train(
         }
         ClassifierKind::Mlp => {
             let trajs: Vec<_> = samples.iter().map(|s| s.trajectory()).collect();
+            let plan = FewShotPlan::new(samples, &labels, &cfg.few_shot);
+            // Copy `i` of sample `i % n` is augmented afresh (its own index seeds it); with
+            // one copy this is the training of every model before few-shot ones.
+            let n = trajs.len();
+            let copies = plan.copies();
+            let copy_class: Vec<usize> = (0..n * copies).map(|i| class_of[i % n]).collect();
             let fcfg = FeatureConfig {
                 depth,
                 ..cfg.features
@@ -314,12 +335,12 @@ pub fn train(
                 let feats = |epoch: usize, i: usize| {
                     let mut f = Vec::with_capacity(fcfg.dim());
                     if epoch == usize::MAX || strength <= 0.0 {
-                        feature_vector(&trajs[i], &fcfg, &mut f);
+                        feature_vector(&trajs[i % n], &fcfg, &mut f);
                     } else {
                         let mut rng = ChaCha8Rng::seed_from_u64(
                             seed ^ ((epoch as u64) << 32) ^ (i as u64).wrapping_mul(0x9E37_79B9),
                         );
-                        let mut t = augment(&trajs[i], &mut rng, strength);
+                        let mut t = augment(&trajs[i % n], &mut rng, strength);
                         if cfg.stream_augment > 0.0 && rng.gen::<f32>() < cfg.stream_augment {
                             let scfg = training_stream(&mut rng);
                             t = drawn_in_stream(&t, &scfg, &tracker, &mut rng);
@@ -330,9 +351,9 @@ pub fn train(
                 };
                 let mcfg = MlpTrainConfig { seed, ..cfg.mlp };
                 let net = Mlp::train(
-                    trajs.len(),
+                    copy_class.len(),
                     fcfg.dim(),
-                    &class_of,
+                    &copy_class,
                     labels.len(),
                     &mcfg,
                     feats,
@@ -340,10 +361,14 @@ pub fn train(
                 );
                 nets.push(net);
             }
+            let templates = matches!(plan, FewShotPlan::WithTemplates { .. }).then(|| {
+                few_shot::template_member(samples, &class_of, labels.len(), &cfg.few_shot)
+            });
             Classifier::Mlp {
                 features: fcfg,
                 classes: labels.clone(),
                 nets,
+                templates,
             }
         }
     };
