@@ -30,6 +30,7 @@
 mod bezier;
 mod body_frame;
 mod crf;
+mod dtw;
 mod features;
 mod features3d;
 mod hmm;

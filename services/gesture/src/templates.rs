@@ -5,6 +5,7 @@
 //! its posterior with the networks'. What a model file holds of it and its decision;
 //! which samples become templates, and with what weight, is the lab's training.
 
+use crate::dtw::dtw;
 use crate::features::resample;
 use crate::trajectory::Trajectory;
 use serde::{Deserialize, Serialize};
@@ -153,43 +154,6 @@ impl Templates {
             })
             .collect()
     }
-}
-
-/// DTW distance (sum of Euclidean step costs along the best warping path) within a band,
-/// abandoned (infinite) once a whole row exceeds `cutoff`.
-fn dtw(a: &[Step], b: &[Step], band: usize, cutoff: f32, buf: &mut Vec<f32>) -> f32 {
-    let (n, m) = (a.len(), b.len());
-    if n == 0 || m == 0 {
-        return f32::INFINITY;
-    }
-    let w = band.max(n.abs_diff(m));
-    buf.clear();
-    buf.resize(2 * (m + 1), f32::INFINITY);
-    let (prev, cur) = buf.split_at_mut(m + 1);
-    let (mut prev, mut cur) = (prev, cur);
-    prev[0] = 0.0;
-    for i in 1..=n {
-        cur.iter_mut().for_each(|v| *v = f32::INFINITY);
-        let lo = i.saturating_sub(w).max(1);
-        let hi = (i + w).min(m);
-        let mut row_min = f32::INFINITY;
-        for j in lo..=hi {
-            let (p, q) = (a[i - 1], b[j - 1]);
-            let c = ((p[0] - q[0]).powi(2)
-                + (p[1] - q[1]).powi(2)
-                + (p[2] - q[2]).powi(2)
-                + (p[3] - q[3]).powi(2))
-            .sqrt();
-            let v = c + prev[j - 1].min(prev[j]).min(cur[j - 1]);
-            cur[j] = v;
-            row_min = row_min.min(v);
-        }
-        if row_min > cutoff {
-            return f32::INFINITY;
-        }
-        std::mem::swap(&mut prev, &mut cur);
-    }
-    prev[m]
 }
 
 #[cfg(test)]

@@ -2,6 +2,7 @@
 //! training sample, as [`super::dtw`] but on points in space (resampled to equal arc
 //! length in space, centred on their box and divided by its largest side).
 
+use crate::dtw::dtw;
 use crate::features::FeatureConfig;
 use crate::trajectory::{Point3, Trajectory};
 
@@ -56,7 +57,7 @@ impl Dtw3dClassifier {
         let mut arg = None;
         let mut buf = Vec::new();
         for (tpl, c) in &self.templates {
-            let d = dtw3(&q, tpl, self.band, best, &mut buf);
+            let d = dtw(&q, tpl, self.band, best, &mut buf);
             if d < best {
                 best = d;
                 arg = Some(*c);
@@ -64,37 +65,6 @@ impl Dtw3dClassifier {
         }
         arg
     }
-}
-
-/// DTW distance in space with a band and early abandoning once a row exceeds `cutoff`.
-fn dtw3(a: &[Point3], b: &[Point3], band: usize, cutoff: f32, buf: &mut Vec<f32>) -> f32 {
-    let (n, m) = (a.len(), b.len());
-    if n == 0 || m == 0 {
-        return f32::INFINITY;
-    }
-    let w = band.max(n.abs_diff(m));
-    buf.clear();
-    buf.resize(2 * (m + 1), f32::INFINITY);
-    let (prev, cur) = buf.split_at_mut(m + 1);
-    let (mut prev, mut cur) = (prev, cur);
-    prev[0] = 0.0;
-    for i in 1..=n {
-        cur.iter_mut().for_each(|v| *v = f32::INFINITY);
-        let (lo, hi) = (i.saturating_sub(w).max(1), (i + w).min(m));
-        let mut row_min = f32::INFINITY;
-        for j in lo..=hi {
-            let (p, q) = (a[i - 1], b[j - 1]);
-            let c = ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt();
-            let v = c + prev[j - 1].min(prev[j]).min(cur[j - 1]);
-            cur[j] = v;
-            row_min = row_min.min(v);
-        }
-        if row_min > cutoff {
-            return f32::INFINITY;
-        }
-        std::mem::swap(&mut prev, &mut cur);
-    }
-    prev[m]
 }
 
 #[cfg(test)]
