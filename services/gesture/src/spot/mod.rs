@@ -276,7 +276,7 @@ impl Spotter {
             0.0
         };
         self.waiting
-            .extend(self.seg.push_deep([p.x * inv, p.y * inv], z, seq, time_ns));
+            .extend(self.seg.push([p.x * inv, p.y * inv], z, seq, time_ns));
         let mut out = None;
         // A break's candidates are judged once the context after it is in.
         let after = context_steps(self.seg.fps());

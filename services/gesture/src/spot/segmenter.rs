@@ -64,19 +64,14 @@ impl Segmenter {
         self.base + self.pts.len()
     }
 
-    /// Adds a point (gesture-size units); returns the point where a gesture may end,
-    /// when one was found (a few points back).
-    pub fn push(&mut self, p: [f32; 2], seq: u64, time_ns: u64) -> Option<usize> {
-        self.push_deep(p, 0.0, seq, time_ns)
-    }
-
     /// Counts the depth in the hand's speed from now on (see `in_depth`).
     pub fn set_in_depth(&mut self, on: bool) {
         self.in_depth = on;
     }
 
-    /// [`Self::push`] with the point's depth `z`.
-    pub fn push_deep(&mut self, p: [f32; 2], z: f32, seq: u64, time_ns: u64) -> Option<usize> {
+    /// Adds a point (gesture-size units) and its depth `z` (0 in the plane); returns the
+    /// point where a gesture may end, when one was found (a few points back).
+    pub fn push(&mut self, p: [f32; 2], z: f32, seq: u64, time_ns: u64) -> Option<usize> {
         self.pts.push((p, seq, time_ns));
         self.depth.push(z);
         let k = self.pts.len() - 1;
@@ -251,7 +246,7 @@ mod tests {
     fn feed(seg: &mut Segmenter, pts: &[[f32; 2]]) -> Vec<usize> {
         let mut ends = Vec::new();
         for (i, p) in pts.iter().enumerate() {
-            ends.extend(seg.push(*p, i as u64, i as u64 * 33_333_333));
+            ends.extend(seg.push(*p, 0.0, i as u64, i as u64 * 33_333_333));
         }
         ends
     }
@@ -295,7 +290,7 @@ mod tests {
         z.extend(vec![1.0; 30]);
         let mut ends = Vec::new();
         for (i, &d) in z.iter().enumerate() {
-            ends.extend(seg.push_deep([0.0, 0.0], d, i as u64, i as u64 * 33_333_333));
+            ends.extend(seg.push([0.0, 0.0], d, i as u64, i as u64 * 33_333_333));
         }
         ends
     }

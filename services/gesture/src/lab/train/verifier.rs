@@ -176,7 +176,7 @@ pub fn stream_examples(
                 let Some(p) = tracker.update(&sk, i as u64 * dt) else {
                     continue;
                 };
-                ends.extend(seg.push([p.x, p.y], i as u64, i as u64 * dt));
+                ends.extend(seg.push([p.x, p.y], 0.0, i as u64, i as u64 * dt));
             }
             let fps = cfg.fps as f64;
             let min_len = (scfg.min_seconds * fps) as usize;
