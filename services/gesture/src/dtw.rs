@@ -46,6 +46,27 @@ pub fn dtw<const D: usize>(
     prev[m]
 }
 
+/// The class of the template nearest `q` by [`dtw`] (None without templates): a 1-NN
+/// classifier's decision, each distance abandoned once it exceeds the best so far.
+#[cfg(feature = "lab")]
+pub fn nearest<const D: usize>(
+    q: &[[f32; D]],
+    templates: &[(Vec<[f32; D]>, usize)],
+    band: usize,
+) -> Option<usize> {
+    let mut best = f32::INFINITY;
+    let mut arg = None;
+    let mut buf = Vec::new();
+    for (tpl, c) in templates {
+        let d = dtw(q, tpl, band, best, &mut buf);
+        if d < best {
+            best = d;
+            arg = Some(*c);
+        }
+    }
+    arg
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,7 +1,7 @@
 //! The template baseline: dynamic time warping 1-nearest-neighbour over every training
 //! sample (trajectories resampled to equal arc length and normalized).
 
-use crate::dtw::dtw;
+use crate::dtw::nearest;
 use crate::features::resample;
 use crate::trajectory::Trajectory;
 
@@ -35,16 +35,6 @@ impl DtwClassifier {
     /// The class of the nearest template (None without templates).
     pub fn classify(&self, t: &Trajectory) -> Option<usize> {
         let q = resample(t, self.points).points;
-        let mut best = f32::INFINITY;
-        let mut arg = None;
-        let mut buf = Vec::new();
-        for (tpl, c) in &self.templates {
-            let d = dtw(&q, tpl, self.band, best, &mut buf);
-            if d < best {
-                best = d;
-                arg = Some(*c);
-            }
-        }
-        arg
+        nearest(&q, &self.templates, self.band)
     }
 }

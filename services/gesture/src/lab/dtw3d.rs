@@ -2,7 +2,7 @@
 //! training sample, as [`super::dtw`] but on points in space (resampled to equal arc
 //! length in space, centred on their box and divided by its largest side).
 
-use crate::dtw::dtw;
+use crate::dtw::nearest;
 use crate::features::FeatureConfig;
 use crate::trajectory::{Point3, Trajectory};
 
@@ -53,17 +53,7 @@ impl Dtw3dClassifier {
     /// The class of the nearest template (None without templates).
     pub fn classify(&self, t: &Trajectory) -> Option<usize> {
         let q = self.resampled(t);
-        let mut best = f32::INFINITY;
-        let mut arg = None;
-        let mut buf = Vec::new();
-        for (tpl, c) in &self.templates {
-            let d = dtw(&q, tpl, self.band, best, &mut buf);
-            if d < best {
-                best = d;
-                arg = Some(*c);
-            }
-        }
-        arg
+        nearest(&q, &self.templates, self.band)
     }
 }
 
