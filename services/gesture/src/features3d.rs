@@ -26,14 +26,14 @@ pub(crate) fn dim(points: usize, grid: usize) -> usize {
 
 /// A trajectory in space resampled to `n` points of equal arc length, centred on its
 /// box and divided by the box's largest side.
-struct Resampled3 {
-    points: Vec<Point3>,
+pub(crate) struct Resampled3 {
+    pub(crate) points: Vec<Point3>,
     pen_up: Vec<bool>,
     /// Sides of the box before normalization.
     sides: [f32; 3],
 }
 
-fn resample3(t: &Trajectory, n: usize) -> Resampled3 {
+pub(crate) fn resample3(t: &Trajectory, n: usize) -> Resampled3 {
     let n = n.max(2);
     let raw = t.points3();
     if raw.is_empty() {

@@ -3,7 +3,7 @@
 //! length in space, centred on their box and divided by its largest side).
 
 use crate::dtw::nearest;
-use crate::features::FeatureConfig;
+use crate::features3d::resample3;
 use crate::trajectory::{Point3, Trajectory};
 
 /// Templates: resampled, normalized 3-D point sequences with their class index.
@@ -32,22 +32,10 @@ impl Dtw3dClassifier {
         self.templates.push((self.resampled(t), class));
     }
 
-    /// The points as the templates hold them: the 3-D features' normalized points.
+    /// The points as the templates hold them: resampled in space and normalized, as the
+    /// 3-D features have them.
     fn resampled(&self, t: &Trajectory) -> Vec<Point3> {
-        // The 3-D feature vector starts with the resampled points (×2) and their
-        // directions: one computation of the resampling for both.
-        let cfg = FeatureConfig {
-            points: self.points,
-            grid: 0,
-            pen_up: false,
-            depth: true,
-        };
-        let mut f = Vec::new();
-        crate::features::feature_vector(t, &cfg, &mut f);
-        f.chunks(7)
-            .take(self.points)
-            .map(|c| [c[0], c[1], c[2]])
-            .collect()
+        resample3(t, self.points).points
     }
 
     /// The class of the nearest template (None without templates).
