@@ -238,8 +238,11 @@ impl PoseEstimator {
                     .smoother
                     .smooth(s, time_s, &self.cfg.smoothing);
                 // Smoothing may carry a joint seen at the image's edge past it.
-                for (p, v) in skeleton.joints.iter().zip(&mut skeleton.visible) {
-                    *v = *v && inside(&k, p);
+                for j in 0..Joint::COUNT {
+                    if !inside(&k, &skeleton.joints[j]) {
+                        skeleton.visible[j] = false;
+                        skeleton.confidence[j] = 0.0;
+                    }
                 }
                 PoseResult {
                     person_found: true,
@@ -418,6 +421,35 @@ impl PoseEstimator {
         };
         for j in 0..Joint::COUNT {
             skeleton.visible[j] = frame.sees(&skeleton.joints[j]);
+        }
+        // A leg whose farthest point lies where the body is cut from view (the image's
+        // edge, a table before it) goes on beyond the cut: its foot was not seen,
+        // wherever the fit put it; unless the cut lies farther along the body than the
+        // fitted leg is long and the fitted foot beside it, when only the toes are cut.
+        // A leg whose hip the camera could not see either shows nothing of its own:
+        // its knee and foot are the template's guess. (Not so for an arm: the geodesic
+        // length of an arm hanging beside the torso says too little of where along it
+        // the image's edge cuts it.)
+        for l in [Limb::LeftLeg, Limb::RightLeg] {
+            let (hip, knee, foot) = l.joints();
+            let joint = |j: Joint| skeleton.joints[j.index()];
+            let leg = knee.map_or(0.0, |knee| {
+                (joint(knee) - joint(hip)).norm() + (joint(foot) - joint(knee)).norm()
+            });
+            let cut_short = assigned.limb[l.index()].is_some_and(|mi| {
+                let at = s.graph.pos[maxima[mi] as usize];
+                cut[mi]
+                    && (assigned.lengths[mi][l.index()] < leg
+                        || (joint(foot) - at).norm() > FOOT_BY_ITS_CUT)
+            });
+            if cut_short || !rooted[l.index()] {
+                skeleton.visible[foot.index()] = false;
+            }
+            if let Some(knee) = knee.filter(|_| !rooted[l.index()]) {
+                skeleton.visible[knee.index()] = false;
+            }
+        }
+        for j in 0..Joint::COUNT {
             if !skeleton.visible[j] {
                 skeleton.confidence[j] = 0.0;
             }
@@ -434,6 +466,10 @@ impl PoseEstimator {
         Some(skeleton)
     }
 }
+
+/// How near the fitted foot must lie to the point where the image's edge (or a table)
+/// cuts its leg, metres, for the cut to take only its toes: a foot's length.
+const FOOT_BY_ITS_CUT: f32 = 0.2;
 
 /// Whether `p` projects inside the image of camera `k`.
 fn inside(k: &Intrinsics, p: &Point3<f32>) -> bool {

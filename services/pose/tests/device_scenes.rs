@@ -206,3 +206,29 @@ fn hands_resting_on_a_table_are_no_feet() {
         }
     }
 }
+
+#[test]
+fn seated_with_no_table_the_legs_below_the_image_are_not_invented() {
+    // Seated close, framed from the waist up: at 1.0 m the hips are below the image's
+    // edge and the legs show nothing of their own; at 1.2 m the thighs run out of the
+    // image towards the camera, cut by its edge before the feet.
+    for (distance_m, pose, hidden) in [
+        (1.0, ScriptedPose::Neutral, &LEGS[..]),
+        (1.0, ScriptedPose::ArmsAtSides, &LEGS[..]),
+        (1.0, ScriptedPose::HandsInLap, &LEGS[..]),
+        (1.2, ScriptedPose::Neutral, &LEGS[2..]),
+        (1.2, ScriptedPose::HandsOnThighs, &LEGS[2..]),
+    ] {
+        let k = qvga();
+        let (r, truth) = single(upper_body(seated(at(distance_m, pose), false)), 0);
+        assert!(r.person_found, "{distance_m} m, {pose:?}");
+        visibility_is_consistent(&r, &k);
+        for j in hidden {
+            assert!(!truth.skeleton.visible[j.index()], "the scene hides {j:?}");
+            assert!(
+                !r.skeleton.visible[j.index()],
+                "{distance_m} m, {pose:?}: {j:?} reported visible"
+            );
+        }
+    }
+}
