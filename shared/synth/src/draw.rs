@@ -15,7 +15,7 @@ use crate::poses::{self, Side};
 use crate::shapes3d;
 use airglyph_core::gestures::GestureTruth;
 use airglyph_core::Joint;
-use nalgebra::{Point2, Point3, Vector3};
+use nalgebra::{Point, Point2, Point3, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -36,8 +36,8 @@ fn min_jerk(t: f32) -> f32 {
     t * t * t * (10.0 - 15.0 * t + 6.0 * t * t)
 }
 
-/// Points along a polyline at arc-length fractions.
-fn along(path: &[Point2<f32>], s: f32) -> Point2<f32> {
+/// The point at arc-length fraction `s` along a polyline (in the plane or in space).
+fn along<const D: usize>(path: &[Point<f32, D>], s: f32) -> Point<f32, D> {
     let total: f32 = path.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
     if path.len() < 2 || total <= 0.0 {
         return path[0];
@@ -50,24 +50,7 @@ fn along(path: &[Point2<f32>], s: f32) -> Point2<f32> {
         }
         want -= l;
     }
-    *path.last().unwrap()
-}
-
-/// Points along a 3-D polyline at arc-length fractions.
-fn along3(path: &[Point3<f32>], s: f32) -> Point3<f32> {
-    let total: f32 = path.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
-    if path.len() < 2 || total <= 0.0 {
-        return path[0];
-    }
-    let mut want = s.clamp(0.0, 1.0) * total;
-    for w in path.windows(2) {
-        let l = (w[1] - w[0]).norm();
-        if want <= l && l > 0.0 {
-            return w[0] + (w[1] - w[0]) * (want / l);
-        }
-        want -= l;
-    }
-    *path.last().unwrap()
+    path[path.len() - 1]
 }
 
 /// What the person draws: a symbol on a pane (a glyph's strokes), or a gesture of the
@@ -252,7 +235,7 @@ impl Drawing {
                     first = targets.len();
                     for i in 0..n {
                         let s = min_jerk(i as f32 / (n - 1).max(1) as f32);
-                        targets.push(place3(along3(path, s)));
+                        targets.push(place3(along(path, s)));
                     }
                 }
             }

@@ -470,33 +470,29 @@ impl Synthesizer {
         (img, truth)
     }
 
+    /// The index of the pixel `p` projects to, if inside the image.
+    fn pixel(&self, p: &Point3<f32>) -> Option<usize> {
+        let k = &self.cfg.intrinsics;
+        let (u, v) = k.project(p)?;
+        let (u, v) = (u.round(), v.round());
+        (u >= 0.0 && v >= 0.0 && u < k.width as f32 && v < k.height as f32)
+            .then(|| v as usize * k.width as usize + u as usize)
+    }
+
     /// Inside the image and before the static scene at its pixel.
     fn in_view(&self, p: &Point3<f32>) -> bool {
-        let k = &self.cfg.intrinsics;
-        let Some((u, v)) = k.project(p) else {
+        let Some(i) = self.pixel(p) else {
             return false;
         };
-        let (u, v) = (u.round(), v.round());
-        if u < 0.0 || v < 0.0 || u >= k.width as f32 || v >= k.height as f32 {
-            return false;
-        }
-        let behind = self
-            .background
-            .as_ref()
-            .map_or(0, |bg| bg[v as usize * k.width as usize + u as usize]);
+        let behind = self.background.as_ref().map_or(0, |bg| bg[i]);
         behind == 0 || behind as f32 > p.z * 1000.0
     }
 
     fn joint_visible(&self, j: Joint, p: &Point3<f32>) -> bool {
-        let k = &self.cfg.intrinsics;
-        let Some((u, v)) = k.project(p) else {
+        let Some(i) = self.pixel(p) else {
             return false;
         };
-        let (u, v) = (u.round(), v.round());
-        if u < 0.0 || v < 0.0 || u >= k.width as f32 || v >= k.height as f32 {
-            return false;
-        }
-        let l = self.labels[v as usize * k.width as usize + u as usize];
+        let l = self.labels[i];
         l != raster::NO_LABEL && own_bones(j).iter().any(|b| *b as u8 == l)
     }
 }
