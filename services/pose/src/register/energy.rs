@@ -162,30 +162,8 @@ impl Registration {
                     }
                 } else if f.mask[idx] {
                     // A hole the sensor left in the person: no evidence either way.
-                } else if let Some((qu, qv)) = self
-                    .nearest
-                    .get(u as usize, v as usize)
-                    .filter(|_| c.in_view)
-                {
-                    // Behind something nearer (a table) the camera could not have seen
-                    // the body, but a limb partly in view is more likely above the table
-                    // than through it: a weaker pull. A capsule wholly out of view (legs
-                    // under the table) is left alone.
-                    let weight = if f.occluded(idx, s.z) {
-                        cfg.energy.occluded_weight
-                    } else {
-                        1.0
-                    } * cfg.energy.silhouette_weight;
-                    let target = f.k.back_project(qu as f32, qv as f32, s.z);
-                    let e = s - target;
-                    let (wc, cost) = huber(e.norm(), cfg.energy.silhouette_scale);
-                    acc.energy += (weight * cost) as f64;
-                    let ws = weight * wc;
-                    // Both image axes: pulled only up or down, an arm held out beside
-                    // the silhouette (a T-pose's arm, the person since turned side-on)
-                    // stayed in the air.
-                    acc.add(c.segment, &s, &Vector3::x(), e.x, ws);
-                    acc.add(c.segment, &s, &Vector3::y(), e.y, ws);
+                } else if c.in_view {
+                    self.outside(p, &mut acc, c, &s, (u, v), cfg.energy.silhouette_weight);
                 }
             }
         }
@@ -242,6 +220,45 @@ impl Registration {
             };
         }
         (acc, seen)
+    }
+}
+
+impl Registration {
+    /// A point `s` of capsule `c` seen at pixel `(u, v)` outside the person's mask:
+    /// pulled in the image to the nearest person pixel, at its depth.
+    #[inline]
+    fn outside(
+        &self,
+        p: &Problem,
+        acc: &mut Accumulator,
+        c: &Placed,
+        s: &Point3<f32>,
+        (u, v): (i32, i32),
+        weight: f32,
+    ) {
+        let (f, cfg) = (p.frame, p.cfg);
+        let Some((qu, qv)) = self.nearest.get(u as usize, v as usize) else {
+            return;
+        };
+        // Behind something nearer (a table) the camera could not have seen the body,
+        // but a limb partly in view is more likely above the table than through it: a
+        // weaker pull. A capsule wholly out of view (legs under the table) the callers
+        // leave alone.
+        let idx = v as usize * f.width + u as usize;
+        let weight = if f.occluded(idx, s.z) {
+            cfg.energy.occluded_weight
+        } else {
+            1.0
+        } * weight;
+        let target = f.k.back_project(qu as f32, qv as f32, s.z);
+        let e = s - target;
+        let (wc, cost) = huber(e.norm(), cfg.energy.silhouette_scale);
+        acc.energy += (weight * cost) as f64;
+        let ws = weight * wc;
+        // Both image axes: pulled only up or down, an arm held out beside the
+        // silhouette (a T-pose's arm, the person since turned side-on) stayed in the air.
+        acc.add(c.segment, s, &Vector3::x(), e.x, ws);
+        acc.add(c.segment, s, &Vector3::y(), e.y, ws);
     }
 }
 
