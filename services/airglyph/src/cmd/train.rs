@@ -83,7 +83,8 @@ pub struct Args {
     pub generator: String,
     /// After training, warn about labels the vocabulary cannot separate: a quick
     /// classifier (one network) trained on four writers in five reads the fifth's
-    /// samples, and every label read as one other at least this often is named (e.g.
+    /// samples, and every label read as one other at least this often (and at least
+    /// three times) is named (e.g.
     /// "0/O: 18 % of "0" read as "O""). 0 skips the check (as --recalibrate does).
     #[arg(long, default_value_t = LOOK_ALIKE_THRESHOLD, value_parser = options::within(0.0f64, 1.0), allow_negative_numbers = true)]
     pub look_alike: f64,

@@ -12,6 +12,9 @@ use std::fmt;
 /// Labels whose held-out samples the classifier reads as another label this often or
 /// more are reported by default.
 pub const LOOK_ALIKE_THRESHOLD: f64 = 0.1;
+/// A label read as another fewer times than this is not reported: one or two are
+/// chance.
+const MIN_CONFUSIONS: usize = 3;
 
 /// A label the classifier reads as another on writers it did not train on.
 #[derive(Debug, Clone, PartialEq)]
@@ -53,28 +56,33 @@ impl fmt::Display for LookAlike {
 /// (one network, no spotting part) is trained on the samples of four writers in five
 /// (by a stable hash of the writer; every fifth sample when there are fewer than five
 /// writers) and classifies the others; each label whose held-out samples are read as
-/// one other label at least `threshold` of the time is reported, the most confused
-/// first. Labels without held-out samples, or without training samples, are not judged.
+/// one other label at least `threshold` of the time (and at least three times) is
+/// reported, the most confused first. Labels without held-out samples, or without training samples, are not judged.
 pub fn look_alikes(
     samples: &[Sample],
     cfg: &TrainConfig,
     threshold: f64,
 ) -> Result<Vec<LookAlike>, TrainError> {
     let writers: BTreeSet<&str> = samples.iter().map(|s| s.subject.as_str()).collect();
-    let held = |i: usize, s: &Sample| {
-        if writers.len() >= 5 {
-            writer_hash(&s.subject) % 5 == 0
-        } else {
-            i % 5 == 4
+    let split = |by_writer: bool| {
+        let (mut fit, mut test) = (Vec::new(), Vec::new());
+        for (i, s) in samples.iter().enumerate() {
+            let held = if by_writer {
+                writer_hash(&s.subject) % 5 == 0
+            } else {
+                i % 5 == 4
+            };
+            if held {
+                test.push(s);
+            } else {
+                fit.push(s.clone());
+            }
         }
+        (fit, test)
     };
-    let (mut fit, mut test) = (Vec::new(), Vec::new());
-    for (i, s) in samples.iter().enumerate() {
-        if held(i, s) {
-            test.push(s);
-        } else {
-            fit.push(s.clone());
-        }
+    let (mut fit, mut test) = split(writers.len() >= 5);
+    if fit.is_empty() || test.is_empty() {
+        (fit, test) = split(false);
     }
     let quick = TrainConfig {
         ensemble: 1,
@@ -101,7 +109,7 @@ pub fn look_alikes(
             count,
             of: drawn[label],
         })
-        .filter(|l| l.rate() >= threshold)
+        .filter(|l| l.rate() >= threshold && l.count >= MIN_CONFUSIONS)
         .collect();
     out.sort_by(|a, b| b.rate().total_cmp(&a.rate()));
     Ok(out)
