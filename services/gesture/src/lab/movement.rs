@@ -57,7 +57,7 @@ impl Generator {
         match self {
             Self::Lab => true,
             Self::Everyday => false,
-            Self::Mixed => index % 2 == 0,
+            Self::Mixed => index.is_multiple_of(2),
         }
     }
 

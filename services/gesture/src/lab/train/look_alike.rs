@@ -68,7 +68,7 @@ pub fn look_alikes(
         let (mut fit, mut test) = (Vec::new(), Vec::new());
         for (i, s) in samples.iter().enumerate() {
             let held = if by_writer {
-                writer_hash(&s.subject) % 5 == 0
+                writer_hash(&s.subject).is_multiple_of(5)
             } else {
                 i % 5 == 4
             };
