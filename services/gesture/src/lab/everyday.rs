@@ -209,7 +209,8 @@ impl<R: Rng> Hand<'_, R> {
         let n = (secs * FPS).round() as usize;
         for i in 1..=n {
             let t = i as f32 / FPS;
-            let env = (PI * i as f32 / n as f32).sin().sqrt();
+            // (sin π is a hair below 0 in f32: no square root of it.)
+            let env = (PI * i as f32 / n as f32).sin().max(0.0).sqrt();
             let o = env * amp * (TAU * freq * t).sin();
             self.points
                 .push([p[0] + dir[0] * o, p[1] + dir[1] * o, p[2]]);
