@@ -2,8 +2,8 @@
 //! files needed), and the model loader's errors.
 
 use airglyph_gesture::lab::{
-    build_stream, few_shot_plan, random_movement, score, train, ClassifierKind, FewShotPlan,
-    Sample, StreamConfig, SyntheticStream, TrainConfig,
+    build_stream, few_shot_plan, look_alikes, random_movement, score, train, ClassifierKind,
+    FewShotPlan, Sample, StreamConfig, SyntheticStream, TrainConfig,
 };
 use airglyph_gesture::model::Classifier;
 use airglyph_gesture::{Model, Spotter, SpotterConfig};
@@ -419,4 +419,47 @@ fn classifiers_trained_on_depth_tell_a_push_from_a_pull_and_2d_ones_cannot() {
             "{kind:?}"
         );
     }
+}
+
+#[test]
+fn look_alike_labels_are_found_and_distinct_ones_are_not() {
+    // "circle" and "O" are the same shape drawn by the same writers; the zigzag and the
+    // square are unlike either.
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    let mut v = Vec::new();
+    for i in 0..40 {
+        for (label, kind) in [("circle", 0), ("O", 0), ("zigzag", 1), ("square", 2)] {
+            v.push(Sample {
+                label: label.to_string(),
+                subject: format!("w{}", i % 10),
+                strokes: vec![shape(kind, &mut rng)],
+                depth: None,
+            });
+        }
+    }
+    let mut cfg = small_config(ClassifierKind::Mlp);
+    cfg.spotting = false;
+    let pairs = look_alikes(&v, &cfg, 0.1).unwrap();
+    let names = |p: &airglyph_gesture::lab::LookAlike| [p.label.clone(), p.read_as.clone()];
+    assert!(
+        pairs.iter().any(|p| {
+            let mut n = names(p);
+            n.sort();
+            n == ["O", "circle"]
+        }),
+        "{pairs:?}"
+    );
+    for p in &pairs {
+        assert!(p.rate() >= 0.1 && p.count <= p.of, "{p:?}");
+        assert!(
+            names(p).iter().all(|n| n == "O" || n == "circle"),
+            "distinct shapes reported as look-alikes: {p}"
+        );
+    }
+    // The line `train` prints names the pair and how often.
+    let line = pairs[0].to_string();
+    assert!(
+        line.contains(" % of ") && line.contains(" read as "),
+        "{line}"
+    );
 }

@@ -5,8 +5,8 @@
 
 use crate::interrupt::unless_interrupted;
 use airglyph_gesture::lab::{
-    build_stream, load_many, matched, plot_timeline, random_movement, Sample, Span, SpottingScore,
-    StreamConfig, SyntheticStream,
+    load_many, matched, plot_timeline, Generator, Sample, Span, SpottingScore, StreamConfig,
+    SyntheticStream,
 };
 use airglyph_gesture::{Candidate, Model, SpottedGesture, Spotter, SpotterConfig, Trajectory};
 use airglyph_ipc::options;
@@ -91,6 +91,17 @@ pub struct Args {
     pub plot_from: f32,
     #[arg(long, default_value_t = 30.0, value_parser = options::within(0.1f32, 600.0), allow_negative_numbers = true)]
     pub plot_seconds: f32,
+    /// Which model of how people move makes the streams: lab (as described above),
+    /// everyday (written apart from it: one person a stream at 1.8–3.2 m, with a rest
+    /// pose — arm hanging, hands clasped, hand on the hip — drawing at constant speed
+    /// or speed ∝ radius^β with β 0.15–0.45, slow or fast, pausing at sharp corners or
+    /// not, starting and ending each symbol from a stop; between symbols everyday
+    /// actions: rests, reaches and holds, touching the face or chest, waving, pointing,
+    /// scratching, gesticulating, a hand to the pocket; Gaussian tracking noise; the
+    /// other hand rests too, and the tracker may take it), or mixed (a stream of each
+    /// in turn). --pause-prob, --flow and --speed are the lab generator's.
+    #[arg(long, default_value = "lab", value_parser = ["lab", "everyday", "mixed"])]
+    pub generator: String,
 }
 
 /// How often the streams' symbols of one label were spotted with it.
@@ -309,6 +320,7 @@ fn evaluate(args: &Args) -> anyhow::Result<Evaluation> {
         ..StreamConfig::default()
     };
     let scfg = SpotterConfig::with_overrides(args.spotter.as_deref()).context("--spotter")?;
+    let generator = Generator::parse(&args.generator).context("--generator")?;
     let per = args.per_stream;
     let chunks: Vec<(usize, u64, Vec<&Sample>)> = known
         .chunks(per)
@@ -339,7 +351,7 @@ fn evaluate(args: &Args) -> anyhow::Result<Evaluation> {
         .par_iter()
         .map(|(index, seed, c)| {
             let mut r = ChaCha8Rng::seed_from_u64(*seed);
-            let s = build_stream(c, &cfg, &mut r);
+            let s = generator.stream(c, &cfg, *index, &mut r);
             let mut spotter = Spotter::new(model.clone(), scfg)?;
             spotter.set_trace(args.verbose || args.dump.is_some());
             let mut cands = Vec::new();
@@ -383,8 +395,10 @@ fn evaluate(args: &Args) -> anyhow::Result<Evaluation> {
     }
     // Pure random movement.
     let mut r = ChaCha8Rng::seed_from_u64(args.seed ^ 0xABCD);
-    let rm = random_movement(args.random_seconds, &cfg, &mut r);
-    let alarms = run_stream(&model, &scfg, &rm, &cfg)?;
+    let mut alarms = Vec::new();
+    for rm in generator.movement(args.random_seconds, &cfg, &mut r) {
+        alarms.extend(run_stream(&model, &scfg, &rm, &cfg)?);
+    }
     Ok(Evaluation {
         cfg,
         total,

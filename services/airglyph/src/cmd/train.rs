@@ -2,7 +2,8 @@
 
 use crate::interrupt::unless_interrupted;
 use airglyph_gesture::lab::{
-    few_shot_plan, load_many, recalibrate, retrain_spotting, train, ClassifierKind, TrainConfig,
+    few_shot_plan, load_many, look_alikes, recalibrate, retrain_spotting, train, ClassifierKind,
+    Generator, TrainConfig, LOOK_ALIKE_THRESHOLD,
 };
 use airglyph_gesture::limits;
 use airglyph_gesture::Model;
@@ -72,6 +73,21 @@ pub struct Args {
     /// does it too, so this is for models trained before).
     #[arg(long, value_name = "MODEL", conflicts_with_all = ["reuse_classifier", "no_spotting"])]
     pub recalibrate: Option<PathBuf>,
+    /// Which synthetic streams the spotting part's verifier and label bars learn from:
+    /// lab (the two-thirds power law, flowing in and out of symbols, reaches, fidgets
+    /// and rests), everyday (one person a stream: constant speed or another power law,
+    /// pauses at corners, slow and fast drawers, rest poses, everyday actions such as
+    /// waving, pointing, scratching, touching the face), or mixed (a stream of each in
+    /// turn). `airglyph eval-spotting --generator` measures on any of them.
+    #[arg(long, default_value = "lab", value_parser = ["lab", "everyday", "mixed"])]
+    pub generator: String,
+    /// After training, warn about labels the vocabulary cannot separate: a quick
+    /// classifier (one network) trained on four writers in five reads the fifth's
+    /// samples, and every label read as one other at least this often (and at least
+    /// three times) is named (e.g.
+    /// "0/O: 18 % of "0" read as "O""). 0 skips the check (as --recalibrate does).
+    #[arg(long, default_value_t = LOOK_ALIKE_THRESHOLD, value_parser = options::within(0.0f64, 1.0), allow_negative_numbers = true)]
+    pub look_alike: f64,
 }
 
 /// The training configuration the arguments describe (their ranges are checked as
@@ -102,6 +118,8 @@ pub fn config(args: &Args) -> anyhow::Result<TrainConfig> {
     cfg.stream_augment = args.stream_augment;
     cfg.verifiers = args.verifiers;
     cfg.spotting = !args.no_spotting;
+    cfg.generator = Generator::parse(&args.generator)
+        .with_context(|| format!("unknown generator {:?}", args.generator))?;
     Ok(cfg)
 }
 
@@ -110,7 +128,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // Training writes nothing until it is done: a signal leaves it where it is.
     let kept = format!("no model was written ({} is as it was)", args.out.display());
     let model = unless_interrupted(&kept, {
-        let args = args.clone();
+        let (args, cfg) = (args.clone(), cfg.clone());
         move || model(&args, &cfg)
     })??;
     model
@@ -122,6 +140,38 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         model.labels.len(),
         std::fs::metadata(&args.out).map(|m| m.len()).unwrap_or(0)
     );
+    if args.look_alike > 0.0 && args.recalibrate.is_none() {
+        warn_look_alikes(&args, &cfg)?;
+    }
+    Ok(())
+}
+
+/// Warns about the labels the vocabulary cannot separate ([`look_alikes`]).
+fn warn_look_alikes(args: &Args, cfg: &TrainConfig) -> anyhow::Result<()> {
+    let mut samples = load_many(&args.data)?;
+    if args.flat {
+        samples = samples.iter().map(|s| s.flattened()).collect();
+    }
+    let pairs = unless_interrupted(
+        "the model was written; the look-alike check was not done",
+        {
+            let cfg = cfg.clone();
+            let threshold = args.look_alike;
+            move || look_alikes(&samples, &cfg, threshold)
+        },
+    )?;
+    match pairs {
+        Ok(pairs) if pairs.is_empty() => eprintln!(
+            "look-alikes: no label read as another {:.0} % of the time or more on writers left out of a quick check",
+            100.0 * args.look_alike
+        ),
+        Ok(pairs) => {
+            for p in pairs {
+                eprintln!("warning: look-alike labels {p} on writers left out of a quick check: the vocabulary does not separate them");
+            }
+        }
+        Err(e) => eprintln!("look-alikes: not checked ({e})"),
+    }
     Ok(())
 }
 
@@ -172,7 +222,7 @@ fn model(args: &Args, cfg: &TrainConfig) -> anyhow::Result<Model> {
         (None, None) => train(&samples, cfg, &progress)?,
         (_, Some(path)) => {
             bar.set_message("calibrating the label bars");
-            let r = recalibrate(Model::load(path)?, &samples, &progress)
+            let r = recalibrate(Model::load(path)?, &samples, cfg.generator, &progress)
                 .with_context(|| format!("{}: cannot recalibrate it", path.display()))?;
             eprintln!("label bars: {:?} → {:?}", r.before, r.after());
             r.model

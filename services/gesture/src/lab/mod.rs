@@ -14,6 +14,8 @@ mod data;
 mod dtw;
 mod dtw3d;
 mod eval;
+mod everyday;
+mod movement;
 mod scoring;
 mod stream;
 mod train;
@@ -27,14 +29,17 @@ pub use data::{
 pub use dtw::DtwClassifier;
 pub use dtw3d::Dtw3dClassifier;
 pub use eval::{plot_timeline, Confusion, Span};
+pub use everyday::{everyday_movement, everyday_stream};
+pub use movement::Generator;
 pub use scoring::{matched, score, Matching, SpottingScore};
 pub use stream::{
-    build_stream, drawn_in_stream, random_movement, training_stream, StreamConfig, SyntheticStream,
-    TruthGesture,
+    build_stream, drawn_in_stream, random_movement, training_stream, Body, StreamConfig,
+    SyntheticStream, TruthGesture,
 };
 pub use train::{
-    calibrate_label_bars, few_shot_plan, recalibrate, retrain_spotting, train, ClassifierKind,
-    CrfTrainConfig, FewShotConfig, FewShotPlan, HmmTrainConfig, MlpTrainConfig, Progress,
-    Recalibrated, TrainConfig, TrainError, BAR_STEPS, CALIBRATION_SEED,
+    calibrate_label_bars, few_shot_plan, look_alikes, recalibrate, retrain_spotting, train,
+    ClassifierKind, CrfTrainConfig, FewShotConfig, FewShotPlan, HmmTrainConfig, LookAlike,
+    MlpTrainConfig, Progress, Recalibrated, TrainConfig, TrainError, BAR_STEPS, CALIBRATION_SEED,
+    LOOK_ALIKE_THRESHOLD,
 };
 pub use user_dependent::{writer_hash, writer_splits, WriterGroup, WriterSplit};

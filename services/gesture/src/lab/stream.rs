@@ -24,7 +24,8 @@ use crate::lab::data::Sample;
 use crate::spot::{Candidate, SpottedGesture, Spotter};
 use crate::tracker::{HandFilter, TrackerConfig};
 use crate::trajectory::Trajectory;
-use airglyph_core::Skeleton;
+use airglyph_core::{Joint, Skeleton};
+use nalgebra::Point3;
 use rand::Rng;
 use serde::Serialize;
 
@@ -93,6 +94,20 @@ pub struct SyntheticStream {
     pub points: Vec<[f32; 2]>,
     /// What was drawn, in order.
     pub truth: Vec<TruthGesture>,
+    /// The person's body when the generator models it (the everyday generator): None
+    /// for the lab generator's, whose hand is always 0.35 m in front of the chest.
+    pub body: Option<Body>,
+}
+
+/// What a generator knows of the person besides the hand's path in the plane.
+#[derive(Debug, Clone, Default)]
+pub struct Body {
+    /// Distance from the camera, metres (instead of the one the stream is fed at).
+    pub distance: f32,
+    /// How far in front of the shoulders the right hand is, metres, a frame.
+    pub forward: Vec<f32>,
+    /// Where the left hand rests: body frame x, y (shoulder widths), metres in front.
+    pub left: [f32; 3],
 }
 
 impl SyntheticStream {
@@ -101,7 +116,19 @@ impl SyntheticStream {
     /// what is measured.
     pub fn skeleton(&self, frame: usize, distance: f32) -> Skeleton {
         let p = self.points[frame];
-        skeleton_with_hand(p[0], p[1], distance)
+        let Some(body) = &self.body else {
+            return skeleton_with_hand(p[0], p[1], distance);
+        };
+        let z = body.distance;
+        let mut s = skeleton_with_hand(p[0], p[1], z);
+        // Shoulder width 0.36 m, origin between the shoulders 0.3 m above the camera's
+        // centre line, as `skeleton_with_hand` has them.
+        let sw = 0.36f32;
+        let fwd = body.forward.get(frame).copied().unwrap_or(0.35);
+        s.joints[Joint::RightHand.index()] = Point3::new(-p[0] * sw, -0.3 + p[1] * sw, z - fwd);
+        let l = body.left;
+        s.joints[Joint::LeftHand.index()] = Point3::new(-l[0] * sw, -0.3 + l[1] * sw, z - l[2]);
+        s
     }
 
     /// Feeds the stream through `spotter` as skeletons (frame i at i / fps seconds)
@@ -498,7 +525,11 @@ pub fn build_stream<R: Rng>(
     m.ordinary();
     let mut points = m.points;
     add_noise(&mut points, cfg.noise, rng);
-    SyntheticStream { points, truth }
+    SyntheticStream {
+        points,
+        truth,
+        body: None,
+    }
 }
 
 fn add_noise<R: Rng>(points: &mut [[f32; 2]], noise: f32, rng: &mut R) {
@@ -591,6 +622,7 @@ pub fn random_movement<R: Rng>(seconds: f32, cfg: &StreamConfig, rng: &mut R) ->
     SyntheticStream {
         points,
         truth: Vec::new(),
+        body: None,
     }
 }
 

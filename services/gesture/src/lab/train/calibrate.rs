@@ -15,8 +15,9 @@
 
 use super::Progress;
 use crate::lab::data::Sample;
+use crate::lab::movement::Generator;
 use crate::lab::scoring::{matched, SpottingScore};
-use crate::lab::stream::{build_stream, StreamConfig, SyntheticStream};
+use crate::lab::stream::{StreamConfig, SyntheticStream};
 use crate::model::Model;
 use crate::spot::{Spotter, SpotterConfig};
 use rand::seq::SliceRandom;
@@ -42,7 +43,7 @@ struct Streams {
 }
 
 impl Streams {
-    fn new(model: &Model, samples: &[Sample], seed: u64) -> Self {
+    fn new(model: &Model, samples: &[Sample], seed: u64, generator: Generator) -> Self {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let mut chosen: Vec<&Sample> = samples
             .iter()
@@ -57,7 +58,7 @@ impl Streams {
             .map(|(i, c)| {
                 let mut r =
                     ChaCha8Rng::seed_from_u64(seed.wrapping_mul(7919).wrapping_add(i as u64));
-                build_stream(c, &cfg, &mut r)
+                generator.stream(c, &cfg, i, &mut r)
             })
             .collect();
         Streams { streams, cfg }
@@ -100,7 +101,7 @@ impl Streams {
 }
 
 /// Bars for the labels ordinary movement passes for, calibrated on streams of
-/// `samples` (drawn from `seed`) spotted by `model` (which must have a verifier; its
+/// `samples` (drawn from `seed` by `generator`) spotted by `model` (which must have a verifier; its
 /// own bars are ignored); `progress` counts spotter runs over the streams. A label's
 /// bar is raised through [`BAR_STEPS`] and kept where the streams' reliability is
 /// highest, if higher than without it; labels are taken from the most inserted down.
@@ -108,6 +109,7 @@ pub fn calibrate_label_bars(
     model: &Model,
     samples: &[Sample],
     seed: u64,
+    generator: Generator,
     progress: Progress,
 ) -> BTreeMap<String, f64> {
     let Some(base) = model
@@ -118,7 +120,7 @@ pub fn calibrate_label_bars(
     else {
         return BTreeMap::new();
     };
-    let streams = Streams::new(model, samples, seed);
+    let streams = Streams::new(model, samples, seed, generator);
     let mut bars = BTreeMap::new();
     let (mut best, inserted) = streams.run(model, &bars);
     let mut labels: Vec<(String, usize)> = inserted

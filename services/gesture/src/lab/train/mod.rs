@@ -5,6 +5,7 @@ mod calibrate;
 mod crf;
 mod few_shot;
 mod hmm;
+mod look_alike;
 mod mlp;
 mod reuse;
 mod spotting;
@@ -14,6 +15,7 @@ pub use calibrate::{calibrate_label_bars, BAR_STEPS};
 pub use crf::CrfTrainConfig;
 pub use few_shot::{FewShotConfig, FewShotPlan};
 pub use hmm::HmmTrainConfig;
+pub use look_alike::{look_alikes, LookAlike, LOOK_ALIKE_THRESHOLD};
 pub use mlp::MlpTrainConfig;
 pub use reuse::{recalibrate, retrain_spotting, Recalibrated};
 pub use spotting::CALIBRATION_SEED;
@@ -24,6 +26,7 @@ use crate::features::{feature_vector, FeatureConfig};
 use crate::hmm::DiscreteHmm;
 use crate::lab::augment::augment;
 use crate::lab::data::{labels_of, Sample};
+use crate::lab::movement::Generator;
 use crate::lab::stream::{drawn_in_stream, training_stream};
 use crate::mlp::Mlp;
 use crate::model::{
@@ -112,6 +115,10 @@ pub struct TrainConfig {
     /// more than a few samples a label.
     #[serde(default)]
     pub few_shot: FewShotConfig,
+    /// Which synthetic streams the spotting part's verifier and label bars learn from
+    /// (models trained before it, and those of the lab generator, do not name it).
+    #[serde(default, skip_serializing_if = "Generator::is_lab")]
+    pub generator: Generator,
     /// Every random draw of training follows from it.
     pub seed: u64,
     /// Data file names, recorded in the model.
@@ -141,6 +148,7 @@ impl Default for TrainConfig {
             spotting_states: 10,
             verifiers: 3,
             few_shot: FewShotConfig::default(),
+            generator: Generator::Lab,
             seed: 1,
             data: Vec::new(),
         }

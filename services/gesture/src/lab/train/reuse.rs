@@ -6,6 +6,7 @@ use super::calibrate::calibrate_label_bars;
 use super::spotting::CALIBRATION_SEED;
 use super::{Progress, TrainConfig, TrainError};
 use crate::lab::data::{labels_of, Sample};
+use crate::lab::movement::Generator;
 use crate::model::{Model, SpottingModel};
 use std::collections::BTreeMap;
 
@@ -24,6 +25,9 @@ pub fn retrain_spotting(
         p.insert("spotting_step".into(), cfg.spotting_step.into());
         p.insert("spotting_states".into(), cfg.spotting_states.into());
         p.insert("verifiers".into(), cfg.verifiers.into());
+        if !cfg.generator.is_lab() {
+            p.insert("generator".into(), cfg.generator.name().into());
+        }
     }
     Ok(model)
 }
@@ -51,10 +55,12 @@ impl Recalibrated {
 
 /// `model` kept whole (classifier and spotting part) with its per-label bars calibrated
 /// again on streams of `samples` ([`calibrate_label_bars`]): for models trained before
-/// the calibration, which training now does itself. `progress` counts spotter runs.
+/// the calibration, which training now does itself; `generator` makes the streams.
+/// `progress` counts spotter runs.
 pub fn recalibrate(
     mut model: Model,
     samples: &[Sample],
+    generator: Generator,
     progress: Progress,
 ) -> Result<Recalibrated, TrainError> {
     same_labels(&model, samples)?;
@@ -64,7 +70,7 @@ pub fn recalibrate(
         .and_then(|s| s.verifier.as_ref())
         .map(|v| v.label_bars.clone())
         .ok_or(TrainError::NoVerifier)?;
-    let bars = calibrate_label_bars(&model, samples, CALIBRATION_SEED, progress);
+    let bars = calibrate_label_bars(&model, samples, CALIBRATION_SEED, generator, progress);
     if let Some(v) = model.spotting.as_mut().and_then(|s| s.verifier.as_mut()) {
         v.label_bars = bars;
     }
@@ -106,7 +112,8 @@ mod tests {
         let model = ModelSource::Shipped.load().unwrap();
         let mut labels = model.labels.clone();
         let last = labels.pop().unwrap();
-        let e = recalibrate(model.clone(), &samples(&labels), &|_, _| {}).unwrap_err();
+        let e =
+            recalibrate(model.clone(), &samples(&labels), Generator::Lab, &|_, _| {}).unwrap_err();
         assert!(
             matches!(&e, TrainError::OnlyInModel(l) if *l == last),
             "{e}"
@@ -120,7 +127,7 @@ mod tests {
             s.verifier = None;
         }
         let own = samples(&bare.labels);
-        let e = recalibrate(bare, &own, &|_, _| {}).unwrap_err();
+        let e = recalibrate(bare, &own, Generator::Lab, &|_, _| {}).unwrap_err();
         assert!(matches!(e, TrainError::NoVerifier), "{e}");
     }
 }

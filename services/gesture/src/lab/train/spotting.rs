@@ -60,10 +60,22 @@ impl SpottingModel {
         }
         // Seed 7 first: a one-network verifier is the one trained before ensembles.
         let seeds: Vec<u64> = (7..).take(verifiers.max(1)).collect();
-        model.verifier = Some(Verifier::train(samples, classifier, &model, &seeds));
+        model.verifier = Some(Verifier::train(
+            samples,
+            classifier,
+            &model,
+            &seeds,
+            train.generator,
+        ));
         let mut whole = classifier.clone();
         whole.spotting = Some(model.clone());
-        let bars = calibrate_label_bars(&whole, samples, CALIBRATION_SEED, &|_, _| {});
+        let bars = calibrate_label_bars(
+            &whole,
+            samples,
+            CALIBRATION_SEED,
+            train.generator,
+            &|_, _| {},
+        );
         if let Some(v) = model.verifier.as_mut() {
             v.label_bars = bars;
         }

@@ -4,7 +4,8 @@
 use crate::features::FeatureConfig;
 use crate::lab::augment::augment;
 use crate::lab::data::Sample;
-use crate::lab::stream::{build_stream, training_stream};
+use crate::lab::movement::Generator;
+use crate::lab::stream::StreamConfig;
 use crate::lab::train::mlp::MlpTrainConfig;
 use crate::mlp::Mlp;
 use crate::model::verifier::{verifier_features, VerifierInput};
@@ -49,12 +50,13 @@ impl Verifier {
     /// (intersection over union ≥ 0.85), not a gesture when it does not (< 0.6:
     /// movement, part of a gesture, a gesture with movement before or after it); those
     /// in between are left out. `classifier` gives the posterior the verifier sees, and
-    /// its labels.
+    /// its labels; `generator` makes the streams.
     pub fn train(
         samples: &[Sample],
         classifier: &Model,
         spotting: &SpottingModel,
         seeds: &[u64],
+        generator: Generator,
     ) -> Verifier {
         let mut shell = Verifier {
             features: SHAPE,
@@ -66,7 +68,7 @@ impl Verifier {
         let lee_kim = LeeKim::new(spotting);
         shell.nets = seeds
             .iter()
-            .map(|&seed| shell.train_net(samples, classifier, &lee_kim, seed))
+            .map(|&seed| shell.train_net(samples, classifier, &lee_kim, seed, generator))
             .collect();
         shell
     }
@@ -78,8 +80,9 @@ impl Verifier {
         classifier: &Model,
         lee_kim: &LeeKim,
         seed: u64,
+        generator: Generator,
     ) -> Mlp {
-        let mut examples = stream_examples(samples, classifier, lee_kim, seed);
+        let mut examples = stream_examples(samples, classifier, lee_kim, seed, generator);
         let pos = examples.iter().filter(|e| e.1 > 0).count().max(1);
         let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5EED);
         let keep =
@@ -139,6 +142,7 @@ pub fn stream_examples(
     classifier: &Model,
     lee_kim: &LeeKim,
     seed: u64,
+    generator: Generator,
 ) -> Vec<(VerifierInput, usize)> {
     let labels = &classifier.labels;
     let mut order: Vec<&Sample> = (0..VERIFIER_REPEATS).flat_map(|_| samples.iter()).collect();
@@ -150,23 +154,24 @@ pub fn stream_examples(
         .par_iter()
         .flat_map_iter(|(k, chunk)| {
             let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_mul(31).wrapping_add(*k as u64));
-            let cfg = training_stream(&mut rng);
             // Writer variation (as the classifier is trained with): every sample a
             // little rotated, sheared and stretched.
-            let varied: Vec<Sample> = chunk
-                .iter()
-                .map(|s| {
-                    let t = augment(&s.trajectory(), &mut rng, 1.0);
-                    Sample {
-                        label: s.label.clone(),
-                        subject: s.subject.clone(),
-                        strokes: vec![t.points],
-                        depth: None,
-                    }
-                })
-                .collect();
-            let refs: Vec<&Sample> = varied.iter().collect();
-            let stream = build_stream(&refs, &cfg, &mut rng);
+            let varied = |rng: &mut ChaCha8Rng| -> Vec<Sample> {
+                chunk
+                    .iter()
+                    .map(|s| {
+                        let t = augment(&s.trajectory(), rng, 1.0);
+                        Sample {
+                            label: s.label.clone(),
+                            subject: s.subject.clone(),
+                            strokes: vec![t.points],
+                            depth: None,
+                        }
+                    })
+                    .collect()
+            };
+            let stream = generator.training(*k, &mut rng, varied);
+            let cfg = StreamConfig::default();
             let mut tracker = HandTracker::new(scfg.tracker);
             let mut seg = Segmenter::new(&scfg);
             let dt = (1e9 / cfg.fps as f64) as u64;
