@@ -5,7 +5,7 @@
 
 use crate::segment::Plane;
 use airglyph_core::Intrinsics;
-use nalgebra::Point3;
+use nalgebra::{Point3, Vector3};
 
 /// A surface this much nearer than a point of the body hides it, metres: a table before
 /// the legs, a chair's arm before a hand. Nearer than this the surface may be what the
@@ -19,6 +19,24 @@ const UNDER_THE_FLOOR: f32 = 0.05;
 /// How close to the image's edge (work pixels) the body counts as cut by it: the graph
 /// leaves out the last pixels of a noisy edge, so a maximum stops short of it.
 const BORDER_PX: usize = 4;
+
+/// A table top the segmentation took for the floor, over a leg whose hip is under it
+/// ([`Frame::table_top_over`]).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct TableTop(Plane);
+
+impl TableTop {
+    /// How far a leg's surface of radius `radius` around its axis point `x` rises into
+    /// the top, metres (at most 0: under it, with room to spare).
+    pub(crate) fn rise(&self, x: &Point3<f32>, radius: f32) -> f32 {
+        self.0.height(x) + radius + UNDER_THE_FLOOR
+    }
+
+    /// The top's upward normal, camera frame.
+    pub(crate) fn up(&self) -> Vector3<f32> {
+        self.0.n
+    }
+}
 
 /// The frame the steps work on: the work image's organized point cloud (z = 0: no
 /// data) and the person's mask.
@@ -86,24 +104,14 @@ impl Frame<'_> {
         })
     }
 
-    /// How far the leg's surface of radius `radius` around `x`, a point of a leg whose
-    /// hip is at `hip`, rises into the table top the segmentation took for the floor,
-    /// metres (None: no such top, or the hip is not under it). A seated person's knees stay under the table their hips are under;
-    /// with nothing else holding a leg out of view, it would fold up through the top to
-    /// explain the forearms lying on it.
-    pub(crate) fn through_the_table_top(
-        &self,
-        hip: &Point3<f32>,
-        x: &Point3<f32>,
-        radius: f32,
-    ) -> Option<f32> {
+    /// The table top the segmentation took for the floor, if the hip at `hip` lies
+    /// under it (None: no such top, or the hip is not under it). A seated person's
+    /// knees stay under the table their hips are under; with nothing else holding a leg
+    /// out of view, it would fold up through the top to explain the forearms lying on
+    /// it.
+    pub(crate) fn table_top_over(&self, hip: &Point3<f32>) -> Option<TableTop> {
         let top = self.floor.filter(|pl| pl.d > 0.0)?;
-        (top.height(hip) < -UNDER_THE_FLOOR).then(|| top.height(x) + radius + UNDER_THE_FLOOR)
-    }
-
-    /// The table top's (or floor's) upward normal, camera frame.
-    pub(crate) fn up(&self) -> Option<nalgebra::Vector3<f32>> {
-        self.floor.map(|pl| pl.n)
+        (top.height(hip) < -UNDER_THE_FLOOR).then_some(TableTop(top))
     }
 
     /// Whether the camera could see any of `points`.
@@ -185,23 +193,21 @@ mod tests {
         // Seated: the hip 0.2 m under the top (y = 0.5).
         let hip = Point3::new(0.1, 0.5, 1.5);
         // A knee under the top with room for its surface: nothing to undo.
-        let under = f.through_the_table_top(&hip, &Point3::new(0.1, 0.45, 1.1), r);
-        assert!(under.is_some_and(|d| d < 0.0), "{under:?}");
+        let top = f.table_top_over(&hip).expect("the hip is under the top");
+        let under = top.rise(&Point3::new(0.1, 0.45, 1.1), r);
+        assert!(under < 0.0, "{under:?}");
         // A knee folded up onto the top, as if to explain a forearm lying on it: its
         // surface is inside the top by its radius, the margin and 2 cm above it.
-        let through = f.through_the_table_top(&hip, &Point3::new(0.1, 0.28, 1.1), r);
-        assert!(through.is_some_and(|d| (d - (0.02 + r + UNDER_THE_FLOOR)).abs() < 1e-5));
+        let through = top.rise(&Point3::new(0.1, 0.28, 1.1), r);
+        assert!(
+            (through - (0.02 + r + UNDER_THE_FLOOR)).abs() < 1e-5,
+            "{through}"
+        );
         // Standing behind a low table, the hip above it: the legs are not held.
         let standing = Point3::new(0.1, 0.25, 1.5);
-        assert_eq!(
-            f.through_the_table_top(&standing, &Point3::new(0.1, 0.28, 1.1), r),
-            None
-        );
+        assert!(f.table_top_over(&standing).is_none());
         // No floor or table top taken out: nothing holds the legs.
         let bare = Frame { floor: None, ..f };
-        assert_eq!(
-            bare.through_the_table_top(&hip, &Point3::new(0.1, 0.28, 1.1), r),
-            None
-        );
+        assert!(bare.table_top_over(&hip).is_none());
     }
 }

@@ -249,23 +249,28 @@ impl Registration {
         }
 
         // Legs under a table top stay under it (their points may rise to just under it).
-        if let Some(up) = f.up() {
-            for c in &placed {
-                let Some(thigh) = c.segment.thigh() else {
+        for c in &placed {
+            let Some(top) = c
+                .segment
+                .thigh()
+                .and_then(|thigh| f.table_top_over(&posed.joint[thigh.index()]))
+            else {
+                continue;
+            };
+            for (x, radius) in axis_points(c) {
+                let r = top.rise(&x, radius);
+                if r <= 0.0 {
                     continue;
-                };
-                let hip = posed.joint[thigh.index()];
-                for (x, radius) in axis_points(c) {
-                    let Some(r) = f
-                        .through_the_table_top(&hip, &x, radius)
-                        .filter(|r| *r > 0.0)
-                    else {
-                        continue;
-                    };
-                    let (wc, cost) = huber(r, cfg.energy.silhouette_scale);
-                    acc.energy += (cfg.energy.table_top_weight * cost) as f64;
-                    acc.add(c.segment, &x, &up, r, cfg.energy.table_top_weight * wc);
                 }
+                let (wc, cost) = huber(r, cfg.energy.silhouette_scale);
+                acc.energy += (cfg.energy.table_top_weight * cost) as f64;
+                acc.add(
+                    c.segment,
+                    &x,
+                    &top.up(),
+                    r,
+                    cfg.energy.table_top_weight * wc,
+                );
             }
         }
 
