@@ -26,15 +26,6 @@ pub struct EnergyConfig {
     pub silhouette_scale: f32,
     /// How far the body's front may lie before the surface seen, metres.
     pub free_space_margin: f32,
-    /// Weight of a point of the head's outline (its capsules' rims and ends as the
-    /// camera sees them) outside the person's mask, against one data point's (0: off).
-    pub head_outline_weight: f32,
-    /// Whether the head's outline has its rims, or only its capsules' ends.
-    pub head_outline_rims: bool,
-    /// Weight of a point of the chest's upper rim in the image outside the mask (0: off).
-    pub shoulder_outline_weight: f32,
-    /// Where those points lie, as a share of the capsule's radius out from its axis.
-    pub outline_share: f32,
     /// Weight of a leg's point above the table top its hip is under (a point every 4 cm).
     pub table_top_weight: f32,
     /// Weight of a limb tip's distance to its geodesic maximum...
@@ -53,10 +44,6 @@ impl Default for EnergyConfig {
 
             silhouette_scale: 0.05,
             free_space_margin: 0.03,
-            head_outline_weight: 0.0,
-            head_outline_rims: true,
-            shoulder_outline_weight: 0.0,
-            outline_share: 1.0,
             table_top_weight: 4.0,
             tip_weight: 10.0,
             tip_sigma: 0.1,
@@ -181,73 +168,6 @@ impl Registration {
             }
         }
 
-        // The head's outline: the front's points lie on the axis, a radius inside the
-        // rim, so the head may rise that far out of the silhouette unseen. A body cut
-        // by the image's border (from the waist up) has its height held by the tops of
-        // its head and shoulders alone, which the axes do not reach. The head's capsules
-        // only: the trunk's are not its outline (the chest's reaches over the upper
-        // arms' tops, out of the silhouette when the arms hang). Off by default: the
-        // rims take the template's head for the person's, and pull a smaller head down
-        // (NOTES.md, 2026-12-04, "the outline").
-        if cfg.energy.head_outline_weight > 0.0 {
-            for c in placed
-                .iter()
-                .filter(|c| c.in_view && c.segment == Segment::Head)
-            {
-                for s in outline(
-                    c,
-                    cfg.energy.outline_share,
-                    cfg.energy.head_outline_rims,
-                    true,
-                ) {
-                    let Some((u, v)) = f.k.project(&s) else {
-                        continue;
-                    };
-                    let (u, v) = (u.round() as i32, v.round() as i32);
-                    if u < 0 || v < 0 || u >= w || v >= h || f.mask[(v * w + u) as usize] {
-                        continue;
-                    }
-                    self.outside(p, &mut acc, c, &s, (u, v), cfg.energy.head_outline_weight);
-                }
-            }
-        }
-
-        // The shoulders' tops: the chest's capsules' upper rim in the image (the rim
-        // only: their outer ends reach over the upper arms, out of the silhouette when
-        // the arms hang, and their lower rim lies in the armpits). Off by default: it
-        // helps single frames, but tracked clips lose the person more (NOTES.md).
-        if cfg.energy.shoulder_outline_weight > 0.0 {
-            for c in placed
-                .iter()
-                .filter(|c| c.in_view && c.segment == Segment::Chest)
-            {
-                for s in outline(c, cfg.energy.outline_share, true, false) {
-                    let Some((u, v)) = f.k.project(&s) else {
-                        continue;
-                    };
-                    // Of each pair either side of the axis, the one above it.
-                    let Some((_, va)) = f.k.project(&c.nearest(&s).0) else {
-                        continue;
-                    };
-                    if v >= va {
-                        continue;
-                    }
-                    let (u, v) = (u.round() as i32, v.round() as i32);
-                    if u < 0 || v < 0 || u >= w || v >= h || f.mask[(v * w + u) as usize] {
-                        continue;
-                    }
-                    self.outside(
-                        p,
-                        &mut acc,
-                        c,
-                        &s,
-                        (u, v),
-                        cfg.energy.shoulder_outline_weight,
-                    );
-                }
-            }
-        }
-
         // Legs under a table top stay under it (their points may rise to just under it).
         for c in &placed {
             let Some(top) = c
@@ -327,7 +247,7 @@ impl Registration {
         };
         // Behind something nearer (a table) the camera could not have seen the body,
         // but a limb partly in view is more likely above the table than through it: a
-        // weaker pull. A capsule wholly out of view (legs under the table) the callers
+        // weaker pull. A capsule wholly out of view (legs under the table) the caller
         // leave alone.
         let idx = v as usize * f.width + u as usize;
         let weight = if f.occluded(idx, s.z) {
@@ -345,43 +265,6 @@ impl Registration {
         acc.add(c.segment, s, &Vector3::x(), e.x, ws);
         acc.add(c.segment, s, &Vector3::y(), e.y, ws);
     }
-}
-
-/// Points of a capsule's outline as the camera sees it, `share` of the radius out from
-/// the axis: either side of the axis every 4 cm, at the axis's depth (with `rims`), and
-/// beyond each end along the axis as the image shows it (with `ends`; not for an axis
-/// along the view's ray, whose ends the camera does not see as ends).
-fn outline(
-    c: &Placed,
-    share: f32,
-    rims: bool,
-    ends: bool,
-) -> impl Iterator<Item = Point3<f32>> + '_ {
-    let len = c.len2.sqrt();
-    let k = ((len / 0.04).ceil() as usize + 1).max(2);
-    let mid = c.a + c.ab * 0.5;
-    let ray = mid.coords.try_normalize(1e-6).unwrap_or_else(Vector3::z);
-    let d = if len > 1e-4 {
-        c.ab / len
-    } else {
-        Vector3::zeros()
-    };
-    let side = d.cross(&ray).try_normalize(1e-3).filter(|_| rims);
-    let along = (d - ray * d.dot(&ray))
-        .try_normalize(1e-6)
-        .filter(|a| ends && a.dot(&d) > 0.3);
-    let rims = side.into_iter().flat_map(move |e| {
-        (0..k).flat_map(move |i| {
-            let t = i as f32 / (k - 1) as f32;
-            let x = c.a + c.ab * t;
-            let r = share * (c.ra + (c.rb - c.ra) * t);
-            [x + e * r, x - e * r]
-        })
-    });
-    let ends = along
-        .into_iter()
-        .flat_map(move |a| [c.a - a * (share * c.ra), c.a + c.ab + a * (share * c.rb)]);
-    rims.chain(ends)
 }
 
 /// Points of a capsule's axis every 4 cm, with its radius there.
