@@ -87,15 +87,12 @@ impl Generator {
         rng: &mut R,
         samples: impl FnOnce(&mut R) -> Vec<Sample>,
     ) -> SyntheticStream {
-        if self.lab_for(index) {
-            let cfg = training_stream(rng);
-            let s = samples(rng);
-            let refs: Vec<&Sample> = s.iter().collect();
-            build_stream(&refs, &cfg, rng)
-        } else {
-            let s = samples(rng);
-            let refs: Vec<&Sample> = s.iter().collect();
-            everyday_stream(&refs, rng)
+        let cfg = self.lab_for(index).then(|| training_stream(rng));
+        let s = samples(rng);
+        let refs: Vec<&Sample> = s.iter().collect();
+        match cfg {
+            Some(cfg) => build_stream(&refs, &cfg, rng),
+            None => everyday_stream(&refs, rng),
         }
     }
 
