@@ -115,6 +115,7 @@ fn main() {
     let (mut npass, mut npts, mut nrace) = (0usize, 0usize, 0usize);
     let mut ncpu = 0usize;
     let mut bias = [nalgebra::Vector3::<f32>::zeros(); Joint::COUNT];
+    let mut neck_rows: Vec<(f32, f32, f32, f32)> = Vec::new();
     // Per joint: frames it was hidden, and of those the frames it was reported visible.
     let mut hidden = [(0usize, 0usize); Joint::COUNT];
     let mut series = std::env::var("SERIES")
@@ -224,6 +225,18 @@ fn main() {
                 tdiff[j.index()] += g - local.coords;
                 tn[j.index()] += 1.0;
             }
+        }
+        // The outline's neck base against the true neck and the estimate's, along the
+        // torso's up (cm; positive: the base lies above).
+        if let (Some(nb), Some(tp)) = (&est.debug().neck_base, est.debug().torso_pose) {
+            let up = tp.r * nalgebra::Vector3::y();
+            let along = |j: Joint, s: &airglyph_core::Skeleton| (nb.point - s[j]).dot(&up) * 100.0;
+            neck_rows.push((
+                along(Joint::Neck, &truth.skeleton),
+                along(Joint::Neck, &r.skeleton),
+                nb.head_width,
+                nb.neck_width,
+            ));
         }
         if let (true, Some(tp)) = (r.person_found, est.debug().torso_pose) {
             let inv = tp.inverse();
@@ -403,6 +416,22 @@ fn main() {
             "frames (in view) with a joint beyond 20 cm: {} {:?}",
             bad.len(),
             &bad[..bad.len().min(40)]
+        );
+    }
+    if !neck_rows.is_empty() {
+        let m = |f: fn(&(f32, f32, f32, f32)) -> f32| {
+            let mut v: Vec<f32> = neck_rows.iter().map(f).collect();
+            v.sort_by(f32::total_cmp);
+            let mean = v.iter().sum::<f32>() / v.len() as f32;
+            (mean, v[v.len() / 10], v[v.len() / 2], v[v.len() * 9 / 10])
+        };
+        println!(
+            "neck base in {} frames: over the true neck {:?}, over the estimate's {:?}, head width {:?}, neck width {:?} (mean, p10, median, p90)",
+            neck_rows.len(),
+            m(|r| r.0),
+            m(|r| r.1),
+            m(|r| r.2),
+            m(|r| r.3)
         );
     }
     for j in Joint::ALL {

@@ -2,6 +2,7 @@
 //! and intermediate results, for overlays, examples and diagnostics.
 
 use crate::body::{BodyPose, BodyTemplate};
+use crate::neck::NeckBase;
 use crate::segment::Plane;
 use crate::torso::TorsoPose;
 use airglyph_core::Skeleton;
@@ -75,4 +76,6 @@ pub struct Debug {
     pub register_energy: f32,
     /// Whether the geodesic estimate raced the tracked body this frame.
     pub raced: bool,
+    /// The neck's base as the person's outline shows it, when it shows one.
+    pub neck_base: Option<NeckBase>,
 }

@@ -12,6 +12,7 @@ use crate::dijkstra::Graph;
 use crate::geodesic::Geodesic;
 use crate::graph::{GeoGraph, NONE};
 use crate::hands::{hands_at_fingertips, hands_at_their_points};
+use crate::neck::{neck_base, NeckBase};
 use crate::register::{
     drop_borrowed_tips, hidden_limbs, starts, tips_strayed, Fit, Frame, OfferedStart, Registration,
 };
@@ -366,6 +367,23 @@ impl PoseEstimator {
         // behind a table) shows no end in view either.
         let rooted = Limb::ALL.map(|l| frame.sees(torso.keypoints.root_of(l)));
         let assigned = assign_limbs(s, t, &maxima, &cut, rooted, &mut torso, size, &tpl, cfg, d);
+        // The neck's base as the person's outline shows it, below the head's maximum.
+        let neck = assigned.limb[Limb::Head.index()]
+            .filter(|&mi| !cut[mi])
+            .and_then(|mi| {
+                let top = s.graph.pos[maxima[mi] as usize];
+                neck_base(&s.points, &s.mask, &torso.pose, &top, 1.0 / k.fx)
+            });
+        d.neck_base = neck.clone();
+        // A foot in view holds the body's height better: the neck's base guides only a
+        // body the image or a table cuts short of its feet. (A leg's tip near the
+        // torso is no foot: a hand's maximum taken for a leg's.)
+        let neck = neck.filter(|nb| {
+            [Limb::LeftLeg, Limb::RightLeg].iter().all(|l| {
+                assigned.tips[l.index()]
+                    .is_none_or(|tip| (nb.point - tip).dot(&nb.up) < FOOT_BELOW_NECK)
+            })
+        });
         // Without registration, the limbs' geodesic lengths measure the person.
         if !cfg.register.enabled {
             for l in Limb::ALL {
@@ -402,6 +420,7 @@ impl PoseEstimator {
                 side_on,
                 offered,
                 upright,
+                neck,
             };
             let reg = &mut s.registration;
             register_body(reg, &frame, t, &seed, &torso.pose, body, calib, cfg, d)?
@@ -470,6 +489,10 @@ impl PoseEstimator {
 /// How near the fitted foot must lie to the point where the image's edge (or a table)
 /// cuts its leg, metres, for the cut to take only its toes: a foot's length.
 const FOOT_BY_ITS_CUT: f32 = 0.2;
+
+/// How far below the neck's base a leg's tip must lie to be a foot, metres: a seated
+/// child's feet lie farther.
+const FOOT_BELOW_NECK: f32 = 0.8;
 
 /// Whether `p` projects inside the image of camera `k`.
 fn inside(k: &Intrinsics, p: &Point3<f32>) -> bool {
@@ -898,6 +921,8 @@ struct Body {
     /// At a detection, the seed's estimate on the torso step's own torso turned
     /// upright ([`upright_torso`]).
     upright: Option<BodyPose>,
+    /// The neck's base the person's outline shows ([`neck_base`]).
+    neck: Option<NeckBase>,
 }
 
 /// Step 7: the whole body registered to the frame; its skeleton, with the hands placed
@@ -930,6 +955,7 @@ fn register_body(
         &seed.tips,
         body.side_on,
         body.offered,
+        body.neck,
         &cfg.register,
     );
     // A person found afresh has their arms searched for too. (While tracking, a

@@ -156,6 +156,7 @@ mod graph;
 mod hands;
 mod limb;
 pub mod metrics;
+mod neck;
 pub mod overlay;
 mod register;
 mod segment;
@@ -167,6 +168,7 @@ pub use config::PoseConfig;
 pub use debug::{Debug, StepTimes};
 pub use estimator::{PoseEstimator, PoseResult};
 pub use limb::Limb;
+pub use neck::NeckBase;
 pub use register::OfferedStart;
 
 /// The steps one at a time, for the benches and diagnostics (`benches/pose.rs` times

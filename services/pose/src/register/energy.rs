@@ -7,6 +7,7 @@ use super::capsules::{nearest_capsule, place, Gaps};
 use super::solver::Accumulator;
 use super::{Pass, Problem, Registration};
 use crate::body::{Posed, Segment};
+use airglyph_core::Joint;
 use nalgebra::{Point3, Vector3};
 
 /// Weights and scales of the energy's terms (part of [`super::RegisterConfig`]).
@@ -32,6 +33,11 @@ pub struct EnergyConfig {
     pub tip_weight: f32,
     /// ...and its Cauchy scale, metres.
     pub tip_sigma: f32,
+    /// Weight of the neck's height against the neck's base the outline shows, as the
+    /// area of the person's surface whose data points weigh as much, m² (0: off)...
+    pub neck_weight: f32,
+    /// ...and its Huber scale, metres.
+    pub neck_scale: f32,
 }
 
 impl Default for EnergyConfig {
@@ -47,6 +53,8 @@ impl Default for EnergyConfig {
             table_top_weight: 4.0,
             tip_weight: 10.0,
             tip_sigma: 0.1,
+            neck_weight: 0.0,
+            neck_scale: 0.02,
         }
     }
 }
@@ -201,11 +209,28 @@ impl Registration {
             let e = x - m;
             let (wc, cost) = cauchy(e.norm(), cfg.energy.tip_sigma);
             acc.energy += (cfg.energy.tip_weight * cost) as f64;
-            acc.tip_energy += (cfg.energy.tip_weight * cost) as f64;
+            acc.guide_energy += (cfg.energy.tip_weight * cost) as f64;
             let wt = cfg.energy.tip_weight * wc;
             acc.add(tip.0, &x, &Vector3::x(), e.x, wt);
             acc.add(tip.0, &x, &Vector3::y(), e.y, wt);
             acc.add(tip.0, &x, &Vector3::z(), e.z, wt);
+        }
+        // The neck's base the person's outline shows holds the torso's height, along
+        // the torso's up: cut by the image at the waist, the torso slides along its
+        // axis under the data term, and the head's and shoulders' tops then hold it
+        // where the template's shape, not the person's, puts them.
+        if let Some(nb) = p.neck.filter(|_| cfg.energy.neck_weight > 0.0) {
+            let (seg, local) = t.joints[Joint::Neck.index()];
+            let x = posed.point(seg, &local);
+            let r = (x - nb.point).dot(&nb.up);
+            // A data point weighs its pixel: the same area of the body weighs less
+            // the farther it is.
+            let px = f.k.fx / nb.point.z.max(0.1);
+            let weight = cfg.energy.neck_weight * px * px;
+            let (wc, cost) = huber(r, cfg.energy.neck_scale);
+            acc.energy += (weight * cost) as f64;
+            acc.guide_energy += (weight * cost) as f64;
+            acc.add(seg, &x, &nb.up, r, weight * wc);
         }
         // A segment without a surface of its own (a collarbone) is seen as its parent;
         // one whose surface lies all outside the image is not seen.

@@ -43,6 +43,7 @@ pub use starts::{starts, OfferedStart, Starts};
 pub use tips::{drop_borrowed_tips, tips_strayed};
 
 use crate::body::{BodyPose, BodyTemplate, Segment};
+use crate::neck::NeckBase;
 use nalgebra::{Point3, SMatrix, SVector};
 use sampling::NearestPixel;
 
@@ -60,9 +61,10 @@ pub struct Fit {
     pub pose: BodyPose,
     /// The robust energy at the end (lower explains the frame better).
     pub energy: f32,
-    /// The part of `energy` the tips' term makes: a guide to the limbs' ends, not
-    /// evidence of the fit (a maximum given to the wrong limb costs the right pose).
-    pub tip_energy: f32,
+    /// The part of `energy` the guides make, not evidence of the fit: the tips' term
+    /// (a maximum given to the wrong limb costs the right pose) and the neck's base's
+    /// (it holds the torso's height; which arms a start has is for the frame to say).
+    pub guide_energy: f32,
     /// Per segment, the share of its front surface the camera sees where the body puts
     /// it (1 = all of it; hidden or contradicted parts lower it).
     pub seen: [f32; Segment::COUNT],
@@ -90,6 +92,8 @@ pub(super) struct Problem<'a> {
     pub(super) frame: &'a Frame<'a>,
     pub(super) body: &'a BodyTemplate,
     pub(super) tips: &'a [Option<Point3<f32>>; 5],
+    /// The neck's base the outline shows.
+    pub(super) neck: Option<&'a NeckBase>,
     /// Per segment, how hidden it was last frame (1 − seen, squared): what the pull
     /// towards hanging acts on.
     pub(super) hidden: &'a [f32; Segment::COUNT],
@@ -136,6 +140,7 @@ impl Registration {
             frame: f,
             body: t,
             tips,
+            neck: s.neck.as_ref(),
             hidden,
             cfg,
         };
@@ -154,7 +159,7 @@ impl Registration {
         // one hanging, its hand's maximum does.)
         let evidence = |f: &Fit| {
             if search {
-                f.energy - f.tip_energy
+                f.energy - f.guide_energy
             } else {
                 f.energy
             }

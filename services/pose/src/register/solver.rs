@@ -78,8 +78,8 @@ pub(super) struct Accumulator {
     /// The twists' origins: each segment's joint.
     pub(super) origin: [Point3<f32>; Segment::COUNT],
     pub(super) energy: f64,
-    /// The part of `energy` the tips' term makes.
-    pub(super) tip_energy: f64,
+    /// The part of `energy` the guides make (the tips', the neck's base's terms).
+    pub(super) guide_energy: f64,
     /// Where each limb is rooted (shoulder, hip), for the limb-length gradient.
     pub(super) roots: [Option<Point3<f32>>; Segment::COUNT],
     /// For arms and legs: Σ w j r and Σ w j² of the residuals' derivative j by the limbs'
@@ -132,7 +132,7 @@ impl Accumulator {
             g: [[0.0; 6]; Segment::COUNT],
             origin: posed.joint,
             energy: 0.0,
-            tip_energy: 0.0,
+            guide_energy: 0.0,
             roots,
             length: [(0.0, 0.0); 2],
             arm_bones: split_arms.then_some([[0.0; 5]; 2]),
@@ -339,7 +339,7 @@ impl Registration {
                 self.accumulate(p, &Posed::new(t, &pose), pass, &mut assign)
             }
         };
-        let (energy, tip_energy) = (acc.energy as f32, acc.tip_energy as f32);
+        let (energy, guide_energy) = (acc.energy as f32, acc.guide_energy as f32);
         let (length, arm_bones) = (acc.length, acc.arm_bones);
         // A step only where the limbs carry enough evidence (about a hundred points'
         // worth of a limb's reach).
@@ -351,7 +351,7 @@ impl Registration {
         Fit {
             pose,
             energy,
-            tip_energy,
+            guide_energy,
             seen,
             length_step,
             arm_bone_steps,

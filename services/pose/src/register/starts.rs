@@ -4,6 +4,7 @@
 
 use super::RegisterConfig;
 use crate::body::{BodyPose, BodyTemplate, Posed, Segment};
+use crate::neck::NeckBase;
 use crate::Limb;
 use airglyph_core::Skeleton;
 use nalgebra::{Point3, Vector3};
@@ -33,6 +34,8 @@ pub struct Starts<'a> {
     pub cfg: Cow<'a, RegisterConfig>,
     /// The limbs' tips the tip term pulls to.
     pub tips: [Option<Point3<f32>>; 5],
+    /// The neck's base the person's outline shows, which holds the torso's height.
+    pub neck: Option<NeckBase>,
 }
 
 /// The starts of a frame: the last frame's body `tracked`, the geodesic estimate
@@ -52,6 +55,7 @@ pub fn starts<'a>(
     tips: &[Option<Point3<f32>>; 5],
     side_on: Option<Point3<f32>>,
     offered: Option<OfferedStart>,
+    neck: Option<NeckBase>,
     cfg: &'a RegisterConfig,
 ) -> Starts<'a> {
     let hybrid = tracked
@@ -74,14 +78,14 @@ pub fn starts<'a>(
             }
         }
     }
-    let (register_cfg, tips_now) = match geodesic.zip(side_on) {
+    let (register_cfg, tips_now, neck) = match geodesic.zip(side_on) {
         Some((g, centroid)) => {
             poses.extend(side_on_starts(&g, &centroid));
             let mut side_on_cfg = cfg.clone();
             side_on_cfg.solver.race_iterations = cfg.solver.iterations;
-            (Cow::Owned(side_on_cfg), [None; 5])
+            (Cow::Owned(side_on_cfg), [None; 5], None)
         }
-        None => (Cow::Borrowed(cfg), *tips),
+        None => (Cow::Borrowed(cfg), *tips, neck),
     };
     match offered {
         Some(OfferedStart::Also(s)) => free.extend(BodyPose::from_skeleton(tpl, &s)),
@@ -98,6 +102,7 @@ pub fn starts<'a>(
         free,
         cfg: register_cfg,
         tips: tips_now,
+        neck,
     }
 }
 

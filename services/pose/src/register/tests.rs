@@ -358,6 +358,7 @@ fn a_run_that_stops_early_is_measured_where_it_stopped() {
         frame: &frame,
         body: &t,
         tips: &tips,
+        neck: None,
         hidden: &SEEN,
         cfg: &cfg,
     };
@@ -394,5 +395,6 @@ fn racing(
         free: Vec::new(),
         cfg: std::borrow::Cow::Borrowed(cfg),
         tips,
+        neck: None,
     }
 }
