@@ -444,7 +444,8 @@ impl PoseEstimator {
         // A leg whose farthest point lies where the body is cut from view (the image's
         // edge, a table before it) goes on beyond the cut: its foot was not seen,
         // wherever the fit put it; unless the cut lies farther along the body than the
-        // fitted leg is long and the fitted foot beside it, when only the toes are cut.
+        // fitted leg is long, below the hip, and the fitted foot beside it, when only
+        // the toes are cut.
         // A leg whose hip the camera could not see either shows nothing of its own:
         // its knee and foot are the template's guess. (Not so for an arm: the geodesic
         // length of an arm hanging beside the torso says too little of where along it
@@ -455,16 +456,24 @@ impl PoseEstimator {
             let leg = knee.map_or(0.0, |knee| {
                 (joint(knee) - joint(hip)).norm() + (joint(foot) - joint(knee)).norm()
             });
+            // (Toes cut lie below the hip, most of a leg down: a cut beside the hip
+            // reached the long way round, through the torso, is another limb's.)
+            let up = torso.pose.r * Vector3::y();
             let cut_short = assigned.limb[l.index()].is_some_and(|mi| {
                 let at = s.graph.pos[maxima[mi] as usize];
                 cut[mi]
                     && (assigned.lengths[mi][l.index()] < leg
-                        || (joint(foot) - at).norm() > FOOT_BY_ITS_CUT)
+                        || (joint(foot) - at).norm() > FOOT_BY_ITS_CUT
+                        || (joint(hip) - at).dot(&up) < 0.5 * leg)
             });
-            if cut_short || !rooted[l.index()] {
+            // A leg with no maximum of its own showed the camera no end at all: its
+            // foot and knee are where the fit put them (a thigh bent back into the
+            // image to take an arm's points), not where anything was seen.
+            let endless = assigned.limb[l.index()].is_none();
+            if cut_short || endless || !rooted[l.index()] {
                 skeleton.visible[foot.index()] = false;
             }
-            if let Some(knee) = knee.filter(|_| !rooted[l.index()]) {
+            if let Some(knee) = knee.filter(|_| endless || !rooted[l.index()]) {
                 skeleton.visible[knee.index()] = false;
             }
         }

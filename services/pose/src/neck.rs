@@ -14,6 +14,14 @@ const DEPTH: f32 = 0.45;
 const BINS: usize = (DEPTH / BIN) as usize;
 /// Lateral reach from the head's centre line, metres: beyond it, an arm held out.
 const REACH: f32 = 0.4;
+/// A head's width, metres: a child's is over 0.12 m, nobody's is 0.3.
+const MIN_HEAD: f32 = 0.11;
+const MAX_HEAD: f32 = 0.3;
+/// A neck's width at least, metres (an adult's is about 0.1 m).
+const MIN_NECK: f32 = 0.06;
+/// How high above the torso's origin the head's top lies at least, metres (a short
+/// adult's is about 0.5 m up).
+const MIN_CROWN: f32 = 0.3;
 
 /// The outline's widths below the top of the head and where its neck ends.
 #[derive(Debug, Clone, PartialEq)]
@@ -44,6 +52,11 @@ pub fn neck_base(
 ) -> Option<NeckBase> {
     let inv = torso.inverse();
     let crown = inv.apply(top);
+    // The profile is read along the torso's up: a torso fitted tilted away from the
+    // head (lost, or lying along the chair's back) has no neck along it.
+    if crown.y < MIN_CROWN || crown.x.abs() > 0.5 * crown.y {
+        return None;
+    }
     // Each bin's lateral offsets, from the crown's line.
     let mut bins: Vec<Vec<f32>> = vec![Vec::new(); BINS];
     for (p, _) in points.iter().zip(mask).filter(|(p, &m)| m && p.z > 0.0) {
@@ -84,6 +97,16 @@ pub fn neck_base(
         width[b] = xs[hi] - xs[lo];
         centre = 0.5 * (xs[hi] + xs[lo]);
     }
+    // The sensor's noise frays the outline row by row: each bin the median of three.
+    let width: [f32; BINS] = std::array::from_fn(|b| {
+        let mut near: Vec<f32> = width[b.saturating_sub(1)..(b + 2).min(BINS)]
+            .iter()
+            .copied()
+            .filter(|w| w.is_finite())
+            .collect();
+        near.sort_by(f32::total_cmp);
+        near.get(near.len() / 2).copied().unwrap_or(f32::NAN)
+    });
     // The head: the outline's widest before it narrows to the neck (within 25 cm of
     // its top, a head's height and more); then the neck, the narrowest below it before
     // the outline is wider than the head; its base, where it has widened to twice its
@@ -98,6 +121,9 @@ pub fn neck_base(
         }
     }
     let head = head?;
+    if !(MIN_HEAD..MAX_HEAD).contains(&width[head]) {
+        return None;
+    }
     let head_width = width[head];
     let mut neck = head;
     // Bins a pixel's row missed (far away a pixel is more than a bin high) are skipped;
@@ -118,8 +144,8 @@ pub fn neck_base(
         }
         if w > 2.0 * width[neck] {
             let neck_width = width[neck];
-            // A real neck: clearly narrower than the head, not a sliver of noise.
-            if neck_width > 0.75 * head_width || neck_width < 0.04 {
+            // A real neck: clearly narrower than the head, no sliver of noise.
+            if neck_width > 0.75 * head_width || neck_width < MIN_NECK {
                 return None;
             }
             let below_top = (b as f32 + 0.5) * BIN;

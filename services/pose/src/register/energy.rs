@@ -53,7 +53,7 @@ impl Default for EnergyConfig {
             table_top_weight: 4.0,
             tip_weight: 10.0,
             tip_sigma: 0.1,
-            neck_weight: 0.0,
+            neck_weight: 0.02,
             neck_scale: 0.02,
         }
     }
