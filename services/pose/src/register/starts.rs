@@ -41,8 +41,7 @@ pub struct Starts<'a> {
 /// for a person perhaps side-on (`side_on`: the person's centroid), standing side-on
 /// bodies, raced for every step and without the tips (they were assigned to the limbs
 /// of the frontal body). A person found afresh is also looked for at rest on the
-/// geodesic estimate's torso and on `upright` (the torso step's own, upright), if any,
-/// standing, and on `upright` seated too. An
+/// geodesic estimate's torso and on `upright` (the torso step's own, upright), if any. An
 /// `offered` start is added, or replaces them all.
 #[allow(clippy::too_many_arguments)]
 pub fn starts<'a>(
@@ -71,15 +70,7 @@ pub fn starts<'a>(
     if let Some(geo) = geodesic.filter(|_| tracked.is_none()) {
         for body in [Some(geo), upright].iter().flatten() {
             for arms in [[false, false], [true, true], [true, false], [false, true]] {
-                free.extend(resting(tpl, body, arms, false));
-            }
-        }
-        // Seated, the thighs run towards the camera and hold many of the lap's points:
-        // from standing legs three steps do not reach them, and such a start loses the
-        // race to bodies whose arms lie in the lap. So seated too, on the upright torso.
-        if let Some(body) = upright {
-            for arms in [[false, false], [true, true], [true, false], [false, true]] {
-                free.extend(resting(tpl, &body, arms, true));
+                free.extend(resting(tpl, body, arms));
             }
         }
     }
@@ -157,17 +148,15 @@ fn hybrid_start(
     changed.then_some(h)
 }
 
-/// `geo` standing straight (or `seated`: the thighs straight forward, the shins down),
-/// with the left (`arms[0]`) and right (`arms[1]`) arm hanging (along the body down
-/// from the shoulder, a little out from the side, the elbow a little bent).
-fn resting(tpl: &BodyTemplate, geo: &BodyPose, arms: [bool; 2], seated: bool) -> Option<BodyPose> {
+/// `geo` standing straight, with the left (`arms[0]`) and right (`arms[1]`) arm hanging
+/// (along the body down from the shoulder, a little out from the side, the elbow a
+/// little bent).
+fn resting(tpl: &BodyTemplate, geo: &BodyPose, arms: [bool; 2]) -> Option<BodyPose> {
     use airglyph_core::Joint;
     let mut s = Posed::new(tpl, geo).skeleton(tpl);
     let down = (s[Joint::Pelvis] - s[Joint::Neck]).try_normalize(1e-6)?;
     let left = s[Joint::LeftHip] - s[Joint::RightHip];
     let left = (left - down * down.dot(&left)).try_normalize(1e-6)?;
-    // Forward, the way the person faces: down × left.
-    let thigh_dir = if seated { down.cross(&left) } else { down };
     for (hip, knee, foot, shin) in [
         (
             Joint::LeftHip,
@@ -184,7 +173,7 @@ fn resting(tpl: &BodyTemplate, geo: &BodyPose, arms: [bool; 2], seated: bool) ->
     ] {
         let thigh_len = tpl.origin[shin.index()].norm();
         let shin_len = tpl.joints[foot.index()].1.coords.norm();
-        let k = s[hip] + thigh_dir * thigh_len;
+        let k = s[hip] + down * thigh_len;
         s.set(knee, k);
         s.set(foot, k + down * shin_len);
     }
