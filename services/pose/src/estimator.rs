@@ -108,8 +108,6 @@ struct Scratch {
     /// person's pixels.
     points: Vec<Point3<f32>>,
     mask: Vec<bool>,
-    /// The mask's pixels the registration explains ([`Segmenter::body_points`]).
-    body_mask: Vec<bool>,
     segmenter: Segmenter,
     torso: TorsoEstimator,
     graph: GeoGraph,
@@ -149,7 +147,6 @@ impl PoseEstimator {
                 small: Vec::new(),
                 points: Vec::new(),
                 mask: Vec::new(),
-                body_mask: Vec::new(),
                 segmenter: Segmenter::default(),
                 torso: TorsoEstimator::new(&config.torso),
                 graph: GeoGraph::default(),
@@ -386,14 +383,9 @@ impl PoseEstimator {
         // 7. The whole body registered to the frame, from the last frame's body and
         // from the seed's estimate when it races, whichever explains the frame better.
         let mut skeleton = if cfg.register.enabled {
-            // Behind the torso's back: no part of a body facing the camera is there.
-            let inv = torso.pose.inverse();
-            let back = cfg.torso.half_depth;
-            s.segmenter
-                .body_points(&s.mask, &mut s.body_mask, |p| inv.apply(&p).z < -back);
             let frame = Frame {
                 points: &s.points,
-                mask: &s.body_mask,
+                mask: &s.mask,
                 width: size.0,
                 height: size.1,
                 k: &k,
