@@ -367,23 +367,22 @@ impl PoseEstimator {
         // behind a table) shows no end in view either.
         let rooted = Limb::ALL.map(|l| frame.sees(torso.keypoints.root_of(l)));
         let assigned = assign_limbs(s, t, &maxima, &cut, rooted, &mut torso, size, &tpl, cfg, d);
-        // The neck's base as the person's outline shows it, below the head's maximum.
+        // The neck's base as the person's outline shows it, below the head's maximum,
+        // to hold the height of a body the image or a table cuts short of its feet: a
+        // foot in view holds it better. (A leg's tip near the torso is no foot: a
+        // hand's maximum taken for a leg's.)
+        let up = torso.pose.r * Vector3::y();
+        let foot_seen = [Limb::LeftLeg, Limb::RightLeg].iter().any(|l| {
+            assigned.tips[l.index()]
+                .is_some_and(|tip| (torso.keypoints.neck - tip).dot(&up) >= FOOT_BELOW_NECK)
+        });
         let neck = assigned.limb[Limb::Head.index()]
-            .filter(|&mi| !cut[mi])
+            .filter(|&mi| !cut[mi] && !foot_seen)
             .and_then(|mi| {
                 let top = s.graph.pos[maxima[mi] as usize];
                 neck_base(&s.points, &s.mask, &torso.pose, &top, 1.0 / k.fx)
             });
         d.neck_base = neck.clone();
-        // A foot in view holds the body's height better: the neck's base guides only a
-        // body the image or a table cuts short of its feet. (A leg's tip near the
-        // torso is no foot: a hand's maximum taken for a leg's.)
-        let neck = neck.filter(|nb| {
-            [Limb::LeftLeg, Limb::RightLeg].iter().all(|l| {
-                assigned.tips[l.index()]
-                    .is_none_or(|tip| (nb.point - tip).dot(&nb.up) < FOOT_BELOW_NECK)
-            })
-        });
         // Without registration, the limbs' geodesic lengths measure the person.
         if !cfg.register.enabled {
             for l in Limb::ALL {
@@ -499,8 +498,8 @@ impl PoseEstimator {
 /// cuts its leg, metres, for the cut to take only its toes: a foot's length.
 const FOOT_BY_ITS_CUT: f32 = 0.2;
 
-/// How far below the neck's base a leg's tip must lie to be a foot, metres: a seated
-/// child's feet lie farther.
+/// How far below the neck a leg's tip must lie to be a foot, metres: a seated child's
+/// feet lie farther.
 const FOOT_BELOW_NECK: f32 = 0.8;
 
 /// Whether `p` projects inside the image of camera `k`.
