@@ -54,7 +54,8 @@ pub fn neck_base(
     let crown = inv.apply(top);
     // The profile is read along the torso's up: a torso fitted tilted away from the
     // head (lost, or lying along the chair's back) has no neck along it.
-    if crown.y < MIN_CROWN || crown.x.abs() > 0.5 * crown.y {
+    let upright = crown.y >= MIN_CROWN && crown.x.abs() <= 0.5 * crown.y;
+    if !upright {
         return None;
     }
     // Each bin's lateral offsets, from the crown's line.
