@@ -94,7 +94,9 @@ impl Default for SpotterConfig {
             peak_seconds: 0.5,
             rest_speed: 0.15,
             min_seconds: 0.3,
-            max_seconds: 4.0,
+            // Not 4 s: slow drawers take longer over a symbol; the verifier is trained
+            // on candidates up to this length (`Verifier::train`), so the two go together.
+            max_seconds: 6.0,
             min_size: 0.3,
             max_size: 2.5,
             margin: None,
