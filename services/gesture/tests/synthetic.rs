@@ -298,9 +298,11 @@ fn spotter_finds_gestures_in_a_stream_and_none_in_random_movement() {
     let mut spotter = Spotter::new(model, SpotterConfig::default()).unwrap();
     let spotted = noise.spot(&mut spotter, &scfg);
     // Ordinary movement has straight and curved reaches that can pass for a side of a
-    // square or a zigzag's stroke: at most one false alarm in two minutes.
+    // square or a zigzag's stroke, and since candidates may last 6 s (slow drawers), a
+    // long wander for a whole square: at most two false alarms in two minutes (one
+    // with candidates up to 4 s; NOTES.md, 2026-12-05).
     assert!(
-        spotted.len() <= 1,
+        spotted.len() <= 2,
         "gestures spotted in ordinary movement: {spotted:?}"
     );
 }

@@ -78,6 +78,11 @@ pub struct SpotterConfig {
     /// in the air and as `collect` cuts repetitions; reaches from and back to a rest are
     /// not. Unused otherwise.
     pub min_forward: f32,
+    /// For a model of symbols drawn in the plane: a stretch along which the hand moves
+    /// further in depth (towards or away from the camera) than this many times its
+    /// larger side across is not one: a symbol is drawn facing the camera, a reach from
+    /// a hanging arm or a hand to the face is not (None: depth is not looked at).
+    pub max_depth_ratio: Option<f32>,
 }
 
 impl Default for SpotterConfig {
@@ -89,7 +94,9 @@ impl Default for SpotterConfig {
             peak_seconds: 0.5,
             rest_speed: 0.15,
             min_seconds: 0.3,
-            max_seconds: 4.0,
+            // Not 4 s: slow drawers take longer over a symbol; the verifier is trained
+            // on candidates up to this length (`Verifier::train`), so the two go together.
+            max_seconds: 6.0,
             min_size: 0.3,
             max_size: 2.5,
             margin: None,
@@ -104,6 +111,9 @@ impl Default for SpotterConfig {
             rank_by: RankBy::default(),
             tracker: TrackerConfig::default(),
             min_forward: 0.7,
+            // tan 35°: a symbol drawn on a plane turned as far from facing the camera as
+            // the 3-D synthetic people turn theirs (`airglyph_synth::air3d`) still passes.
+            max_depth_ratio: Some(0.7),
         }
     }
 }

@@ -51,6 +51,17 @@ fn size_ok_in_depth(pts: &[[f32; 2]], depth: &[f32], cfg: &SpotterConfig) -> boo
     size >= cfg.min_size && size <= cfg.max_size
 }
 
+/// Whether a stretch in the plane was drawn facing the camera: the hand's depth
+/// (non-finite values skipped) spans at most `ratio` times the larger frontal side.
+fn faces_the_camera(pts: &[[f32; 2]], depth: &[f32], ratio: f32) -> bool {
+    let (x0, y0, x1, y1) = crate::features::bbox(pts);
+    let (z0, z1) = depth
+        .iter()
+        .filter(|z| z.is_finite())
+        .fold((f32::MAX, f32::MIN), |(a, b), &z| (a.min(z), b.max(z)));
+    z1 <= z0 || z1 - z0 <= ratio * (x1 - x0).max(y1 - y0)
+}
+
 /// A gesture found in the stream.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SpottedGesture {
@@ -270,10 +281,12 @@ impl Spotter {
         }
         let inv = self.inverse_size();
         let now = self.seg.next_index();
-        let z = if self.in_depth && p.z.is_finite() {
-            p.z * inv
-        } else {
-            0.0
+        // A model in the plane keeps the depth only to tell stretches drawn facing the
+        // camera from movement towards or away from it (`max_depth_ratio`).
+        let z = match (self.in_depth, p.z.is_finite()) {
+            (_, true) => p.z * inv,
+            (true, false) => 0.0,
+            (false, false) => f32::NAN,
         };
         self.waiting
             .extend(self.seg.push([p.x * inv, p.y * inv], z, seq, time_ns));
@@ -341,6 +354,11 @@ impl Spotter {
         } else {
             if !size_ok(&input.segment, &self.cfg) {
                 return None;
+            }
+            if let Some(ratio) = self.cfg.max_depth_ratio {
+                if !faces_the_camera(&input.segment, &self.seg.depths(s, e)?, ratio) {
+                    return None;
+                }
             }
             None
         };
@@ -488,5 +506,29 @@ impl Spotter {
             from = from.min(p.start);
         }
         self.seg.forget_before(from);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_stretch_faces_the_camera_unless_it_moves_more_in_depth_than_across() {
+        // A "1" 0.6 tall, drawn on a plane turned 30° away: its depth spans 0.35.
+        let stroke: Vec<[f32; 2]> = (0..=10).map(|i| [0.0, i as f32 * 0.06]).collect();
+        let tilted: Vec<f32> = (0..=10).map(|i| i as f32 * 0.06 * 0.577).collect();
+        assert!(faces_the_camera(&stroke, &tilted, 0.7));
+        // The same shadow made by a reach from a hanging arm, 0.9 towards the camera.
+        let reach: Vec<f32> = (0..=10).map(|i| i as f32 * 0.09).collect();
+        assert!(!faces_the_camera(&stroke, &reach, 0.7));
+        assert!(faces_the_camera(&stroke, &reach, 2.0));
+        // A constant depth (a tracker that has none, the lab generator's streams), and a
+        // depth the camera lost at some frames, which is skipped.
+        assert!(faces_the_camera(&stroke, &[0.35; 11], 0.0));
+        let mut lost = tilted.clone();
+        lost[4] = f32::NAN;
+        assert!(faces_the_camera(&stroke, &lost, 0.7));
+        assert!(faces_the_camera(&stroke, &[f32::NAN; 11], 0.7));
     }
 }
