@@ -455,9 +455,9 @@ impl PoseEstimator {
             let leg = knee.map_or(0.0, |knee| {
                 (joint(knee) - joint(hip)).norm() + (joint(foot) - joint(knee)).norm()
             });
-            // (Toes cut lie below the hip, most of a leg down: a cut beside the hip
-            // reached the long way round, through the torso, is another limb's.)
-            let up = torso.pose.r * Vector3::y();
+            // (Toes cut lie below the hip, most of a leg down, along the torso's `up`:
+            // a cut beside the hip reached the long way round, through the torso, is
+            // another limb's.)
             let cut_short = assigned.limb[l.index()].is_some_and(|mi| {
                 let at = s.graph.pos[maxima[mi] as usize];
                 cut[mi]
