@@ -109,6 +109,8 @@ struct Scratch {
     /// person's pixels.
     points: Vec<Point3<f32>>,
     mask: Vec<bool>,
+    /// The mask's pixels the registration explains ([`Segmenter::body_points`]).
+    body_mask: Vec<bool>,
     segmenter: Segmenter,
     torso: TorsoEstimator,
     graph: GeoGraph,
@@ -148,6 +150,7 @@ impl PoseEstimator {
                 small: Vec::new(),
                 points: Vec::new(),
                 mask: Vec::new(),
+                body_mask: Vec::new(),
                 segmenter: Segmenter::default(),
                 torso: TorsoEstimator::new(&config.torso),
                 graph: GeoGraph::default(),
@@ -400,9 +403,27 @@ impl PoseEstimator {
         // 7. The whole body registered to the frame, from the last frame's body and
         // from the seed's estimate when it races, whichever explains the frame better.
         let mut skeleton = if cfg.register.enabled {
+            // A seated person's chair back shows between the arms and the torso and
+            // around the body; taken into the mask across its depth jumps, it pulled
+            // hanging forearms back into it. Left out of the points the registration
+            // explains: the mask's parts behind the torso's back, of a torso facing
+            // the camera (side-on, its back lies along the rays and a far limb behind
+            // it) and cut short of its feet (a far leg seen through a gap of a whole
+            // body was taken for one).
+            let forward = torso.pose.r * Vector3::z();
+            let facing = forward.dot(&-torso.pose.t.normalize()) > FACING_COS;
+            let mask = if facing && !foot_seen {
+                let inv = torso.pose.inverse();
+                let back = cfg.torso.half_depth;
+                s.segmenter
+                    .body_points(&s.mask, &mut s.body_mask, |p| inv.apply(&p).z < -back);
+                &s.body_mask
+            } else {
+                &s.mask
+            };
             let frame = Frame {
                 points: &s.points,
-                mask: &s.mask,
+                mask,
                 width: size.0,
                 height: size.1,
                 k: &k,
@@ -501,6 +522,10 @@ const FOOT_BY_ITS_CUT: f32 = 0.2;
 /// How far below the neck a leg's tip must lie to be a foot, metres: a seated child's
 /// feet lie farther.
 const FOOT_BELOW_NECK: f32 = 0.8;
+
+/// The cosine of the largest angle between the torso's forward and the ray to the camera
+/// at which its back plane still tells what lies behind the body (45°).
+const FACING_COS: f32 = std::f32::consts::FRAC_1_SQRT_2;
 
 /// Whether `p` projects inside the image of camera `k`.
 fn inside(k: &Intrinsics, p: &Point3<f32>) -> bool {

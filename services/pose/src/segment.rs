@@ -312,6 +312,9 @@ pub struct Segmenter {
     ray_x: Vec<f32>,
     /// Per blob label, whether it is the person's.
     keep: Vec<bool>,
+    /// Per blob label, the mean of a part of the person's mask that lies behind the
+    /// person's own blob ([`Segmenter::body_points`]).
+    behind_body: Vec<Option<Point3<f32>>>,
     /// The flood fill of the holes in the person: its queue, the pixels it reached and
     /// those it has been to (over the person's box).
     queue: Vec<u32>,
@@ -597,6 +600,12 @@ impl Segmenter {
             for &bi in limbs.iter().chain([&bi]) {
                 self.keep[blobs[bi].label as usize] = true;
             }
+            self.behind_body.clear();
+            self.behind_body.resize(blobs.len(), None);
+            for &li in &limbs {
+                let mean = blobs[li].moments.mean();
+                self.behind_body[blobs[li].label as usize] = (mean.z > b.max.z).then_some(mean);
+            }
             for v in win.v0..=win.v1 {
                 for (m, &l) in mask[win.row(v)].iter_mut().zip(&self.labels[win.row(v)]) {
                     *m = self.keep.get(l as usize).copied().unwrap_or(false);
@@ -609,6 +618,32 @@ impl Segmenter {
             seg.bbox = bbox;
         }
         seg
+    }
+
+    /// The person's pixels of the last frame's `mask` (as [`Segmenter::run`] left it)
+    /// but for the parts of the body taken across depth jumps that lie, on average,
+    /// behind the farthest point of the person's own blob and there `beyond(mean)`,
+    /// into `out`. A seated person's chair back is such a part, and so is a far limb
+    /// seen through a gap of the body: the caller's `beyond` tells them apart. The
+    /// steps before the registration keep the whole mask: they were tuned with such
+    /// parts in it, and taken out there they moved the torso.
+    pub fn body_points(
+        &self,
+        mask: &[bool],
+        out: &mut Vec<bool>,
+        beyond: impl Fn(Point3<f32>) -> bool,
+    ) {
+        let left_out: Vec<bool> = self
+            .behind_body
+            .iter()
+            .map(|m| m.is_some_and(&beyond))
+            .collect();
+        out.clear();
+        out.extend(
+            mask.iter()
+                .zip(&self.labels)
+                .map(|(&m, &l)| m && !left_out.get(l as usize).copied().unwrap_or(false)),
+        );
     }
 
     /// Gives the person the pixels without data that their pixels enclose (each hole up
@@ -1226,6 +1261,58 @@ mod tests {
         let (again, _, mask_again) = segment(&mut s, &scene, &k, Some(&whole));
         assert!(again.found);
         assert_eq!(mask_again, mask);
+    }
+
+    #[test]
+    fn a_chair_back_seen_between_the_arms_and_the_torso_is_no_body_point() {
+        use airglyph_synth::{
+            Background, Chair, MotionSpec, Placement, Posture, Prop, SceneConfig, ScriptedPose,
+            Synthesizer,
+        };
+        let k = Intrinsics::default().scaled_to(320, 240);
+        let chair = Chair::default();
+        let cfg = SceneConfig {
+            intrinsics: k,
+            motion: MotionSpec::Pose(ScriptedPose::ArmsAtSides),
+            background: Background::Room,
+            props: vec![Prop::Chair(chair)],
+            posture: Posture::Seated {
+                seat_height_m: chair.seat_height_m,
+            },
+            placement: Placement {
+                distance_m: 1.2,
+                ..Placement::default()
+            },
+            ..SceneConfig::default()
+        }
+        .framing_upper_body()
+        .expect("the body loads");
+        let img = Synthesizer::new(cfg).expect("scene").render(0).0;
+        let mut s = Segmenter::default();
+        let (seg, points, mask) = segment(&mut s, &img, &k, None);
+        assert!(seg.found);
+        let mut body = Vec::new();
+        s.body_points(&mask, &mut body, |_| true);
+        let nearest = (0..mask.len())
+            .filter(|&i| mask[i] && points[i].z > 0.0)
+            .map(|i| points[i].z)
+            .fold(f32::MAX, f32::min);
+        let left_out: Vec<f32> = (0..mask.len())
+            .filter(|&i| mask[i] && !body[i] && points[i].z > 0.0)
+            .map(|i| points[i].z)
+            .collect();
+        // The chair's back is in the mask (the steps before the registration were
+        // tuned so), out of the body's points, and it lies behind the body.
+        assert!(left_out.len() > 50, "{} chair pixels", left_out.len());
+        assert!(
+            left_out.iter().all(|&z| z > nearest + 0.3),
+            "{nearest} {left_out:?}"
+        );
+        // A person standing with nothing behind them keeps every pixel.
+        let (frames, k) = drawing_frames(1);
+        let (_, _, mask) = segment(&mut s, &frames[0], &k, None);
+        s.body_points(&mask, &mut body, |_| true);
+        assert_eq!(body, mask);
     }
 
     #[test]

@@ -7,7 +7,7 @@
 use airglyph_core::{Intrinsics, Joint, Skeleton};
 use airglyph_pose::{PoseConfig, PoseEstimator, PoseResult};
 use airglyph_synth::{
-    Background, Chair, MotionSpec, Placement, Posture, Prop, SceneConfig, ScriptedPose,
+    Background, BodySpec, Chair, MotionSpec, Placement, Posture, Prop, SceneConfig, ScriptedPose,
     Synthesizer, Table,
 };
 
@@ -46,7 +46,7 @@ fn seated(cfg: SceneConfig, table: bool) -> SceneConfig {
 }
 
 fn upper_body(cfg: SceneConfig) -> SceneConfig {
-    cfg.framing_upper_body().expect("the procedural body")
+    cfg.framing_upper_body().expect("the body loads")
 }
 
 /// Frame `frame` of the scene, estimated with no history.
@@ -245,6 +245,42 @@ fn seated_with_no_table_the_legs_below_the_image_are_not_invented() {
             assert!(
                 !r.skeleton.visible[j.index()],
                 "{distance_m} m, {pose:?}: {j:?} reported visible"
+            );
+        }
+    }
+}
+
+#[test]
+fn seated_hanging_arms_are_not_pulled_into_the_chairs_back() {
+    // The chair's back shows between a seated person's hanging arms and torso, taken
+    // into the person's mask across its depth jumps; explaining it, the fit swung the
+    // forearms back into it (hands 35 cm off at 1.0 m, 37 cm at 1.2 m with the sensor).
+    // On the MakeHuman body: the procedural body's arms are longer than the template's,
+    // which a single frame of hanging arms cannot learn (above). (Not yet: without the
+    // sensor model at 1.2 and 1.4 m the fit's starts do not reach the hanging arms,
+    // hands 22–31 cm off; pose NOTES, 2026-12-05, morning.)
+    let body = BodySpec::MakeHuman { assets: None };
+    if body.load().is_err() {
+        eprintln!("skipped: the MakeHuman body is not fetched (scripts/fetch-assets)");
+        return;
+    }
+    for (distance_m, noise) in [(1.0, false), (1.0, true), (1.2, true), (1.4, true)] {
+        let mut cfg = seated(at(distance_m, ScriptedPose::ArmsAtSides), false);
+        cfg.body = body.clone();
+        cfg.sensor_noise = noise;
+        let (r, truth) = single(upper_body(cfg), 0);
+        assert!(r.person_found, "{distance_m} m");
+        visibility_is_consistent(&r, &qvga());
+        for j in [
+            Joint::LeftElbow,
+            Joint::RightElbow,
+            Joint::LeftHand,
+            Joint::RightHand,
+        ] {
+            let e = error_m(&r.skeleton, &truth.skeleton, j);
+            assert!(
+                e < 0.1,
+                "{distance_m} m, noise {noise}: {j:?} off by {e:.2} m"
             );
         }
     }
