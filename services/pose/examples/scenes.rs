@@ -57,7 +57,10 @@ fn draw(symbols: &str) -> MotionSpec {
 }
 
 fn kinds() -> Vec<Kind> {
-    let mh = BodySpec::MakeHuman { assets: None };
+    let mh = BodySpec::MakeHuman {
+        assets: None,
+        shape: Default::default(),
+    };
     let base = |body: &BodySpec, motion: MotionSpec, distance_m: f32| SceneConfig {
         body: body.clone(),
         motion,

@@ -90,6 +90,7 @@ pub use airglyph_core::gestures::GestureTruth;
 pub use body::{Affine, Body, ProceduralBody};
 pub use canon::{Bone, Pose, TposeSkeleton};
 pub use error::SynthError;
+pub use makehuman::MakeHumanShape;
 pub use motion::{DrawSpec, MotionSpec};
 pub use poses::{Posture, ScriptedPose};
 pub use room::{Background, Chair, Mug, Prop, Table};
@@ -110,6 +111,9 @@ pub enum BodySpec {
     MakeHuman {
         /// The folder holding `mpfb2/`, or None for the default.
         assets: Option<PathBuf>,
+        /// Its macro shape (gender, age, muscle, weight, height, …); the default is the
+        /// raw base mesh, as before shapes existed.
+        shape: MakeHumanShape,
     },
 }
 
@@ -118,9 +122,9 @@ impl BodySpec {
     pub fn load(&self) -> Result<Body, SynthError> {
         match self {
             BodySpec::Procedural(p) => Body::procedural(p),
-            BodySpec::MakeHuman { assets } => {
+            BodySpec::MakeHuman { assets, shape } => {
                 let dir = assets.clone().unwrap_or_else(makehuman::default_assets_dir);
-                makehuman::load(&dir)
+                makehuman::load_shaped(&dir, shape)
             }
         }
     }
@@ -584,7 +588,8 @@ pub fn write_recording(
 fn describe(cfg: &SceneConfig) -> String {
     let body = match &cfg.body {
         BodySpec::Procedural(p) => format!("procedural-{:.2}m-{:.2}", p.height_m, p.build),
-        BodySpec::MakeHuman { .. } => "makehuman".into(),
+        BodySpec::MakeHuman { shape, .. } if shape.is_default() => "makehuman".into(),
+        BodySpec::MakeHuman { shape, .. } => format!("makehuman[{}]", shape.label()),
     };
     let motion = match &cfg.motion {
         MotionSpec::Poses => "poses".to_string(),

@@ -17,6 +17,7 @@ fn a_missing_asset_cache_says_how_to_fetch_it() {
     let cfg = SceneConfig {
         body: BodySpec::MakeHuman {
             assets: Some(dir.path().to_owned()),
+            shape: Default::default(),
         },
         ..SceneConfig::default()
     };
@@ -78,6 +79,7 @@ fn makehuman_joints_lie_inside_the_silhouette() {
         let cfg = SceneConfig {
             body: BodySpec::MakeHuman {
                 assets: Some(dir.clone()),
+                shape: Default::default(),
             },
             motion: MotionSpec::Pose(pose),
             ..SceneConfig::default()
@@ -117,7 +119,10 @@ fn makehuman_body_loads_whole() {
     let body = makehuman::load(&dir).unwrap();
     assert!(body.triangle_count() > 20_000, "{}", body.triangle_count());
     let cfg = SceneConfig {
-        body: BodySpec::MakeHuman { assets: Some(dir) },
+        body: BodySpec::MakeHuman {
+            assets: Some(dir),
+            shape: Default::default(),
+        },
         motion: MotionSpec::Pose(ScriptedPose::TPose),
         ..SceneConfig::default()
     };
