@@ -28,7 +28,10 @@
 //!   tapered capsules rigidly bound to 19 bones; height and build are parameters);
 //!   [`BodySpec::MakeHuman`] loads the MakeHuman CC0 body with its `cmu_mb` rig and
 //!   weights from the asset cache that `scripts/fetch-assets` fills (linear blend
-//!   skinning, 4 bones a vertex).
+//!   skinning, 4 bones a vertex), in any of MakeHuman's macro shapes
+//!   ([`MakeHumanShape`]: gender, age, muscle, weight, height, proportions, ethnic
+//!   mix; [`makehuman::shape`] says how its targets are weighed). The default shape is
+//!   the raw base mesh, the body every figure before shapes was measured on.
 //! - [`Pose`] on the canonical skeleton ([`Bone`], 19 bones, T-pose reference): what
 //!   every motion source produces and every body consumes.
 //! - [`MotionSpec`]: scripted poses ([`ScriptedPose`], the hard cases of the seed
@@ -63,6 +66,7 @@
 //! write_recording(cfg, frames, dir: &Path, progress: impl FnMut(usize))
 //!     -> Result<RecordingSummary, SynthError>   (+ joints.csv, gestures.csv)
 //! makehuman::default_assets_dir() -> PathBuf;  makehuman::assets_present(&Path) -> bool
+//! makehuman::targets_present(&Path) -> bool   MakeHumanShape::parse("gender=0,weight=0.8")
 //! ```
 //!
 //! Benchmark (`cargo bench -p airglyph-synth`): skinning + rendering the MakeHuman body
