@@ -251,6 +251,15 @@ mod tests {
             &["eval-pose", "dir", "--overlay-every", "10"],
             &["synth", "--out", "x", "--frames", "3", "--fps", "15"],
             &[
+                "synth",
+                "--out",
+                "x",
+                "--body",
+                "makehuman",
+                "--body-shape",
+                "gender=0,weight=0.8,height=0.3",
+            ],
+            &[
                 "record",
                 "--source",
                 "synthetic",
@@ -289,6 +298,23 @@ mod tests {
             if let Err(e) = Cli::try_parse_from(argv) {
                 panic!("{line:?}: {e}");
             }
+        }
+    }
+
+    /// A body shape is read when the line is parsed: a bad one is refused, naming what
+    /// is wrong.
+    #[test]
+    fn a_bad_body_shape_is_refused() {
+        for (shape, says) in [
+            ("weight=1.2", "0–1"),
+            ("size=1", "gender"),
+            ("weight", "NAME=VALUE"),
+        ] {
+            let argv = ["airglyph", "synth", "--out", "x", "--body", "makehuman"];
+            let e = Cli::try_parse_from(argv.into_iter().chain(["--body-shape", shape]))
+                .err()
+                .unwrap_or_else(|| panic!("{shape} was taken"));
+            assert!(e.to_string().contains(says), "{shape}: {e}");
         }
     }
 }

@@ -40,7 +40,10 @@ fn main() {
         } else if a.starts_with("draw:") {
             cfg.motion = MotionSpec::parse(a, None, false).expect("draw spec");
         } else if a == "mh" {
-            cfg.body = airglyph_synth::BodySpec::MakeHuman { assets: None };
+            cfg.body = airglyph_synth::BodySpec::MakeHuman {
+                assets: None,
+                shape: Default::default(),
+            };
         } else if a == "follow" {
             cfg.placement.follow = true;
         } else if a == "noise" {

@@ -156,7 +156,10 @@ fn main() {
     let procedural = args.iter().any(|a| a == "procedural");
     let mut base = SceneConfig::default();
     if !procedural {
-        base.body = airglyph_synth::BodySpec::MakeHuman { assets: None };
+        base.body = airglyph_synth::BodySpec::MakeHuman {
+            assets: None,
+            shape: Default::default(),
+        };
     }
     let mut scenes = Vec::new();
     for pose in ScriptedPose::ALL {

@@ -18,8 +18,8 @@ use airglyph_core::{Joint, Skeleton};
 use airglyph_pose::metrics::{PoseEval, Summary};
 use airglyph_pose::{overlay, PoseConfig, PoseEstimator};
 use airglyph_synth::{
-    Background, BodySpec, Chair, DrawSpec, MotionSpec, Mug, Placement, Posture, ProceduralBody,
-    Prop, SceneConfig, Synthesizer, Table,
+    Background, BodySpec, Chair, DrawSpec, MakeHumanShape, MotionSpec, Mug, Placement, Posture,
+    ProceduralBody, Prop, SceneConfig, Synthesizer, Table,
 };
 use std::io::Write;
 use std::path::PathBuf;
@@ -57,7 +57,10 @@ fn draw(symbols: &str) -> MotionSpec {
 }
 
 fn kinds() -> Vec<Kind> {
-    let mh = BodySpec::MakeHuman { assets: None };
+    let mh = BodySpec::MakeHuman {
+        assets: None,
+        shape: Default::default(),
+    };
     let base = |body: &BodySpec, motion: MotionSpec, distance_m: f32| SceneConfig {
         body: body.clone(),
         motion,
@@ -68,13 +71,14 @@ fn kinds() -> Vec<Kind> {
         },
         ..SceneConfig::default()
     };
+    // A body that does not load (no asset cache) is left unframed: its rows are then
+    // skipped, saying why.
     let near = |cfg: SceneConfig| {
-        SceneConfig {
+        let framed = SceneConfig {
             background: Background::Room,
             ..cfg
-        }
-        .framing_upper_body()
-        .expect("the body loads")
+        };
+        framed.clone().framing_upper_body().unwrap_or(framed)
     };
     let seated = |cfg: SceneConfig, table: bool| {
         let chair = Chair::default();
@@ -106,6 +110,16 @@ fn kinds() -> Vec<Kind> {
         height_m: 1.92,
         build: 1.25,
     });
+    // MakeHuman bodies of other shapes (MakeHuman's macro sliders, see
+    // airglyph_synth::makehuman::shape); rows skipped when the cache lacks the targets.
+    let mh_shape = |text: &str| BodySpec::MakeHuman {
+        assets: None,
+        shape: MakeHumanShape::parse(text).expect("a shape"),
+    };
+    let woman = mh_shape("gender=0,height=0.45");
+    let heavy_man = mh_shape("gender=1,weight=0.95,muscle=0.4,age=0.6");
+    let tall_thin_man = mh_shape("gender=1,height=0.7,weight=0.15,muscle=0.4");
+    let older_short_woman = mh_shape("gender=0,age=0.85,height=0.3,weight=0.7");
     let seeded = |mut cfg: SceneConfig, seed: u64| {
         cfg.seed = seed;
         cfg
@@ -179,6 +193,32 @@ fn kinds() -> Vec<Kind> {
             scene: near(seeded(
                 seated(base(&short, MotionSpec::Rest, 1.0), false),
                 14,
+            )),
+            held_out: true,
+        },
+        Kind {
+            name: "close-upper woman (1.2 m, drawing)",
+            scene: near(seeded(base(&woman, draw("97531ZXVTR"), 1.2), 21)),
+            held_out: true,
+        },
+        Kind {
+            name: "close-rest heavy man (1.3 m)",
+            scene: near(seeded(base(&heavy_man, MotionSpec::Rest, 1.3), 22)),
+            held_out: true,
+        },
+        Kind {
+            name: "seated-desk tall thin man (1.5 m, drawing)",
+            scene: near(seeded(
+                seated(base(&tall_thin_man, draw("SQOMKIGECA"), 1.5), true),
+                23,
+            )),
+            held_out: true,
+        },
+        Kind {
+            name: "seated-rest older short woman (1.1 m, no table)",
+            scene: near(seeded(
+                seated(base(&older_short_woman, MotionSpec::Rest, 1.1), false),
+                24,
             )),
             held_out: true,
         },

@@ -43,7 +43,14 @@ fn main() {
     let procedural = [Neutral, TPose, Wave, HandsInFront];
     let mut bodies: Vec<(&str, BodySpec, &[ScriptedPose])> = Vec::new();
     if matches!(which, "mh" | "both") {
-        bodies.push(("mh", BodySpec::MakeHuman { assets: None }, &mh));
+        bodies.push((
+            "mh",
+            BodySpec::MakeHuman {
+                assets: None,
+                shape: Default::default(),
+            },
+            &mh,
+        ));
     }
     if matches!(which, "procedural" | "both") {
         bodies.push((

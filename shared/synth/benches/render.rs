@@ -20,7 +20,16 @@ fn bench(c: &mut Criterion) {
     let mut bodies = vec![("procedural", BodySpec::Procedural(Default::default()))];
     let dir = makehuman::default_assets_dir();
     if makehuman::assets_present(&dir) {
-        bodies.insert(0, ("makehuman", BodySpec::MakeHuman { assets: Some(dir) }));
+        bodies.insert(
+            0,
+            (
+                "makehuman",
+                BodySpec::MakeHuman {
+                    assets: Some(dir),
+                    shape: Default::default(),
+                },
+            ),
+        );
     } else {
         println!(
             "MakeHuman assets missing in {}: run scripts/fetch-assets; benchmarking the procedural body only",

@@ -25,7 +25,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .unwrap_or_else(|| "docs/synth".into()),
     );
     let body = if args.iter().any(|a| a == "--makehuman") {
-        BodySpec::MakeHuman { assets: None }
+        BodySpec::MakeHuman {
+            assets: None,
+            shape: Default::default(),
+        }
     } else {
         BodySpec::Procedural(Default::default())
     };

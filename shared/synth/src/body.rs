@@ -112,6 +112,16 @@ impl Body {
         &self.bones
     }
 
+    /// Its mesh's vertices at rest (body frame: metres, y up, floor y = 0).
+    pub fn rest_vertices(&self) -> &[Point3<f32>] {
+        &self.verts
+    }
+
+    /// Its ground-truth joints at rest, in [`Joint::ALL`]'s order (body frame).
+    pub fn rest_joints(&self) -> [Point3<f32>; Joint::COUNT] {
+        self.joints.map(|(_, p)| p)
+    }
+
     /// The canonical skeleton of this body in the T-pose (lengths for motion scripts).
     pub fn tpose(&self) -> &TposeSkeleton {
         &self.tpose

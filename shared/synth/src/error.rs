@@ -36,6 +36,16 @@ pub enum SynthError {
         /// The file that is not there.
         missing: PathBuf,
     },
+    /// A MakeHuman body shape was asked for, but a macro target it needs is not in the
+    /// asset cache (one fetched before the targets were part of it).
+    #[error(
+        "MakeHuman shape target not found: {} is missing; rerun `airglyph fetch-assets` (it adds mpfb2/targets/macrodetails/ to an existing cache) or use the default shape",
+        missing.display()
+    )]
+    MissingTargets {
+        /// The file that is not there.
+        missing: PathBuf,
+    },
     /// Writing a recording failed.
     #[error(transparent)]
     Recording(#[from] airglyph_core::recording::RecordingError),

@@ -28,7 +28,10 @@
 //!   tapered capsules rigidly bound to 19 bones; height and build are parameters);
 //!   [`BodySpec::MakeHuman`] loads the MakeHuman CC0 body with its `cmu_mb` rig and
 //!   weights from the asset cache that `scripts/fetch-assets` fills (linear blend
-//!   skinning, 4 bones a vertex).
+//!   skinning, 4 bones a vertex), in any of MakeHuman's macro shapes
+//!   ([`MakeHumanShape`]: gender, age, muscle, weight, height, proportions, ethnic
+//!   mix; [`makehuman::shape`] says how its targets are weighed). The default shape is
+//!   the raw base mesh, the body every figure before shapes was measured on.
 //! - [`Pose`] on the canonical skeleton ([`Bone`], 19 bones, T-pose reference): what
 //!   every motion source produces and every body consumes.
 //! - [`MotionSpec`]: scripted poses ([`ScriptedPose`], the hard cases of the seed
@@ -63,6 +66,7 @@
 //! write_recording(cfg, frames, dir: &Path, progress: impl FnMut(usize))
 //!     -> Result<RecordingSummary, SynthError>   (+ joints.csv, gestures.csv)
 //! makehuman::default_assets_dir() -> PathBuf;  makehuman::assets_present(&Path) -> bool
+//! makehuman::targets_present(&Path) -> bool   MakeHumanShape::parse("gender=0,weight=0.8")
 //! ```
 //!
 //! Benchmark (`cargo bench -p airglyph-synth`): skinning + rendering the MakeHuman body
@@ -90,6 +94,7 @@ pub use airglyph_core::gestures::GestureTruth;
 pub use body::{Affine, Body, ProceduralBody};
 pub use canon::{Bone, Pose, TposeSkeleton};
 pub use error::SynthError;
+pub use makehuman::MakeHumanShape;
 pub use motion::{DrawSpec, MotionSpec};
 pub use poses::{Posture, ScriptedPose};
 pub use room::{Background, Chair, Mug, Prop, Table};
@@ -110,6 +115,9 @@ pub enum BodySpec {
     MakeHuman {
         /// The folder holding `mpfb2/`, or None for the default.
         assets: Option<PathBuf>,
+        /// Its macro shape (gender, age, muscle, weight, height, …); the default is the
+        /// raw base mesh, as before shapes existed.
+        shape: MakeHumanShape,
     },
 }
 
@@ -118,9 +126,9 @@ impl BodySpec {
     pub fn load(&self) -> Result<Body, SynthError> {
         match self {
             BodySpec::Procedural(p) => Body::procedural(p),
-            BodySpec::MakeHuman { assets } => {
+            BodySpec::MakeHuman { assets, shape } => {
                 let dir = assets.clone().unwrap_or_else(makehuman::default_assets_dir);
-                makehuman::load(&dir)
+                makehuman::load_shaped(&dir, shape)
             }
         }
     }
@@ -584,7 +592,8 @@ pub fn write_recording(
 fn describe(cfg: &SceneConfig) -> String {
     let body = match &cfg.body {
         BodySpec::Procedural(p) => format!("procedural-{:.2}m-{:.2}", p.height_m, p.build),
-        BodySpec::MakeHuman { .. } => "makehuman".into(),
+        BodySpec::MakeHuman { shape, .. } if shape.is_default() => "makehuman".into(),
+        BodySpec::MakeHuman { shape, .. } => format!("makehuman[{}]", shape.label()),
     };
     let motion = match &cfg.motion {
         MotionSpec::Poses => "poses".to_string(),

