@@ -259,7 +259,10 @@ fn seated_hanging_arms_are_not_pulled_into_the_chairs_back() {
     // which a single frame of hanging arms cannot learn (above). (Not yet: without the
     // sensor model at 1.2 and 1.4 m the fit's starts do not reach the hanging arms,
     // hands 22–31 cm off; pose NOTES, 2026-12-05, morning.)
-    let body = BodySpec::MakeHuman { assets: None };
+    let body = BodySpec::MakeHuman {
+        assets: None,
+        shape: Default::default(),
+    };
     if body.load().is_err() {
         eprintln!("skipped: the MakeHuman body is not fetched (scripts/fetch-assets)");
         return;
