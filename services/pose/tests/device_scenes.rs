@@ -84,6 +84,13 @@ fn error_m(r: &Skeleton, truth: &Skeleton, j: Joint) -> f32 {
     (r[j] - truth[j]).norm()
 }
 
+const ARMS: [Joint; 4] = [
+    Joint::LeftElbow,
+    Joint::RightElbow,
+    Joint::LeftHand,
+    Joint::RightHand,
+];
+
 const LEGS: [Joint; 4] = [
     Joint::LeftKnee,
     Joint::RightKnee,
@@ -153,12 +160,7 @@ fn arms_at_rest_are_found_in_a_single_frame_near_and_far() {
         let (r, truth) = single(at(distance_m, pose), 0);
         assert!(r.person_found, "{distance_m} m, {pose:?}");
         visibility_is_consistent(&r, &k);
-        for j in [
-            Joint::LeftElbow,
-            Joint::RightElbow,
-            Joint::LeftHand,
-            Joint::RightHand,
-        ] {
+        for j in ARMS {
             let e = error_m(&r.skeleton, &truth.skeleton, j);
             assert!(e < 0.2, "{distance_m} m, {pose:?}: {j:?} off by {e:.2} m");
         }
@@ -274,12 +276,7 @@ fn seated_hanging_arms_are_not_pulled_into_the_chairs_back() {
         let (r, truth) = single(upper_body(cfg), 0);
         assert!(r.person_found, "{distance_m} m");
         visibility_is_consistent(&r, &qvga());
-        for j in [
-            Joint::LeftElbow,
-            Joint::RightElbow,
-            Joint::LeftHand,
-            Joint::RightHand,
-        ] {
+        for j in ARMS {
             let e = error_m(&r.skeleton, &truth.skeleton, j);
             assert!(
                 e < 0.1,

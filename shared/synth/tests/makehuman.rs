@@ -86,24 +86,7 @@ fn makehuman_joints_lie_inside_the_silhouette() {
             motion: MotionSpec::Pose(pose),
             ..SceneConfig::default()
         };
-        let mut synth = Synthesizer::new(cfg).unwrap();
-        let k = synth.intrinsics();
-        let (depth, truth) = synth.render(0);
-        let mut seen = 0;
-        for j in Joint::ALL {
-            if !truth.visible[j.index()] {
-                continue;
-            }
-            seen += 1;
-            let p = truth.skeleton.get(j);
-            let (u, v) = k.project(&p).unwrap();
-            let d = depth.get(u.round() as u32, v.round() as u32);
-            assert!(
-                d > 0 && (d as f32) < p.z * 1000.0,
-                "{pose:?}: {j:?} d={d} z={}",
-                p.z
-            );
-        }
+        let seen = visible_joints_inside_the_surface(cfg, &format!("{pose:?}"));
         let min_seen = if pose == ScriptedPose::Sideways {
             8
         } else {
@@ -289,22 +272,7 @@ fn shaped_joints_lie_inside_the_silhouette() {
                 motion: MotionSpec::Pose(pose),
                 ..SceneConfig::default()
             };
-            let mut synth = Synthesizer::new(cfg).unwrap();
-            let k = synth.intrinsics();
-            let (depth, truth) = synth.render(0);
-            for j in Joint::ALL {
-                if !truth.visible[j.index()] {
-                    continue;
-                }
-                let p = truth.skeleton.get(j);
-                let (u, v) = k.project(&p).unwrap();
-                let d = depth.get(u.round() as u32, v.round() as u32);
-                assert!(
-                    d > 0 && (d as f32) < p.z * 1000.0,
-                    "{text} {pose:?}: {j:?} d={d} z={}",
-                    p.z
-                );
-            }
+            visible_joints_inside_the_surface(cfg, &format!("{text} {pose:?}"));
         }
     }
 }
@@ -383,4 +351,29 @@ fn a_corrupt_target_is_refused_with_its_file() {
     // Well-formed: the body loads.
     write(&names[0], &gz("0 0.1 0.2 0.3\n"));
     assert!(makehuman::load_shaped(dir.path(), &shape).is_ok());
+}
+
+/// Renders frame 0 of `cfg` and checks that every joint the truth calls visible
+/// projects onto a surface in front of it (the joint lies inside the body); returns how
+/// many were visible.
+fn visible_joints_inside_the_surface(cfg: SceneConfig, what: &str) -> usize {
+    let mut synth = Synthesizer::new(cfg).unwrap();
+    let k = synth.intrinsics();
+    let (depth, truth) = synth.render(0);
+    let mut seen = 0;
+    for j in Joint::ALL {
+        if !truth.visible[j.index()] {
+            continue;
+        }
+        seen += 1;
+        let p = truth.skeleton.get(j);
+        let (u, v) = k.project(&p).unwrap();
+        let d = depth.get(u.round() as u32, v.round() as u32);
+        assert!(
+            d > 0 && (d as f32) < p.z * 1000.0,
+            "{what}: {j:?} d={d} z={}",
+            p.z
+        );
+    }
+    seen
 }
