@@ -31,6 +31,11 @@ pub struct SegmentConfig {
     pub min_person_height: f32,
     /// Largest horizontal extent of a person (arms spread).
     pub max_person_width: f32,
+    /// Whether pixels between the two sides of a depth jump are taken for the sensor's
+    /// mixed ("flying") pixels and dropped before the blobs are found. Off: it frees a
+    /// seated person from a wide chair's back but costs other Kinect-like scenes as
+    /// much (the pose NOTES).
+    pub drop_flying_pixels: bool,
 }
 
 impl Default for SegmentConfig {
@@ -46,6 +51,7 @@ impl Default for SegmentConfig {
             max_person_area: 2.0,
             min_person_height: 0.4,
             max_person_width: 2.4,
+            drop_flying_pixels: false,
         }
     }
 }
@@ -296,6 +302,49 @@ fn ray_point(d: u16, ray_x: f32, ray_y: f32, band: (f32, f32)) -> Point3<f32> {
     }
 }
 
+/// The vertical extent of `blobs` together (metres): above the floor when there is
+/// one, else in the camera's frame.
+fn extent<'a>(blobs: impl IntoIterator<Item = &'a Blob>, floored: bool) -> f32 {
+    let (lo, hi) = blobs.into_iter().fold((f32::MAX, f32::MIN), |(lo, hi), b| {
+        if floored {
+            (lo.min(b.hmin.max(0.0)), hi.max(b.hmax))
+        } else {
+            (lo.min(b.min.y), hi.max(b.max.y))
+        }
+    });
+    hi - lo
+}
+
+/// A step within a surface smaller than this (metres) is noise, however small the
+/// steps beside it.
+const SURFACE_NOISE: f32 = 0.005;
+
+/// Whether the middle of five depths along a line (0: no data) is a mixed ("flying")
+/// pixel: it lies between its two neighbours, which lie farther apart than the fill
+/// steps, and off both their surfaces, by more than thrice the step each surface
+/// takes beside it. A depth sensor's matching window cut by a jump gives a pixel such a
+/// depth; the last pixel of a surface seen at a grazing angle (an arm's side before
+/// the chest) lies between too, but continues its surface's curve.
+#[inline]
+fn mixed([a2, a, z, b, b2]: [f32; 5], step: Step) -> bool {
+    let ((lo, lo2), (hi, hi2)) = if a < b {
+        ((a, a2), (b, b2))
+    } else {
+        ((b, b2), (a, a2))
+    };
+    let slope = |s: f32, s2: f32| {
+        if s2 > 0.0 {
+            (s - s2).abs().max(SURFACE_NOISE)
+        } else {
+            SURFACE_NOISE
+        }
+    };
+    lo > 0.0
+        && hi - lo >= step.reach(lo)
+        && z - lo > 3.0 * slope(lo, lo2)
+        && hi - z > 3.0 * slope(hi, hi2)
+}
+
 /// Reusable buffers of the segmentation step.
 #[derive(Debug, Default)]
 pub struct Segmenter {
@@ -320,6 +369,8 @@ pub struct Segmenter {
     queue: Vec<u32>,
     reached: Vec<u32>,
     visited: Vec<bool>,
+    /// The pixels [`Segmenter::drop_flying_pixels`] drops.
+    flying: Vec<u32>,
 }
 
 struct Blob {
@@ -480,6 +531,13 @@ impl Segmenter {
     ) -> Segmentation {
         let (w, h) = (win.w, win.h);
         self.back_project(depth, k, cfg, &win, points);
+        let step = Step {
+            inv_f: 2.0 / (k.fx + k.fy),
+            jump: (cfg.blob_jump_px, cfg.blob_jump_min),
+        };
+        if cfg.drop_flying_pixels {
+            self.drop_flying_pixels(points, &win, step);
+        }
         if let Some(pl) = floor {
             for v in win.v0..=win.v1 {
                 for p in &mut points[win.row(v)] {
@@ -501,10 +559,6 @@ impl Segmenter {
         self.labels.fill(u32::MAX);
         self.filled.clear();
         let mut blobs: Vec<Blob> = Vec::new();
-        let step = Step {
-            inv_f: 2.0 / (k.fx + k.fy),
-            jump: (cfg.blob_jump_px, cfg.blob_jump_min),
-        };
         for v in win.v0..=win.v1 {
             for start in win.row(v) {
                 if points[start].z <= 0.0 || self.labels[start] != u32::MAX {
@@ -534,12 +588,12 @@ impl Segmenter {
             if b.cut || b.area < cfg.min_person_area || b.area > cfg.max_person_area {
                 continue;
             }
-            let height = if floor.is_some() {
-                b.hmax - b.hmin.max(0.0)
-            } else {
-                b.max.y - b.min.y
-            };
-            if height < cfg.min_person_height {
+            let height = extent([b], floor.is_some());
+            let tracked = prev_centroid.is_some_and(|c| (b.moments.mean() - c).norm() < TRACKED);
+            // A forearm raised before the face can cut the tracked person in two, neither
+            // as tall as a person: a piece of them keeps the track, and is judged with
+            // the parts it gathers below.
+            if height < cfg.min_person_height && !tracked {
                 continue;
             }
             let width = (b.max.x - b.min.x).max(0.0);
@@ -556,10 +610,8 @@ impl Segmenter {
             }
             // Largest in the image: of two people, the nearer one.
             let mut score = b.pixels as f32;
-            if let Some(c) = prev_centroid {
-                if (b.moments.mean() - c).norm() < TRACKED {
-                    score *= 1.5;
-                }
+            if tracked {
+                score *= 1.5;
             }
             if best.is_none_or(|(s, _)| score > s) {
                 best = Some((score, bi));
@@ -582,6 +634,10 @@ impl Segmenter {
         if let Some((_, bi)) = best {
             let b = &blobs[bi];
             let limbs = self.body_parts(points, w, h, &blobs, bi, cfg);
+            let whole = limbs.iter().map(|&li| &blobs[li]).chain([b]);
+            if extent(whole, floor.is_some()) < cfg.min_person_height {
+                return seg;
+            }
             let mut pixels = b.pixels;
             let mut bbox = b.bbox;
             for &li in &limbs {
@@ -764,6 +820,41 @@ impl Segmenter {
             {
                 *p = ray_point(d, ray_x, ray_y, band);
             }
+        }
+    }
+
+    /// Takes the depth from the pixels of `win` the sensor mixed across a depth jump
+    /// ([`mixed`]), along a row or a column: one of them joins a chair's back to the
+    /// person sitting before it.
+    fn drop_flying_pixels(&mut self, points: &mut [Point3<f32>], win: &Window, step: Step) {
+        let w = win.w;
+        // Depth 0 (no data) beyond the window.
+        let z = |u: usize, v: usize| {
+            if (win.u0..=win.u1).contains(&u) && (win.v0..=win.v1).contains(&v) {
+                points[v * w + u].z
+            } else {
+                0.0
+            }
+        };
+        self.flying.clear();
+        for v in win.v0..=win.v1 {
+            for u in win.u0..=win.u1 {
+                let here = points[v * w + u].z;
+                if here <= 0.0 {
+                    continue;
+                }
+                let (l, r) = (u.wrapping_sub(1), u.wrapping_sub(2));
+                let (t, b) = (v.wrapping_sub(1), v.wrapping_sub(2));
+                let row = [z(r, v), z(l, v), here, z(u + 1, v), z(u + 2, v)];
+                let column = [z(u, b), z(u, t), here, z(u, v + 1), z(u, v + 2)];
+                if mixed(row, step) || mixed(column, step) {
+                    self.flying.push((v * w + u) as u32);
+                }
+            }
+        }
+        // Judged on the image as measured, dropped after.
+        for &i in &self.flying {
+            points[i as usize] = Point3::origin();
         }
     }
 
@@ -1234,6 +1325,127 @@ mod tests {
             }
         }
         (img, k)
+    }
+
+    /// A person-sized cylinder 1.2 m away before a wider board 25 cm behind it (a
+    /// chair's back), with the board's pixels beside the cylinder's sides at a depth
+    /// between the two, as a depth sensor's matching window gives them.
+    fn person_before_a_chair_with_flying_pixels() -> (airglyph_core::DepthImage, Intrinsics) {
+        let k = Intrinsics::default().scaled_to(320, 240);
+        let mut img = airglyph_core::DepthImage::empty(k.width, k.height);
+        let person = |u: u32, v: u32| {
+            let ray = k.back_project(u as f32, v as f32, 1.0);
+            let (x, y) = (ray.x * 1.2, ray.y * 1.2);
+            (x.abs() < 0.18 && y.abs() < 0.6).then(|| 1.2 - (0.0324 - x * x).max(0.0).sqrt())
+        };
+        for v in 0..k.height {
+            for u in 0..k.width {
+                let ray = k.back_project(u as f32, v as f32, 1.0);
+                let (x, y) = (ray.x * 1.45, ray.y * 1.45);
+                let z = match person(u, v) {
+                    Some(z) => z,
+                    None if x.abs() < 0.3 && (-0.3..0.45).contains(&y) => {
+                        let beside = [u.wrapping_sub(1), u + 1]
+                            .iter()
+                            .filter_map(|&n| person(n, v))
+                            .next();
+                        beside.map_or(1.45, |near| (near + 1.45) / 2.0)
+                    }
+                    None => continue,
+                };
+                img.set(u, v, (z * 1000.0) as u16);
+            }
+        }
+        (img, k)
+    }
+
+    #[test]
+    fn flying_pixels_do_not_join_a_chairs_back_to_the_person() {
+        let (img, k) = person_before_a_chair_with_flying_pixels();
+        let chair_points = |drop_flying_pixels: bool| {
+            let cfg = SegmentConfig {
+                drop_flying_pixels,
+                ..SegmentConfig::default()
+            };
+            let mut s = Segmenter::default();
+            let (mut points, mut mask) = (Vec::new(), Vec::new());
+            let seg = s.run(
+                &img.view(),
+                &k,
+                &cfg,
+                None,
+                None,
+                None,
+                &mut points,
+                &mut mask,
+            );
+            assert!(seg.found);
+            let mut body = Vec::new();
+            s.body_points(&mask, &mut body, |_| true);
+            (0..mask.len())
+                .filter(|&i| body[i] && points[i].z > 1.4)
+                .count()
+        };
+        // The pixels between bridge the jump: the board is the person's own blob, and
+        // nothing of it leaves the body's points.
+        assert!(chair_points(false) > 1000, "the scene bridges the jump");
+        assert_eq!(chair_points(true), 0);
+    }
+
+    #[test]
+    fn a_tracked_person_cut_in_two_by_a_forearm_is_still_found() {
+        // Seen from the waist up, 0.7 m of them, 1.3 m away, with a forearm held
+        // across them 0.3 m nearer: neither half is as tall as a person.
+        let k = Intrinsics::default().scaled_to(320, 240);
+        let mut img = airglyph_core::DepthImage::empty(k.width, k.height);
+        for v in 0..k.height {
+            for u in 0..k.width {
+                let ray = k.back_project(u as f32, v as f32, 1.0);
+                let (x, y) = (ray.x * 1.3, ray.y * 1.3);
+                if x.abs() < 0.2 && y.abs() < 0.35 {
+                    img.set(
+                        u,
+                        v,
+                        (1300.0 - 200.0 * (0.04 - x * x).max(0.0).sqrt()) as u16,
+                    );
+                }
+                let (x, y) = (ray.x, ray.y);
+                if x.abs() < 0.26 && y.abs() < 0.04 {
+                    img.set(u, v, 1000);
+                }
+            }
+        }
+        let found = |prev_centroid: Option<Point3<f32>>| {
+            let mut s = Segmenter::default();
+            let (mut points, mut mask) = (Vec::new(), Vec::new());
+            let cfg = SegmentConfig::default();
+            let seg = s.run(
+                &img.view(),
+                &k,
+                &cfg,
+                None,
+                prev_centroid,
+                None,
+                &mut points,
+                &mut mask,
+            );
+            let rows = |v: std::ops::Range<usize>| {
+                v.flat_map(|v| (0..k.width as usize).map(move |u| v * k.width as usize + u))
+                    .filter(|&i| mask[i])
+                    .count()
+            };
+            let (middle, h) = (k.cy as usize, k.height as usize);
+            (seg.found, rows(0..middle - 12), rows(middle + 12..h))
+        };
+        // Without a track neither half is taken for a person; with the person's last
+        // place, both halves and the forearm are.
+        assert!(!found(None).0);
+        let (tracked, above, below) = found(Some(Point3::new(0.0, 0.0, 1.25)));
+        assert!(tracked);
+        assert!(
+            above > 1000 && below > 1000,
+            "{above} pixels above, {below} below"
+        );
     }
 
     #[test]
