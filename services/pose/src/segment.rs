@@ -31,11 +31,9 @@ pub struct SegmentConfig {
     pub min_person_height: f32,
     /// Largest horizontal extent of a person (arms spread).
     pub max_person_width: f32,
-    /// Whether pixels between the two sides of a depth jump are taken for the sensor's
-    /// mixed ("flying") pixels and dropped before the blobs are found. Off: it frees a
-    /// seated person from a wide chair's back but costs other Kinect-like scenes as
-    /// much (the pose NOTES).
-    pub drop_flying_pixels: bool,
+    /// What becomes of pixels between the two sides of a depth jump, taken for the
+    /// sensor's mixed ("flying") pixels, before the blobs are found.
+    pub flying_pixels: FlyingPixels,
 }
 
 impl Default for SegmentConfig {
@@ -51,9 +49,22 @@ impl Default for SegmentConfig {
             max_person_area: 2.0,
             min_person_height: 0.4,
             max_person_width: 2.4,
-            drop_flying_pixels: false,
+            flying_pixels: FlyingPixels::Keep,
         }
     }
+}
+
+/// What the segmentation does with a depth sensor's mixed ("flying") pixels.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FlyingPixels {
+    /// Left as measured.
+    Keep,
+    /// Left without data: no blob takes them.
+    Drop,
+    /// Given the nearer surface's depth: that surface's blob takes them, and they no
+    /// longer bridge the jump.
+    ToNearer,
 }
 
 /// A plane `n · x + d = 0` with unit normal pointing up, out of the floor.
@@ -319,14 +330,14 @@ fn extent<'a>(blobs: impl IntoIterator<Item = &'a Blob>, floored: bool) -> f32 {
 /// steps beside it.
 const SURFACE_NOISE: f32 = 0.005;
 
-/// Whether the middle of five depths along a line (0: no data) is a mixed ("flying")
-/// pixel: it lies between its two neighbours, which lie farther apart than the fill
+/// The nearer neighbour's depth when the middle of five depths along a line (0: no
+/// data) is a mixed ("flying") pixel: it lies between its two neighbours, which lie farther apart than the fill
 /// steps, and off both their surfaces, by more than thrice the step each surface
 /// takes beside it. A depth sensor's matching window cut by a jump gives a pixel such a
 /// depth; the last pixel of a surface seen at a grazing angle (an arm's side before
 /// the chest) lies between too, but continues its surface's curve.
 #[inline]
-fn mixed([a2, a, z, b, b2]: [f32; 5], step: Step) -> bool {
+fn mixed([a2, a, z, b, b2]: [f32; 5], step: Step) -> Option<f32> {
     let ((lo, lo2), (hi, hi2)) = if a < b {
         ((a, a2), (b, b2))
     } else {
@@ -339,10 +350,11 @@ fn mixed([a2, a, z, b, b2]: [f32; 5], step: Step) -> bool {
             SURFACE_NOISE
         }
     };
-    lo > 0.0
+    (lo > 0.0
         && hi - lo >= step.reach(lo)
         && z - lo > 3.0 * slope(lo, lo2)
-        && hi - z > 3.0 * slope(hi, hi2)
+        && hi - z > 3.0 * slope(hi, hi2))
+    .then_some(lo)
 }
 
 /// Reusable buffers of the segmentation step.
@@ -369,8 +381,9 @@ pub struct Segmenter {
     queue: Vec<u32>,
     reached: Vec<u32>,
     visited: Vec<bool>,
-    /// The pixels [`Segmenter::drop_flying_pixels`] drops.
-    flying: Vec<u32>,
+    /// The pixels [`Segmenter::mend_flying_pixels`] mends, with their nearer
+    /// neighbour's depth.
+    flying: Vec<(u32, f32)>,
 }
 
 struct Blob {
@@ -535,8 +548,8 @@ impl Segmenter {
             inv_f: 2.0 / (k.fx + k.fy),
             jump: (cfg.blob_jump_px, cfg.blob_jump_min),
         };
-        if cfg.drop_flying_pixels {
-            self.drop_flying_pixels(points, &win, step);
+        if cfg.flying_pixels != FlyingPixels::Keep {
+            self.mend_flying_pixels(points, &win, step, cfg.flying_pixels);
         }
         if let Some(pl) = floor {
             for v in win.v0..=win.v1 {
@@ -584,18 +597,18 @@ impl Segmenter {
         // stand before what borders them.
         let mut best_before: Option<(f32, usize)> = None;
         let mut best: Option<(f32, usize)> = None;
+        let mut best_short: Option<(f32, usize)> = None;
         for (bi, b) in blobs.iter().enumerate() {
             if b.cut || b.area < cfg.min_person_area || b.area > cfg.max_person_area {
                 continue;
             }
             let height = extent([b], floor.is_some());
             let tracked = prev_centroid.is_some_and(|c| (b.moments.mean() - c).norm() < TRACKED);
-            // A forearm raised before the face can cut the tracked person in two, neither
-            // as tall as a person: a piece of them keeps the track, and is judged with
-            // the parts it gathers below.
-            if height < cfg.min_person_height && !tracked {
-                continue;
-            }
+            // A forearm raised before the face can cut a person in two, neither as tall
+            // as a person: a piece of the tracked person keeps the track, and with no
+            // track the largest piece stands in when no blob is tall enough; either is
+            // judged with the parts it gathers below.
+            let short = height < cfg.min_person_height && !tracked;
             let width = (b.max.x - b.min.x).max(0.0);
             if width > cfg.max_person_width || height > 2.6 {
                 continue;
@@ -613,6 +626,12 @@ impl Segmenter {
             if tracked {
                 score *= 1.5;
             }
+            if short {
+                if best_short.is_none_or(|(s, _)| score > s) {
+                    best_short = Some((score, bi));
+                }
+                continue;
+            }
             if best.is_none_or(|(s, _)| score > s) {
                 best = Some((score, bi));
             }
@@ -629,7 +648,8 @@ impl Segmenter {
         let best = match (best_before, best) {
             (Some(f), Some(b)) if f.0 * 2.0 >= b.0 => Some(f),
             (_, b) => b,
-        };
+        }
+        .or(best_short);
         mask.fill(false);
         if let Some((_, bi)) = best {
             let b = &blobs[bi];
@@ -823,10 +843,16 @@ impl Segmenter {
         }
     }
 
-    /// Takes the depth from the pixels of `win` the sensor mixed across a depth jump
-    /// ([`mixed`]), along a row or a column: one of them joins a chair's back to the
+    /// Mends the pixels of `win` the sensor mixed across a depth jump ([`mixed`]),
+    /// along a row or a column, as `how` says: one of them joins a chair's back to the
     /// person sitting before it.
-    fn drop_flying_pixels(&mut self, points: &mut [Point3<f32>], win: &Window, step: Step) {
+    fn mend_flying_pixels(
+        &mut self,
+        points: &mut [Point3<f32>],
+        win: &Window,
+        step: Step,
+        how: FlyingPixels,
+    ) {
         let w = win.w;
         // Depth 0 (no data) beyond the window.
         let z = |u: usize, v: usize| {
@@ -847,14 +873,24 @@ impl Segmenter {
                 let (t, b) = (v.wrapping_sub(1), v.wrapping_sub(2));
                 let row = [z(r, v), z(l, v), here, z(u + 1, v), z(u + 2, v)];
                 let column = [z(u, b), z(u, t), here, z(u, v + 1), z(u, v + 2)];
-                if mixed(row, step) || mixed(column, step) {
-                    self.flying.push((v * w + u) as u32);
+                let nearer = match (mixed(row, step), mixed(column, step)) {
+                    (Some(a), Some(b)) => Some(a.min(b)),
+                    (a, b) => a.or(b),
+                };
+                if let Some(near) = nearer {
+                    self.flying.push(((v * w + u) as u32, near));
                 }
             }
         }
-        // Judged on the image as measured, dropped after.
-        for &i in &self.flying {
-            points[i as usize] = Point3::origin();
+        // Judged on the image as measured, mended after.
+        for &(i, near) in &self.flying {
+            let p = &mut points[i as usize];
+            *p = match how {
+                FlyingPixels::Keep => *p,
+                FlyingPixels::Drop => Point3::origin(),
+                // Along its ray: the camera-frame point scales with its depth.
+                FlyingPixels::ToNearer => *p * (near / p.z),
+            };
         }
     }
 
@@ -1362,9 +1398,9 @@ mod tests {
     #[test]
     fn flying_pixels_do_not_join_a_chairs_back_to_the_person() {
         let (img, k) = person_before_a_chair_with_flying_pixels();
-        let chair_points = |drop_flying_pixels: bool| {
+        let chair_points = |flying_pixels: FlyingPixels| {
             let cfg = SegmentConfig {
-                drop_flying_pixels,
+                flying_pixels,
                 ..SegmentConfig::default()
             };
             let mut s = Segmenter::default();
@@ -1388,12 +1424,16 @@ mod tests {
         };
         // The pixels between bridge the jump: the board is the person's own blob, and
         // nothing of it leaves the body's points.
-        assert!(chair_points(false) > 1000, "the scene bridges the jump");
-        assert_eq!(chair_points(true), 0);
+        assert!(
+            chair_points(FlyingPixels::Keep) > 1000,
+            "the scene bridges the jump"
+        );
+        assert_eq!(chair_points(FlyingPixels::Drop), 0);
+        assert_eq!(chair_points(FlyingPixels::ToNearer), 0);
     }
 
     #[test]
-    fn a_tracked_person_cut_in_two_by_a_forearm_is_still_found() {
+    fn a_person_cut_in_two_by_a_forearm_is_still_found() {
         // Seen from the waist up, 0.7 m of them, 1.3 m away, with a forearm held
         // across them 0.3 m nearer: neither half is as tall as a person.
         let k = Intrinsics::default().scaled_to(320, 240);
@@ -1437,15 +1477,39 @@ mod tests {
             let (middle, h) = (k.cy as usize, k.height as usize);
             (seg.found, rows(0..middle - 12), rows(middle + 12..h))
         };
-        // Without a track neither half is taken for a person; with the person's last
-        // place, both halves and the forearm are.
-        assert!(!found(None).0);
-        let (tracked, above, below) = found(Some(Point3::new(0.0, 0.0, 1.25)));
-        assert!(tracked);
-        assert!(
-            above > 1000 && below > 1000,
-            "{above} pixels above, {below} below"
+        // With the person's last place or without, both halves and the forearm are the
+        // person.
+        for prev in [None, Some(Point3::new(0.0, 0.0, 1.25))] {
+            let (found, above, below) = found(prev);
+            assert!(found, "tracked: {}", prev.is_some());
+            assert!(
+                above > 1000 && below > 1000,
+                "{above} pixels above, {below} below"
+            );
+        }
+        // A box shorter than a person, alone, is none.
+        let mut boxed = airglyph_core::DepthImage::empty(k.width, k.height);
+        for v in 0..k.height {
+            for u in 0..k.width {
+                let ray = k.back_project(u as f32, v as f32, 1.0);
+                if (ray.x * 1.3).abs() < 0.2 && (ray.y * 1.3).abs() < 0.15 {
+                    boxed.set(u, v, 1300 + (u % 7) as u16 * 10);
+                }
+            }
+        }
+        let (mut points, mut mask) = (Vec::new(), Vec::new());
+        let cfg = SegmentConfig::default();
+        let seg = Segmenter::default().run(
+            &boxed.view(),
+            &k,
+            &cfg,
+            None,
+            None,
+            None,
+            &mut points,
+            &mut mask,
         );
+        assert!(!seg.found);
     }
 
     #[test]
