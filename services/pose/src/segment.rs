@@ -381,6 +381,8 @@ pub struct Segmenter {
     queue: Vec<u32>,
     reached: Vec<u32>,
     visited: Vec<bool>,
+    /// The floor's pixels [`Segmenter::drop_floor`] drops.
+    floor_points: Vec<u32>,
     /// The pixels [`Segmenter::mend_flying_pixels`] mends, with their nearer
     /// neighbour's depth.
     flying: Vec<(u32, f32)>,
@@ -552,13 +554,7 @@ impl Segmenter {
             self.mend_flying_pixels(points, &win, step, cfg.flying_pixels);
         }
         if let Some(pl) = floor {
-            for v in win.v0..=win.v1 {
-                for p in &mut points[win.row(v)] {
-                    if p.z > 0.0 && pl.height(p).abs() < cfg.floor_margin {
-                        *p = Point3::origin();
-                    }
-                }
-            }
+            self.drop_floor(points, &win, &pl, cfg.floor_margin);
         }
         let mut seg = Segmentation {
             floor,
@@ -840,6 +836,48 @@ impl Segmenter {
             {
                 *p = ray_point(d, ray_x, ray_y, band);
             }
+        }
+    }
+
+    /// Drops the points of `win` within `margin` of the floor plane `pl`, but for those
+    /// of an upright surface that reaches down to it: the floor hidden by a table, the
+    /// plane found is the table's top, and the belly just above it is no floor.
+    fn drop_floor(&mut self, points: &mut [Point3<f32>], win: &Window, pl: &Plane, margin: f32) {
+        // A neighbour two rows away this near lies on the same surface.
+        const SAME_SURFACE2: f32 = 0.05 * 0.05;
+        let w = win.w;
+        // Along the surface from `p` to `q`, two rows up or down: across the floor it
+        // runs level (within 30° of the plane), up a belly along the plane's normal;
+        // None when `q` lies on another surface.
+        let level = |p: &Point3<f32>, q: &Point3<f32>| {
+            let d = q - p;
+            let length2 = d.norm_squared();
+            (q.z > 0.0 && length2 <= SAME_SURFACE2).then(|| pl.n.dot(&d).powi(2) < 0.25 * length2)
+        };
+        self.floor_points.clear();
+        let cols = win.u0..win.u1 + 1;
+        for v in win.v0..=win.v1 {
+            let row_of = |r: usize| &points[r * w..][cols.clone()];
+            let up = (v >= win.v0 + 2).then(|| row_of(v - 2));
+            let down = (v + 2 <= win.v1).then(|| row_of(v + 2));
+            for (k, p) in row_of(v).iter().enumerate() {
+                if p.z <= 0.0 || pl.height(p).abs() >= margin {
+                    continue;
+                }
+                let above = up.and_then(|r| level(p, &r[k]));
+                // Most of the floor: level with the row above.
+                let floor = above == Some(true)
+                    || match down.and_then(|r| level(p, &r[k])) {
+                        Some(level) => level,
+                        None => above.is_none(),
+                    };
+                if floor {
+                    self.floor_points.push((v * w + win.u0 + k) as u32);
+                }
+            }
+        }
+        for &i in &self.floor_points {
+            points[i as usize] = Point3::origin();
         }
     }
 
@@ -1510,6 +1548,44 @@ mod tests {
             &mut mask,
         );
         assert!(!seg.found);
+    }
+
+    #[test]
+    fn a_belly_just_above_a_table_top_taken_for_the_floor_is_no_floor() {
+        // A table top 0.4 m under the camera from 0.8 to 1.3 m away, and a belly, an
+        // upright surface 1.35 m away, down to the top's level behind it.
+        let (w, h, f) = (160, 160, 240.0);
+        let top = Plane {
+            n: Vector3::new(0.0, -1.0, 0.0),
+            d: 0.4,
+        };
+        let points: Vec<Point3<f32>> = (0..w * h)
+            .map(|i| {
+                let ray = Vector3::new((i % w) as f32 - 80.0, (i / w) as f32 - 40.0, f) / f;
+                let on_top = ray.y > 0.0 && (0.8..1.3).contains(&(0.4 / ray.y));
+                let on_belly = ray.y * 1.35 <= 0.4 && ray.x.abs() * 1.35 < 0.2;
+                match (on_top, on_belly) {
+                    (true, _) => Point3::from(ray * (0.4 / ray.y)),
+                    (false, true) => Point3::from(ray * 1.35),
+                    _ => Point3::origin(),
+                }
+            })
+            .collect();
+        let near_top = |pts: &[Point3<f32>], belly: bool| {
+            pts.iter()
+                .filter(|p| p.z > 0.0 && top.height(p).abs() < 0.03 && (p.z > 1.32) == belly)
+                .count()
+        };
+        let belly = near_top(&points, true);
+        assert!(belly > 100 && near_top(&points, false) > 100);
+        let mut kept = points.clone();
+        Segmenter::default().drop_floor(&mut kept, &Window::whole(w, h), &top, 0.03);
+        assert_eq!(
+            near_top(&kept, true),
+            near_top(&points, true),
+            "the belly stays"
+        );
+        assert_eq!(near_top(&kept, false), 0, "the top goes");
     }
 
     #[test]

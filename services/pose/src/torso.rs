@@ -572,7 +572,22 @@ impl TorsoEstimator {
                 best = Some((pose, residual, matches));
             }
         }
-        let (pose, residual, matches) = best.unwrap_or((init, f32::INFINITY, 0));
+        let (mut pose, mut residual, mut matches) = best.unwrap_or((init, f32::INFINITY, 0));
+        // A torso's front and back look alike to the model: one that turned its back to
+        // the camera (a belly down to a table top, the forearms on it) is also tried
+        // turned round, which is kept when it explains the points about as well.
+        let facing = |p: &TorsoPose| (p.r * Vector3::z()).dot(&-p.t) > 0.0;
+        if residual.is_finite() && !facing(&pose) {
+            let round = Rotation3::from_axis_angle(&Vector3::y_axis(), std::f32::consts::PI);
+            let start = Rigid {
+                r: pose.r * round,
+                t: pose.t,
+            };
+            let (p, r, m) = self.register(points, mask, width, height, cfg, start);
+            if p.is_finite() && facing(&p) && r < FRONT_BACK_SLACK * residual {
+                (pose, residual, matches) = (p, r, m);
+            }
+        }
         Some(TorsoFit {
             pose,
             residual,
@@ -584,6 +599,10 @@ impl TorsoEstimator {
         })
     }
 }
+
+/// A torso turned to face the camera is kept over one facing away when its residual is
+/// at most this many times the other's.
+const FRONT_BACK_SLACK: f32 = 1.5;
 
 /// Half the distance, along the camera's x, between the ends of the mask's run through
 /// pixel `at` in its row.
