@@ -1294,15 +1294,36 @@ mod tests {
         k: &Intrinsics,
         last: Option<&Segmentation>,
     ) -> (Segmentation, Vec<Point3<f32>>, Vec<bool>) {
-        let (mut points, mut mask) = (Vec::new(), Vec::new());
-        let cfg = SegmentConfig::default();
-        let seg = s.run(
-            &img.view(),
+        segment_with(
+            s,
+            img,
             k,
-            &cfg,
+            &SegmentConfig::default(),
             last.and_then(|l| l.floor),
             last.map(|l| l.centroid),
             last.filter(|l| l.found).map(|l| l.bbox),
+        )
+    }
+
+    /// [`Segmenter::run`] on `img` with `cfg`, given the last frame's floor, person's
+    /// centroid and box.
+    fn segment_with(
+        s: &mut Segmenter,
+        img: &airglyph_core::DepthImage,
+        k: &Intrinsics,
+        cfg: &SegmentConfig,
+        floor: Option<Plane>,
+        centroid: Option<Point3<f32>>,
+        bbox: Option<(u32, u32, u32, u32)>,
+    ) -> (Segmentation, Vec<Point3<f32>>, Vec<bool>) {
+        let (mut points, mut mask) = (Vec::new(), Vec::new());
+        let seg = s.run(
+            &img.view(),
+            k,
+            cfg,
+            floor,
+            centroid,
+            bbox,
             &mut points,
             &mut mask,
         );
@@ -1442,17 +1463,7 @@ mod tests {
                 ..SegmentConfig::default()
             };
             let mut s = Segmenter::default();
-            let (mut points, mut mask) = (Vec::new(), Vec::new());
-            let seg = s.run(
-                &img.view(),
-                &k,
-                &cfg,
-                None,
-                None,
-                None,
-                &mut points,
-                &mut mask,
-            );
+            let (seg, points, mask) = segment_with(&mut s, &img, &k, &cfg, None, None, None);
             assert!(seg.found);
             let mut body = Vec::new();
             s.body_points(&mask, &mut body, |_| true);
@@ -1494,18 +1505,15 @@ mod tests {
             }
         }
         let found = |prev_centroid: Option<Point3<f32>>| {
-            let mut s = Segmenter::default();
-            let (mut points, mut mask) = (Vec::new(), Vec::new());
             let cfg = SegmentConfig::default();
-            let seg = s.run(
-                &img.view(),
+            let (seg, _, mask) = segment_with(
+                &mut Segmenter::default(),
+                &img,
                 &k,
                 &cfg,
                 None,
                 prev_centroid,
                 None,
-                &mut points,
-                &mut mask,
             );
             let rows = |v: std::ops::Range<usize>| {
                 v.flat_map(|v| (0..k.width as usize).map(move |u| v * k.width as usize + u))
@@ -1535,18 +1543,7 @@ mod tests {
                 }
             }
         }
-        let (mut points, mut mask) = (Vec::new(), Vec::new());
-        let cfg = SegmentConfig::default();
-        let seg = Segmenter::default().run(
-            &boxed.view(),
-            &k,
-            &cfg,
-            None,
-            None,
-            None,
-            &mut points,
-            &mut mask,
-        );
+        let (seg, _, _) = segment(&mut Segmenter::default(), &boxed, &k, None);
         assert!(!seg.found);
     }
 
