@@ -44,6 +44,19 @@ fn main() {
                 assets: None,
                 shape: Default::default(),
             };
+        } else if let Some(text) = a.strip_prefix("mhshape:") {
+            cfg.body = airglyph_synth::BodySpec::MakeHuman {
+                assets: None,
+                shape: airglyph_synth::MakeHumanShape::parse(text).expect("a shape"),
+            };
+        } else if let Some(hb) = a.strip_prefix("proc:") {
+            let (h, b) = hb.split_once(',').expect("proc:HEIGHT,BUILD");
+            cfg.body = airglyph_synth::BodySpec::Procedural(airglyph_synth::ProceduralBody {
+                height_m: h.parse().expect("a height"),
+                build: b.parse().expect("a build"),
+            });
+        } else if let Some(n) = a.strip_prefix("seed:") {
+            cfg.seed = n.parse().expect("a seed");
         } else if a == "follow" {
             cfg.placement.follow = true;
         } else if a == "noise" {
@@ -106,6 +119,7 @@ fn main() {
             pcfg.register.shape = serde_json::from_str(&text).expect("a Shape");
         }
     }
+    let pcfg_torso = pcfg.torso.clone();
     let mut est = PoseEstimator::new(k, pcfg);
     let mut ev = PoseEval::default();
     if let Some(d) = &out {
@@ -197,6 +211,39 @@ fn main() {
                 est.debug().register_energy * 1e4
             )
             .unwrap();
+        }
+        if std::env::var("TORSO").is_ok() {
+            if let Some(tp) = est.debug().torso_pose {
+                let kp = pcfg_torso
+                    .keypoints
+                    .map(|[x, y, z]| tp.apply(&nalgebra::Point3::new(x, y, z)));
+                let e = |p: nalgebra::Point3<f32>, j: Joint| (p - truth.skeleton[j]).norm() * 100.0;
+                println!(
+                    "TORSO {i} reinit {} res {:.1} neck {:.0} ls {:.0} rs {:.0} torso {:.0}",
+                    est.debug().torso_reinit,
+                    est.debug().torso_residual * 100.0,
+                    e(kp.neck, Joint::Neck),
+                    e(kp.left_shoulder, Joint::LeftShoulder),
+                    e(kp.right_shoulder, Joint::RightShoulder),
+                    e(kp.torso, Joint::Torso)
+                );
+                // The fit's error in its own frame (left, up, forward), cm, and its tilt.
+                let d = tp.r.inverse() * (kp.neck - truth.skeleton[Joint::Neck]) * 100.0;
+                let tup = (truth.skeleton[Joint::Neck] - truth.skeleton[Joint::Pelvis]).normalize();
+                let tl = (truth.skeleton[Joint::LeftShoulder]
+                    - truth.skeleton[Joint::RightShoulder])
+                    .normalize();
+                let up = tp.r * nalgebra::Vector3::y();
+                let left = tp.r * nalgebra::Vector3::x();
+                println!(
+                    "  neck off (l,u,f) ({:.0} {:.0} {:.0}) up off {:.0} deg left off {:.0} deg",
+                    d.x,
+                    d.y,
+                    d.z,
+                    up.angle(&tup).to_degrees(),
+                    left.angle(&tl).to_degrees()
+                );
+            }
         }
         if let Some(d) = &mut dump {
             use std::io::Write;

@@ -2,7 +2,7 @@
 //! sees, with and without the sensor model: one table, and a JSON line a row.
 //!
 //! `cargo run --release -p airglyph-pose --example scenes -- [KIND…] [frames:N]
-//!  [every:N] [single] [json:FILE] [overlays:DIR] [set:FIELD=VALUE]` (default: every
+//!  [every:N] [single] [seeds:+K] [json:FILE] [overlays:DIR] [set:FIELD=VALUE]` (default: every
 //! kind, whole clips; `scripts/eval pose` runs it). KIND filters rows by name prefix;
 //! `single` estimates every frame afresh, with no history (as single real frames are
 //! scored); `every:N` scores every Nth frame only.
@@ -252,6 +252,12 @@ fn main() {
         .iter()
         .find_map(|a| a.strip_prefix("every:"))
         .map_or(1, |n| n.parse::<usize>().expect("every:N").max(1));
+    // seeds:+K: every row's seed moved by K (another draw of the same scene: motion,
+    // noise), to tell a change's effect from one first frame's luck.
+    let seed_shift = args
+        .iter()
+        .find_map(|a| a.strip_prefix("seeds:+"))
+        .map_or(0, |n| n.parse::<u64>().expect("seeds:+K"));
     let filters: Vec<&String> = args
         .iter()
         .filter(|a| !a.contains(':') && *a != "single")
@@ -265,6 +271,7 @@ fn main() {
         for noise in [false, true] {
             let scene = SceneConfig {
                 sensor_noise: noise,
+                seed: kind.scene.seed + seed_shift,
                 ..kind.scene.clone()
             };
             let mut synth = match Synthesizer::new(scene) {
