@@ -395,6 +395,14 @@ impl TorsoEstimator {
         if fwd.z > 0.0 {
             fwd = -fwd;
         }
+        // The surface a camera sees of a torso faces it, turned or not: a region whose
+        // flattest direction lies far from the camera's ray is flattest for another
+        // reason (forearms along a table, a belly above it), and then the ray is the
+        // better guess.
+        let to_camera = -pca.mean.coords.normalize();
+        if fwd.dot(&to_camera) < FACING_COS {
+            fwd = to_camera;
+        }
         let left = up.cross(&fwd).try_normalize(1e-6)?;
         let fwd = left.cross(&up).try_normalize(1e-6)?;
         let up = fwd.cross(&left);
@@ -599,6 +607,10 @@ impl TorsoEstimator {
         })
     }
 }
+
+/// The PCA's flattest direction is taken for the torso's forward only within this
+/// cosine (45°) of the ray to the camera.
+const FACING_COS: f32 = std::f32::consts::FRAC_1_SQRT_2;
 
 /// A torso turned to face the camera is kept over one facing away when its residual is
 /// at most this many times the other's.
