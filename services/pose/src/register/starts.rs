@@ -73,7 +73,7 @@ pub fn starts<'a>(
     let mut free = Vec::new();
     if let Some(geo) = geodesic.filter(|_| tracked.is_none()) {
         for body in [Some(geo), upright].iter().flatten() {
-            for arms in [[false, false], [true, true], [true, false], [false, true]] {
+            for arms in ArmAtRest::STARTS {
                 free.extend(resting(tpl, body, arms));
             }
         }
@@ -153,15 +153,47 @@ fn hybrid_start(
     changed.then_some(h)
 }
 
-/// `geo` standing straight, with the left (`arms[0]`) and right (`arms[1]`) arm hanging
-/// (along the body down from the shoulder, a little out from the side, the elbow a
-/// little bent).
-fn resting(tpl: &BodyTemplate, geo: &BodyPose, arms: [bool; 2]) -> Option<BodyPose> {
+/// Where a start puts an arm of a person at rest.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum ArmAtRest {
+    /// Where the geodesic estimate has it.
+    Estimated,
+    /// Hanging along the body down from the shoulder, a little out from the side, the
+    /// elbow a little bent.
+    Hanging,
+    /// The upper arm down and a little in, the forearm down, forward and in: the hands
+    /// together before the lap (a heavy body's arms rest so, around the belly).
+    Clasped,
+}
+
+impl ArmAtRest {
+    /// The arm pairs (left, right) a person found afresh is also looked for in.
+    const STARTS: [[ArmAtRest; 2]; 5] = {
+        use ArmAtRest::*;
+        [
+            [Estimated, Estimated],
+            [Hanging, Hanging],
+            [Hanging, Estimated],
+            [Estimated, Hanging],
+            [Clasped, Clasped],
+        ]
+    };
+}
+
+/// `geo` standing straight, with the left (`arms[0]`) and right (`arms[1]`) arm at rest
+/// as asked.
+fn resting(tpl: &BodyTemplate, geo: &BodyPose, arms: [ArmAtRest; 2]) -> Option<BodyPose> {
     use airglyph_core::Joint;
     let mut s = Posed::new(tpl, geo).skeleton(tpl);
     let down = (s[Joint::Pelvis] - s[Joint::Neck]).try_normalize(1e-6)?;
     let left = s[Joint::LeftHip] - s[Joint::RightHip];
     let left = (left - down * down.dot(&left)).try_normalize(1e-6)?;
+    // The body's frame is (left, up, forward), right-handed.
+    let forward = down.cross(&left);
+    // Standing straight, the head upright: the geodesic estimate tilts it onto the
+    // shoulder when the head's maximum lies beside its top (an ear, a cheek).
+    let neck_to_head = (s[Joint::Head] - s[Joint::Neck]).norm();
+    s.set(Joint::Head, s[Joint::Neck] - down * neck_to_head);
     for (hip, knee, foot, shin) in [
         (
             Joint::LeftHip,
@@ -182,7 +214,7 @@ fn resting(tpl: &BodyTemplate, geo: &BodyPose, arms: [bool; 2]) -> Option<BodyPo
         s.set(knee, k);
         s.set(foot, k + down * shin_len);
     }
-    for (side, (shoulder, elbow, hand, fore)) in [
+    for ((side, (shoulder, elbow, hand, fore)), arm) in [
         (
             1.0f32,
             (
@@ -204,16 +236,21 @@ fn resting(tpl: &BodyTemplate, geo: &BodyPose, arms: [bool; 2]) -> Option<BodyPo
     ]
     .into_iter()
     .zip(arms)
-    .filter_map(|(arm, hang)| hang.then_some(arm))
     {
         let upper_len = tpl.origin[fore.index()].norm();
         let fore_len = tpl.joints[hand.index()].1.coords.norm();
-        let e = s[shoulder] + (down + left * (side * 0.15)).normalize() * upper_len;
+        let out = left * side;
+        let (upper, forearm) = match arm {
+            ArmAtRest::Estimated => continue,
+            ArmAtRest::Hanging => (down + out * 0.15, down + out * 0.1),
+            ArmAtRest::Clasped => (
+                down + forward * 0.1 - out * 0.2,
+                down + forward * 0.3 - out * 0.3,
+            ),
+        };
+        let e = s[shoulder] + upper.normalize() * upper_len;
         s.set(elbow, e);
-        s.set(
-            hand,
-            e + (down + left * (side * 0.1)).normalize() * fore_len,
-        );
+        s.set(hand, e + forearm.normalize() * fore_len);
     }
     BodyPose::from_skeleton(tpl, &s)
 }
