@@ -71,6 +71,21 @@ impl Tracking {
     /// torso step runs in full, so the geodesic start stays independent of the
     /// tracking.
     fn torso_start(&mut self, cfg: &PoseConfig) -> (TorsoStart, bool) {
+        // A tracked body that has turned its back to the camera is taken to have
+        // turned round by mistake: depth alone hardly tells a back from a front, a
+        // person at a device faces it, and a registration that swapped left and right
+        // explains the frame as well as the right one and keeps it.
+        let turned_away = self.torso.is_some_and(|pose| {
+            (pose.r * Vector3::z()).dot(&-pose.t.normalize()) < TURNED_AWAY_COS
+        });
+        if turned_away {
+            *self = Tracking {
+                floor: self.floor,
+                centroid: self.centroid,
+                bbox: self.bbox,
+                ..Tracking::default()
+            };
+        }
         self.frames_tracked += 1;
         let redetect = self.frames_tracked >= cfg.register.race.redetect_every.max(1);
         let tracked = (!redetect)
@@ -526,6 +541,10 @@ const FOOT_BELOW_NECK: f32 = 0.8;
 /// The cosine of the largest angle between the torso's forward and the ray to the camera
 /// at which its back plane still tells what lies behind the body (45°).
 const FACING_COS: f32 = std::f32::consts::FRAC_1_SQRT_2;
+
+/// A tracked torso turned further than this from facing the camera (120°) is lost
+/// ([`Tracking::torso_start`]).
+const TURNED_AWAY_COS: f32 = -0.5;
 
 /// Whether `p` projects inside the image of camera `k`.
 fn inside(k: &Intrinsics, p: &Point3<f32>) -> bool {
