@@ -395,14 +395,6 @@ impl TorsoEstimator {
         if fwd.z > 0.0 {
             fwd = -fwd;
         }
-        // The surface a camera sees of a torso faces it, turned or not: a region whose
-        // flattest direction lies far from the camera's ray is flattest for another
-        // reason (forearms along a table, a belly above it), and then the ray is the
-        // better guess.
-        let to_camera = -pca.mean.coords.normalize();
-        if fwd.dot(&to_camera) < FACING_COS {
-            fwd = to_camera;
-        }
         let left = up.cross(&fwd).try_normalize(1e-6)?;
         let fwd = left.cross(&up).try_normalize(1e-6)?;
         let up = fwd.cross(&left);
@@ -566,6 +558,12 @@ impl TorsoEstimator {
                 });
             }
         }
+        // The surface a camera sees of a torso faces it, turned or not: a region whose
+        // flattest direction lies far from the camera's ray is flattest for another
+        // reason (forearms along a table, a belly above it), and then the ray is the
+        // better guess for a torso found afresh. (Tracking keeps its own turn, and
+        // there the region's forward only places the start behind its surface.)
+        let init = facing_the_camera(init, cfg);
         // From PCA the torso is taken to face the camera; a person seen from the side
         // fits the model turned a quarter, so those are tried as well.
         let mut best: Option<(TorsoPose, f32, usize)> = None;
@@ -608,9 +606,32 @@ impl TorsoEstimator {
     }
 }
 
-/// The PCA's flattest direction is taken for the torso's forward only within this
+/// The PCA's flattest direction is taken for a fresh torso's forward only within this
 /// cosine (45°) of the ray to the camera.
 const FACING_COS: f32 = std::f32::consts::FRAC_1_SQRT_2;
+
+/// `init`, the torso region's PCA frame ([`TorsoEstimator::initial_pose`]), turned about
+/// its up to face the camera when its forward lies farther than [`FACING_COS`] from the
+/// ray, its surface point (the region's centre) kept.
+fn facing_the_camera(init: TorsoPose, cfg: &TorsoConfig) -> TorsoPose {
+    let behind = 0.8 * cfg.half_depth;
+    let fwd = init.r * Vector3::z();
+    let surface = init.t + fwd * behind;
+    let to_camera = -surface.normalize();
+    if fwd.dot(&to_camera) >= FACING_COS {
+        return init;
+    }
+    let up = init.r * Vector3::y();
+    let Some(left) = up.cross(&to_camera).try_normalize(1e-6) else {
+        return init;
+    };
+    let fwd = left.cross(&up);
+    let r = Rotation3::from_matrix_unchecked(Matrix3::from_columns(&[left, up, fwd]));
+    Rigid {
+        r,
+        t: surface - fwd * behind,
+    }
+}
 
 /// A torso turned to face the camera is kept over one facing away when its residual is
 /// at most this many times the other's.
