@@ -2,8 +2,10 @@
 //! figures and writes overlays (green = truth, red = estimate).
 //!
 //! `cargo run --release -p airglyph-pose --example devloop -- [pose:NAME|bvh:FILE|draw:SYMBOLS]
-//!  [mh] [follow] [noise] [floor|room] [seated] [table] [mug] [upper] [partial] [single] [qvga] [lateral:M] [dist:M]
-//!  [yaw:DEG] [frames] [oracle|oracle-only] [overlays:DIR] [from:N] [every:N] [set:FIELD=VALUE]`
+//!  [mh|mhshape:SLIDERS|proc:HEIGHT,BUILD] [seed:N] [follow] [noise] [floor|room] [seated] [table] [mug]
+//!  [upper] [partial] [single] [qvga] [lateral:M] [dist:M] [yaw:DEG] [frames] [oracle|oracle-only]
+//!  [overlays:DIR] [from:N] [every:N] [set:FIELD=VALUE]`; with `SERIES=FILE` a line a frame,
+//!  `DUMP=FILE` the joints, `TORSO=1` the torso step's error each frame.
 #![allow(clippy::needless_range_loop)]
 
 mod support;
