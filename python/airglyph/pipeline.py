@@ -106,7 +106,13 @@ class Receiver:
         """The next message (a copy), or None when none came within `timeout_s`."""
         sample = self._subscriber.receive()
         if sample is None:
-            self._listener.timed_wait(iox2.Duration.from_secs_f64(timeout_s))
+            try:
+                self._listener.timed_wait(iox2.Duration.from_secs_f64(timeout_s))
+            except iox2.ListenerWaitError as e:
+                # A signal (Ctrl-C, SIGTERM) woke the wait: the program's handler has
+                # run, and the caller decides whether to stop; anything else is an error.
+                if str(e) != "InterruptSignal":
+                    raise
             sample = self._subscriber.receive()
         if sample is None:
             return None
