@@ -201,7 +201,7 @@ fn the_python_example_prints_the_demos_gestures() {
     assert!(demo.wait().unwrap().success());
     let got = take_lines(&heard, from_demo.len(), Duration::from_secs(5));
     signal(&example, libc::SIGTERM);
-    let _ = example.wait();
+    let ended = example.wait().unwrap();
     assert_eq!(
         got.iter().map(gesture_identity).collect::<Vec<_>>(),
         from_demo.iter().map(gesture_identity).collect::<Vec<_>>(),
@@ -216,4 +216,6 @@ fn the_python_example_prints_the_demos_gestures() {
     let mut run_keys = keys(&from_demo[0]);
     run_keys.retain(|k| k != "drawn");
     assert_eq!(keys(&got[0]), run_keys);
+    // Stopped by a signal mid-wait, it ends cleanly (iceoryx2's wait raised on it).
+    assert!(ended.success(), "the example ended with {ended}");
 }
