@@ -19,8 +19,8 @@ use crate::register::{
 use crate::segment::{Plane, Segmentation, Segmenter, TRACKED};
 use crate::smooth::Smoother;
 use crate::torso::{
-    anchored_at_head_top, facing_from_feet, head_top_of_mask, keypoints, TorsoEstimator, TorsoFit,
-    TorsoPoints, TorsoPose, TorsoStart,
+    anchored_at_head_top, facing, facing_from_feet, head_top_of_mask, keypoints, TorsoEstimator,
+    TorsoFit, TorsoPoints, TorsoPose, TorsoStart, FACING_COS,
 };
 use crate::Limb;
 use airglyph_core::{DepthView, Intrinsics, Joint, Skeleton};
@@ -75,17 +75,14 @@ impl Tracking {
     /// tracking.
     fn torso_start(&mut self, cfg: &PoseConfig) -> (TorsoStart, bool) {
         // A tracked body not seen whole lately (cut short of its feet by the image's
-        // edge or a table) that has turned its back to the camera is taken to have turned round by mistake:
-        // depth alone hardly tells a back from a front, a person at a device faces it,
-        // and a registration that swapped left and right explains the frame as well
-        // as the right one and keeps it. (A whole person may well turn round, and its
-        // feet tell: CMU 01_03, side-on, was 0.3 cm worse when whole bodies were lost
-        // so too.)
+        // edge or a table) that has turned its back to the camera is taken to have
+        // turned round by mistake: depth alone hardly tells a back from a front, a
+        // person at a device faces it, and a registration that swapped left and right
+        // explains the frame as well as the right one and keeps it. (A whole person
+        // may well turn round, and its feet tell: CMU 01_03, side-on, was 0.3 cm
+        // worse when whole bodies were lost so too.)
         let whole = self.since_foot.is_some_and(|n| n < FEET_MEMORY);
-        let turned_away = !whole
-            && self.torso.is_some_and(|pose| {
-                (pose.r * Vector3::z()).dot(&-pose.t.normalize()) < TURNED_AWAY_COS
-            });
+        let turned_away = !whole && self.torso.is_some_and(|p| facing(&p) < TURNED_AWAY_COS);
         if turned_away {
             *self = Tracking {
                 floor: self.floor,
@@ -438,9 +435,7 @@ impl PoseEstimator {
             // the camera (side-on, its back lies along the rays and a far limb behind
             // it) and cut short of its feet (a far leg seen through a gap of a whole
             // body was taken for one).
-            let forward = torso.pose.r * Vector3::z();
-            let facing = forward.dot(&-torso.pose.t.normalize()) > FACING_COS;
-            let mask = if facing && !foot_seen {
+            let mask = if facing(&torso.pose) > FACING_COS && !foot_seen {
                 let inv = torso.pose.inverse();
                 let back = cfg.torso.half_depth;
                 s.segmenter
@@ -550,10 +545,6 @@ const FOOT_BY_ITS_CUT: f32 = 0.2;
 /// How far below the neck a leg's tip must lie to be a foot, metres: a seated child's
 /// feet lie farther.
 const FOOT_BELOW_NECK: f32 = 0.8;
-
-/// The cosine of the largest angle between the torso's forward and the ray to the camera
-/// at which its back plane still tells what lies behind the body (45°).
-const FACING_COS: f32 = std::f32::consts::FRAC_1_SQRT_2;
 
 /// A tracked torso turned further than this from facing the camera (120°) is lost
 /// ([`Tracking::torso_start`])...

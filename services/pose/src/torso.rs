@@ -582,15 +582,14 @@ impl TorsoEstimator {
         // A torso's front and back look alike to the model: one that turned its back to
         // the camera (a belly down to a table top, the forearms on it) is also tried
         // turned round, which is kept when it explains the points about as well.
-        let facing = |p: &TorsoPose| (p.r * Vector3::z()).dot(&-p.t) > 0.0;
-        if residual.is_finite() && !facing(&pose) {
+        if residual.is_finite() && facing(&pose) <= 0.0 {
             let round = Rotation3::from_axis_angle(&Vector3::y_axis(), std::f32::consts::PI);
             let start = Rigid {
                 r: pose.r * round,
                 t: pose.t,
             };
             let (p, r, m) = self.register(points, mask, width, height, cfg, start);
-            if p.is_finite() && facing(&p) && r < FRONT_BACK_SLACK * residual {
+            if p.is_finite() && facing(&p) > 0.0 && r < FRONT_BACK_SLACK * residual {
                 (pose, residual, matches) = (p, r, m);
             }
         }
@@ -606,9 +605,17 @@ impl TorsoEstimator {
     }
 }
 
-/// The PCA's flattest direction is taken for a fresh torso's forward only within this
-/// cosine (45°) of the ray to the camera.
-const FACING_COS: f32 = std::f32::consts::FRAC_1_SQRT_2;
+/// The cosine of the largest angle between a torso's forward and the ray to the camera
+/// at which it counts as facing the camera (45°): a fresh torso's forward is the PCA's
+/// only within it, and only within it does the torso's back plane tell what lies
+/// behind the body.
+pub(crate) const FACING_COS: f32 = std::f32::consts::FRAC_1_SQRT_2;
+
+/// The cosine of the angle between `pose`'s forward and the ray from it to the camera:
+/// 1 facing the camera, −1 its back to it.
+pub(crate) fn facing(pose: &TorsoPose) -> f32 {
+    (pose.r * Vector3::z()).dot(&-pose.t.normalize())
+}
 
 /// `init`, the torso region's PCA frame ([`TorsoEstimator::initial_pose`]), turned about
 /// its up to face the camera when its forward lies farther than [`FACING_COS`] from the

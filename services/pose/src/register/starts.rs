@@ -65,7 +65,8 @@ pub fn starts<'a>(
     // Arms at rest lie against the body: no geodesic maximum marks their hands, and the
     // estimate sends them after whatever maximum there is; a leg's maximum may be its
     // knee, or the legs may be out of view. So a person found afresh is also looked for
-    // standing straight, with either arm or both hanging. (Raced against a tracked
+    // standing straight, head upright, with either arm or both hanging or the hands
+    // together ([`ArmAtRest::STARTS`]). (Raced against a tracked
     // body, these won frames they should not: tracking keeps its own starts.) Close
     // up, with the arms merged into the torso's silhouette, the estimate's torso is
     // tilted, and no local step from there reaches arms hanging: so, when asked
