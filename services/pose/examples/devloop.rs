@@ -5,7 +5,8 @@
 //!  [mh|mhshape:SLIDERS|proc:HEIGHT,BUILD] [seed:N] [follow] [noise] [floor|room] [seated] [table] [mug]
 //!  [upper] [partial] [single] [qvga] [lateral:M] [dist:M] [yaw:DEG] [frames] [oracle|oracle-only]
 //!  [overlays:DIR] [from:N] [every:N] [set:FIELD=VALUE]`; with `SERIES=FILE` a line a frame,
-//!  `DUMP=FILE` the joints, `TORSO=1` the torso step's error each frame.
+//!  `DUMP=FILE` the joints, `TORSO=1` the torso step's error each frame, `HIDDENDBG=1` each
+//!  joint out of view but reported visible (where the estimate and the truth project).
 #![allow(clippy::needless_range_loop)]
 
 mod support;
@@ -301,6 +302,17 @@ fn main() {
                 if !truth.skeleton.visible[j] {
                     hidden[j].0 += 1;
                     hidden[j].1 += usize::from(r.skeleton.visible[j]);
+                    if r.skeleton.visible[j] && std::env::var_os("HIDDENDBG").is_some() {
+                        let (e, t) = (r.skeleton.joints[j], truth.skeleton.joints[j]);
+                        eprintln!(
+                            "frame {i} {:?} shown: est {:.2?} px {:?} truth {:.2?} px {:?}",
+                            Joint::ALL[j],
+                            e.coords.as_slice(),
+                            k.project(&e),
+                            t.coords.as_slice(),
+                            k.project(&t)
+                        );
+                    }
                 }
             }
         }
