@@ -68,6 +68,12 @@ struct Tracking {
 }
 
 impl Tracking {
+    /// Whether a foot was seen lately: the person was seen whole, not cut short by the
+    /// image's edge or a table.
+    fn seen_whole(&self) -> bool {
+        self.since_foot.is_some_and(|n| n < FEET_MEMORY)
+    }
+
     /// Where this frame's torso step starts, and whether it runs in full (detecting):
     /// while the registration tracks the body, its torso needs no registration of its
     /// own; every [`crate::config::RaceConfig::redetect_every`] frames the seed's
@@ -81,8 +87,8 @@ impl Tracking {
         // explains the frame as well as the right one and keeps it. (A whole person
         // may well turn round, and its feet tell: CMU 01_03, side-on, was 0.3 cm
         // worse when whole bodies were lost so too.)
-        let whole = self.since_foot.is_some_and(|n| n < FEET_MEMORY);
-        let turned_away = !whole && self.torso.is_some_and(|p| facing(&p) < TURNED_AWAY_COS);
+        let turned_away =
+            !self.seen_whole() && self.torso.is_some_and(|p| facing(&p) < TURNED_AWAY_COS);
         if turned_away {
             *self = Tracking {
                 floor: self.floor,
@@ -440,6 +446,16 @@ impl PoseEstimator {
                 let back = cfg.torso.half_depth;
                 s.segmenter
                     .body_points(&s.mask, &mut s.body_mask, |p| inv.apply(&p).z < -back);
+                // Where the person leans on the chair's back, back and chair meet
+                // with no depth jump and the chair is one part with the body: its
+                // points are then left out one by one, those behind the torso's back
+                // by more than the sensor's noise. Not for a body seen whole lately:
+                // a boxer's elbow drawn back, a leg stepping back, lie there too.
+                if !t.seen_whole() {
+                    for (m, p) in s.body_mask.iter_mut().zip(&s.points) {
+                        *m &= p.z <= 0.0 || inv.apply(p).z >= -back - CHAIR_BEHIND_BACK;
+                    }
+                }
                 &s.body_mask
             } else {
                 &s.mask
@@ -552,6 +568,10 @@ const TURNED_AWAY_COS: f32 = -0.5;
 
 /// ...unless a foot was seen within this many frames (2 s at 30 frames/s).
 const FEET_MEMORY: usize = 60;
+
+/// How far behind the torso's back a point of a body cut short of its feet is taken
+/// for the chair's, metres: beyond the sensor's noise there.
+const CHAIR_BEHIND_BACK: f32 = 0.05;
 
 /// Whether `p` projects inside the image of camera `k`.
 fn inside(k: &Intrinsics, p: &Point3<f32>) -> bool {

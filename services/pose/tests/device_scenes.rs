@@ -337,3 +337,28 @@ fn at_a_desk_with_the_forearms_on_it_a_single_frame_faces_the_camera() {
         assert!(e < 0.1, "{j:?} off by {e:.2} m");
     }
 }
+
+#[test]
+fn a_chair_back_wider_than_the_person_leaning_on_it_is_no_part_of_them() {
+    // A short woman leaning on a chair's back wider than her: back and chair meet with
+    // no depth jump, the chair is one part with her, and the fit took it for arms (an
+    // elbow and a hand 39 cm off, up the chair's back, at 1.0 m with the sensor).
+    let body = BodySpec::MakeHuman {
+        assets: None,
+        shape: airglyph_synth::MakeHumanShape::parse("gender=0,age=0.85,height=0.3,weight=0.7")
+            .expect("a shape"),
+    };
+    if body.load().is_err() {
+        eprintln!("skipped: the MakeHuman body is not fetched (scripts/fetch-assets)");
+        return;
+    }
+    let mut cfg = seated(at(1.0, ScriptedPose::ArmsAtSides), false);
+    cfg.body = body;
+    let (r, truth) = single(upper_body(cfg), 0);
+    assert!(r.person_found);
+    visibility_is_consistent(&r, &qvga());
+    for j in ARMS {
+        let e = error_m(&r.skeleton, &truth.skeleton, j);
+        assert!(e < 0.1, "{j:?} off by {e:.2} m");
+    }
+}
