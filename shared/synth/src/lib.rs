@@ -37,9 +37,14 @@
 //! - [`MotionSpec`]: scripted poses ([`ScriptedPose`], the hard cases of the seed
 //!   paper), BVH clips (any naming convention, rest-pose offsets handled), and
 //!   air-drawing of symbols ([`DrawSpec`]) with ground-truth gesture boundaries.
+//! - [`hand`]: hands in static postures ([`HandPosture`]: open, fist, point, thumb-up,
+//!   V, pinch), a procedural hand of articulated fingers sized from the body's forearm
+//!   that replaces the body's own where [`SceneConfig::hands`] asks, turned at the wrist
+//!   as it says; [`FrameTruth::hands`] gives each hand's posture, palm, orientation and
+//!   fingertips.
 //! - [`raster::Raster`]: the z-buffer rasterizer; [`sensor`]: the Kinect-like noise.
 //! - [`write_recording`]: a whole recording on disk (airglyph-core's format, plus
-//!   `joints.csv` and, for air-drawing, `gestures.csv`).
+//!   `joints.csv`, for air-drawing `gestures.csv`, and with hand postures `hands.csv`).
 //!
 //! Everything is deterministic given [`SceneConfig::seed`].
 //!
@@ -64,7 +69,7 @@
 //! synth.fps() -> f32                    synth.gestures() -> Vec<GestureTruth>
 //! synth.labels() -> &[u8]               (per pixel: the Bone seen, or raster::NO_LABEL)
 //! write_recording(cfg, frames, dir: &Path, progress: impl FnMut(usize))
-//!     -> Result<RecordingSummary, SynthError>   (+ joints.csv, gestures.csv)
+//!     -> Result<RecordingSummary, SynthError>   (+ joints.csv, gestures.csv, hands.csv)
 //! makehuman::default_assets_dir() -> PathBuf;  makehuman::assets_present(&Path) -> bool
 //! makehuman::targets_present(&Path) -> bool   MakeHumanShape::parse("gender=0,weight=0.8")
 //! ```
@@ -587,8 +592,9 @@ pub struct RecordingSummary {
 }
 
 /// Renders `frames` frames (fewer if the motion is shorter) into a new recording in
-/// `dir`: airglyph-core's format with `joints.csv`, and `gestures.csv`
-/// (`label,start_frame,end_frame`) when the motion air-draws. `progress` is called
+/// `dir`: airglyph-core's format with `joints.csv`, `gestures.csv`
+/// (`label,start_frame,end_frame`) when the motion air-draws, and `hands.csv` (each
+/// hand's truth, [`hand::CSV_HEADER`]) when the scene sets a hand's posture or turn. `progress` is called
 /// after every frame with the number written so far.
 pub fn write_recording(
     cfg: SceneConfig,
@@ -603,10 +609,18 @@ pub fn write_recording(
     let mut writer =
         RecordingWriter::create(dir, RecordingInfo::new(k, synth.fps(), source), true)?;
     let mut depth = vec![0u16; (k.width * k.height) as usize];
+    let mut hands = if synth.cfg.hands != Hands::default() {
+        Some(hand::HandsCsv::create(&dir.join("hands.csv"))?)
+    } else {
+        None
+    };
     for i in 0..n {
         let truth = synth.render_into(i, &mut depth)?;
         let view = DepthView::new(k.width, k.height, &depth).expect("sized from intrinsics");
         writer.write_frame(view, truth.capture_ns, Some(&truth.skeleton))?;
+        if let Some(csv) = &mut hands {
+            csv.write(i, &truth.hands)?;
+        }
         progress(i + 1);
     }
     let gestures: Vec<GestureTruth> = synth

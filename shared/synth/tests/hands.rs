@@ -364,3 +364,36 @@ fn extreme_wrist_angles_do_not_panic() {
     let e = Synthesizer::new(cfg).err().unwrap().to_string();
     assert!(e.contains("finite"), "{e}");
 }
+
+/// A recording of a scene with hand postures has hands.csv, a row per hand and frame
+/// with the truth; one without has none.
+#[test]
+fn a_recording_with_postures_writes_their_truth() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut cfg = scene(Some(HandPosture::Point), 1.2);
+    cfg.hands.left.posture = None;
+    airglyph_synth::write_recording(cfg.clone(), 2, dir.path(), |_| {}).unwrap();
+    let text = std::fs::read_to_string(dir.path().join("hands.csv")).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines[0], airglyph_synth::hand::CSV_HEADER);
+    assert_eq!(lines.len(), 1 + 2 * 2);
+    let columns = lines[0].split(',').count();
+    for l in &lines[1..] {
+        assert_eq!(l.split(',').count(), columns, "{l}");
+    }
+    assert!(lines[1].starts_with("0,left,,"), "{}", lines[1]);
+    assert!(lines[2].starts_with("0,right,point,"), "{}", lines[2]);
+    let truth = Synthesizer::new(cfg).unwrap().render(1).1.hands.right;
+    let tip = truth.fingertips.unwrap()[1];
+    let row: Vec<f32> = lines[4]
+        .split(',')
+        .skip(3)
+        .map(|v| v.parse().unwrap())
+        .collect();
+    // length, wrist, palm, normal, finger, thumb side (1 + 5 × 3), the thumb's tip,
+    // then the index's.
+    assert!((row[16 + 3] - tip.x).abs() < 1e-4 && (row[18 + 3] - tip.z).abs() < 1e-4);
+    let plain = tempfile::tempdir().unwrap();
+    airglyph_synth::write_recording(SceneConfig::default(), 1, plain.path(), |_| {}).unwrap();
+    assert!(!plain.path().join("hands.csv").exists());
+}

@@ -11,16 +11,19 @@
 //! Pieces: [`HandPosture`] (the postures and their finger angles), `shape` (the
 //! capsules of a posture), `mesh` (their triangles), `attach` (where a hand is in a
 //! frame: its frame, the wrist's turn, the truth), `render` (drawing the hands of a
-//! scene in place of the body's).
+//! scene in place of the body's), `record` (`hands.csv` beside a recording).
 
 mod attach;
 mod mesh;
 mod posture;
+mod record;
 mod render;
 mod shape;
 
 pub(crate) use attach::turn_wrists;
 pub use posture::{Finger, HandPosture};
+pub(crate) use record::HandsCsv;
+pub use record::HEADER as CSV_HEADER;
 pub(crate) use render::HandRenderer;
 
 use crate::poses::Side;
