@@ -1,12 +1,16 @@
-//! Renders close-ups of the right hand in every posture at 0.8, 1.2, 2 and 2.7 m from
-//! the camera (rows), palm to the camera, fingers up: depth shaded around the palm's
-//! depth (nearer is brighter), one pixel of the camera as a block of pixels, so that
-//! what a posture classifier gets at each distance can be looked at.
+//! Renders close-ups of the right hand in every posture (columns: open, fist, point,
+//! thumb-up, v, pinch), palm to the camera, raised beside the head, so that what a
+//! posture classifier gets can be looked at: depth shaded around the palm's depth
+//! (nearer is brighter; the hand's pixels yellowish, the arm's bluish), each camera
+//! pixel a block, 0.3 m across a cell; the truth marked (fingertips red, palm centre
+//! green, wrist blue).
 //!
-//! cargo run -p airglyph-synth --example hand_postures -- [OUT_DIR] [--makehuman]
+//! cargo run --release -p airglyph-synth --example hand_postures -- [OUT_DIR] [--makehuman]
 //!
-//! Writes hand_postures.png (noise-free) and hand_postures_noise.png (with the sensor
-//! model) into OUT_DIR (default target/hand_postures).
+//! Writes into OUT_DIR (default docs/synth/hands): hand_postures.png (rows: 0.8, 1.2,
+//! 2 and 2.7 m from the camera), hand_postures_noise.png (the same through the sensor
+//! model), hand_postures_turns.png (at 1.2 m, the wrist turned: roll 90°, 180°, −90°,
+//! pitch 60°, −60°).
 
 use airglyph_synth::{
     BodySpec, HandPosture, HandSpec, MotionSpec, SceneConfig, ScriptedPose, Synthesizer,
@@ -16,7 +20,7 @@ use std::path::PathBuf;
 
 const DISTANCES: [f32; 4] = [0.8, 1.2, 2.0, 2.7];
 /// The side of a cell in the picture, pixels, and of the scene it shows, metres.
-const CELL: u32 = 200;
+const CELL: u32 = 128;
 const SPAN_M: f32 = 0.30;
 
 /// The right hand raised beside the head in `posture`, its palm `hand_m` from the
@@ -122,7 +126,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         args.iter()
             .find(|a| !a.starts_with("--"))
             .cloned()
-            .unwrap_or_else(|| "target/hand_postures".into()),
+            .unwrap_or_else(|| "docs/synth/hands".into()),
     );
     let body = if args.iter().any(|a| a == "--makehuman") {
         BodySpec::MakeHuman {
