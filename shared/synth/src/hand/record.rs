@@ -47,7 +47,7 @@ impl HandsCsv {
             let v = |v: &Vector3<f32>| format!("{:.5},{:.5},{:.5}", v.x, v.y, v.z);
             let tips = match &h.fingertips {
                 Some(t) => t.iter().map(p).collect::<Vec<_>>().join(","),
-                None => vec![",,"; 5].join(","),
+                None => [",,"; 5].join(","),
             };
             self.line(format!(
                 "{frame},{},{},{:.5},{},{},{},{},{},{tips}",
