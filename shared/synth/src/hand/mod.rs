@@ -90,7 +90,9 @@ impl HandSpec {
     }
 }
 
-/// The ground truth of one hand in one frame, in the camera frame (metres).
+/// The ground truth of one hand in one frame, in the camera frame (metres). For the
+/// body's own hand (no posture) the palm centre and length are where and what the
+/// procedural hand's would be, on the same bone.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HandTruth {
     /// The posture rendered; `None` when the body's own hand is drawn.
