@@ -260,6 +260,17 @@ mod tests {
                 "gender=0,weight=0.8,height=0.3",
             ],
             &[
+                "synth",
+                "--out",
+                "x",
+                "--hand-posture",
+                "right=point,left=open",
+                "--hand-roll",
+                "right=-45",
+                "--hand-pitch",
+                "both=30",
+            ],
+            &[
                 "record",
                 "--source",
                 "synthetic",
@@ -315,6 +326,24 @@ mod tests {
                 .err()
                 .unwrap_or_else(|| panic!("{shape} was taken"));
             assert!(e.to_string().contains(says), "{shape}: {e}");
+        }
+    }
+
+    /// A bad hand posture is refused when the line is parsed, naming it and listing the
+    /// postures there are.
+    #[test]
+    fn a_bad_hand_posture_is_refused() {
+        for (arg, value, says) in [
+            ("--hand-posture", "right=peace", "\"peace\" is not a hand posture: expected one of open, fist, point, thumb-up, v, pinch"),
+            ("--hand-posture", "middle=open", "left, right or both"),
+            ("--hand-roll", "right=sideways", "\"sideways\" is not an angle"),
+            ("--hand-pitch", "left=-400", "within ±360"),
+        ] {
+            let argv = ["airglyph", "synth", "--out", "x", arg, value];
+            let e = Cli::try_parse_from(argv)
+                .err()
+                .unwrap_or_else(|| panic!("{arg} {value} was taken"));
+            assert!(e.to_string().contains(says), "{arg} {value}: {e}");
         }
     }
 }

@@ -37,9 +37,14 @@
 //! - [`MotionSpec`]: scripted poses ([`ScriptedPose`], the hard cases of the seed
 //!   paper), BVH clips (any naming convention, rest-pose offsets handled), and
 //!   air-drawing of symbols ([`DrawSpec`]) with ground-truth gesture boundaries.
+//! - [`hand`]: hands in static postures ([`HandPosture`]: open, fist, point, thumb-up,
+//!   V, pinch), a procedural hand of articulated fingers sized from the body's forearm
+//!   that replaces the body's own where [`SceneConfig::hands`] asks, turned at the wrist
+//!   as it says; [`FrameTruth::hands`] gives each hand's posture, palm, orientation and
+//!   fingertips.
 //! - [`raster::Raster`]: the z-buffer rasterizer; [`sensor`]: the Kinect-like noise.
 //! - [`write_recording`]: a whole recording on disk (airglyph-core's format, plus
-//!   `joints.csv` and, for air-drawing, `gestures.csv`).
+//!   `joints.csv`, for air-drawing `gestures.csv`, and with hand postures `hands.csv`).
 //!
 //! Everything is deterministic given [`SceneConfig::seed`].
 //!
@@ -64,7 +69,7 @@
 //! synth.fps() -> f32                    synth.gestures() -> Vec<GestureTruth>
 //! synth.labels() -> &[u8]               (per pixel: the Bone seen, or raster::NO_LABEL)
 //! write_recording(cfg, frames, dir: &Path, progress: impl FnMut(usize))
-//!     -> Result<RecordingSummary, SynthError>   (+ joints.csv, gestures.csv)
+//!     -> Result<RecordingSummary, SynthError>   (+ joints.csv, gestures.csv, hands.csv)
 //! makehuman::default_assets_dir() -> PathBuf;  makehuman::assets_present(&Path) -> bool
 //! makehuman::targets_present(&Path) -> bool   MakeHumanShape::parse("gender=0,weight=0.8")
 //! ```
@@ -82,6 +87,7 @@ pub mod canon;
 pub mod draw;
 pub mod error;
 pub mod glyphs;
+pub mod hand;
 pub mod makehuman;
 pub mod motion;
 pub mod poses;
@@ -94,9 +100,10 @@ pub use airglyph_core::gestures::GestureTruth;
 pub use body::{Affine, Body, ProceduralBody};
 pub use canon::{Bone, Pose, TposeSkeleton};
 pub use error::SynthError;
+pub use hand::{Finger, HandPosture, HandSpec, HandTruth, Hands};
 pub use makehuman::MakeHumanShape;
 pub use motion::{DrawSpec, MotionSpec};
-pub use poses::{Posture, ScriptedPose};
+pub use poses::{Posture, ScriptedPose, Side};
 pub use room::{Background, Chair, Mug, Prop, Table};
 
 use airglyph_core::gestures::write_gestures_csv;
@@ -192,6 +199,9 @@ pub struct SceneConfig {
     pub posture: Posture,
     /// Where the person stands before the camera.
     pub placement: Placement,
+    /// Each hand's posture and turn at the wrist; the default keeps the body's own
+    /// hands as the pose holds them.
+    pub hands: Hands<HandSpec>,
     /// Seeds every random choice: the same seed renders the same frames.
     pub seed: u64,
 }
@@ -208,6 +218,7 @@ impl Default for SceneConfig {
             props: Vec::new(),
             posture: Posture::Standing,
             placement: Placement::default(),
+            hands: Hands::default(),
             seed: 0,
         }
     }
@@ -252,6 +263,8 @@ pub struct FrameTruth {
     pub visible: [bool; Joint::COUNT],
     /// The symbol being air-drawn in this frame, if any.
     pub gesture: Option<GestureTruth>,
+    /// Each hand's posture, place and orientation.
+    pub hands: Hands<HandTruth>,
 }
 
 /// Renders frames of a scene. Holds its scratch buffers: reuse one for many frames.
@@ -262,6 +275,7 @@ pub struct Synthesizer {
     camera: Affine,
     background: Option<Vec<u16>>,
     raster: raster::Raster,
+    hands: hand::HandRenderer,
     xf: Vec<Affine>,
     skinned: Vec<Point3<f32>>,
     labels: Vec<u8>,
@@ -328,7 +342,17 @@ impl Synthesizer {
                 )));
             }
         }
+        for side in hand::SIDES {
+            let h = cfg.hands.get(side);
+            if !(h.roll_deg.is_finite() && h.pitch_deg.is_finite()) {
+                return Err(SynthError::Config(format!(
+                    "{side:?} hand: roll {} and pitch {} must be finite degrees",
+                    h.roll_deg, h.pitch_deg
+                )));
+            }
+        }
         let body = cfg.body.load()?;
+        let hands = hand::HandRenderer::new(&body, &cfg.hands);
         let setting = motion::Setting {
             posture: cfg.posture,
             table_m: cfg.props.iter().find_map(|p| match p {
@@ -347,6 +371,7 @@ impl Synthesizer {
             camera,
             background,
             raster: raster::Raster::new(),
+            hands,
             xf: Vec::new(),
             skinned: Vec::new(),
             labels: vec![raster::NO_LABEL; n],
@@ -393,13 +418,15 @@ impl Synthesizer {
         self.camera
     }
 
-    /// The pose (canonical skeleton, body frame) of frame `index`.
+    /// The pose (canonical skeleton, body frame) of frame `index`, the hands turned at
+    /// the wrists as [`SceneConfig::hands`] says.
     pub fn pose(&self, index: usize) -> Pose {
         let mut p = self.motion.pose(index);
         if self.cfg.placement.follow {
             p.root.x = 0.0;
             p.root.z = 0.0;
         }
+        hand::turn_wrists(&mut p, &self.cfg.hands);
         p
     }
 
@@ -437,14 +464,25 @@ impl Synthesizer {
             None => depth.fill(0),
         }
         self.labels.fill(raster::NO_LABEL);
+        let (tris, tri_label) = self.hands.body_triangles(&self.body);
         self.raster.rasterize(
             &k,
             &self.skinned,
-            &self.body.tris,
-            &self.body.tri_label,
+            tris,
+            tri_label,
             true,
             depth,
             Some(&mut self.labels),
+        );
+        let hands = self.hands.draw(
+            &k,
+            &mut self.raster,
+            &self.body,
+            &pose,
+            &self.xf,
+            &self.camera,
+            depth,
+            &mut self.labels,
         );
         let joints = self.body.joints_from(&self.xf);
         let mut visible = [false; Joint::COUNT];
@@ -465,6 +503,7 @@ impl Synthesizer {
             },
             visible,
             gesture: self.motion.gesture(index),
+            hands,
         })
     }
 
@@ -553,8 +592,9 @@ pub struct RecordingSummary {
 }
 
 /// Renders `frames` frames (fewer if the motion is shorter) into a new recording in
-/// `dir`: airglyph-core's format with `joints.csv`, and `gestures.csv`
-/// (`label,start_frame,end_frame`) when the motion air-draws. `progress` is called
+/// `dir`: airglyph-core's format with `joints.csv`, `gestures.csv`
+/// (`label,start_frame,end_frame`) when the motion air-draws, and `hands.csv` (each
+/// hand's truth, [`hand::CSV_HEADER`]) when the scene sets a hand's posture or turn. `progress` is called
 /// after every frame with the number written so far.
 pub fn write_recording(
     cfg: SceneConfig,
@@ -569,10 +609,18 @@ pub fn write_recording(
     let mut writer =
         RecordingWriter::create(dir, RecordingInfo::new(k, synth.fps(), source), true)?;
     let mut depth = vec![0u16; (k.width * k.height) as usize];
+    let mut hands = if synth.cfg.hands != Hands::default() {
+        Some(hand::HandsCsv::create(&dir.join("hands.csv"))?)
+    } else {
+        None
+    };
     for i in 0..n {
         let truth = synth.render_into(i, &mut depth)?;
         let view = DepthView::new(k.width, k.height, &depth).expect("sized from intrinsics");
         writer.write_frame(view, truth.capture_ns, Some(&truth.skeleton))?;
+        if let Some(csv) = &mut hands {
+            csv.write(i, &truth.hands)?;
+        }
         progress(i + 1);
     }
     let gestures: Vec<GestureTruth> = synth
@@ -608,6 +656,11 @@ fn describe(cfg: &SceneConfig) -> String {
         MotionSpec::Rest => "rest".to_string(),
     };
     let mut out = format!("{body}/{motion}");
+    for side in hand::SIDES {
+        if let Some(p) = cfg.hands.get(side).posture {
+            out.push_str(&format!("/{}-hand:{}", side.name(), p.name()));
+        }
+    }
     if let Posture::Seated { .. } = cfg.posture {
         out.push_str("/seated");
     }

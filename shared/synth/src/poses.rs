@@ -305,6 +305,14 @@ pub enum Side {
 }
 
 impl Side {
+    /// The side's name on the command line and in files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Side::Left => "left",
+            Side::Right => "right",
+        }
+    }
+
     pub(crate) fn bones(self) -> (Bone, Bone, Bone) {
         match self {
             Side::Left => (Bone::LeftUpperArm, Bone::LeftForearm, Bone::LeftHand),

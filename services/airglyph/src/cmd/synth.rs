@@ -7,8 +7,9 @@ use airglyph_core::gestures::write_gestures_csv;
 use airglyph_core::Intrinsics;
 use airglyph_ipc::shutdown;
 use airglyph_synth::{
-    Background, BodySpec, Chair, GestureTruth, MakeHumanShape, MotionSpec, Mug, Placement, Posture,
-    ProceduralBody, Prop, SceneConfig, ScriptedPose, SynthError, Table,
+    Background, BodySpec, Chair, GestureTruth, HandPosture, HandSpec, Hands, MakeHumanShape,
+    MotionSpec, Mug, Placement, Posture, ProceduralBody, Prop, SceneConfig, ScriptedPose,
+    SynthError, Table,
 };
 use anyhow::{bail, Context};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -107,6 +108,20 @@ pub struct Args {
     /// `airglyph fetch-assets` extracts.
     #[arg(long, value_name = "NAME=VALUE,…", value_parser = parse_shape)]
     pub body_shape: Option<MakeHumanShape>,
+    /// The hands' postures, drawn by a procedural hand in place of the body's own:
+    /// HAND=POSTURE,… with HAND left, right or both and POSTURE one of open, fist,
+    /// point, thumb-up, v, pinch; e.g. `right=point,left=open`. A hand not named keeps
+    /// the body's own hand. joints.csv is unchanged; the posture is the scene's.
+    #[arg(long, value_name = "HAND=POSTURE,…", value_parser = parse_postures)]
+    pub hand_posture: Option<Hands<Option<HandPosture>>>,
+    /// The hands' turn about the fingers' axis, degrees, on top of the motion's:
+    /// HAND=DEGREES,… (positive turns the palm towards the thumb), e.g. `right=45`.
+    #[arg(long, value_name = "HAND=DEGREES,…", value_parser = parse_angles, allow_hyphen_values = true)]
+    pub hand_roll: Option<Hands<f32>>,
+    /// The hands' bend at the wrist, degrees, on top of the motion's: HAND=DEGREES,…
+    /// (positive bends the fingers towards the palm), e.g. `both=-30`.
+    #[arg(long, value_name = "HAND=DEGREES,…", value_parser = parse_angles, allow_hyphen_values = true)]
+    pub hand_pitch: Option<Hands<f32>>,
     /// Folder holding the MakeHuman assets (mpfb2/); default $AIRGLYPH_ASSETS, else
     /// ~/.cache/airglyph/assets.
     #[arg(long)]
@@ -121,6 +136,30 @@ pub struct Args {
 
 fn parse_shape(text: &str) -> Result<MakeHumanShape, String> {
     MakeHumanShape::parse(text)
+}
+
+fn parse_postures(text: &str) -> Result<Hands<Option<HandPosture>>, String> {
+    airglyph_synth::hand::parse_postures(text)
+}
+
+fn parse_angles(text: &str) -> Result<Hands<f32>, String> {
+    airglyph_synth::hand::parse_angles(text)
+}
+
+/// Each hand's posture and turn from the three hand options.
+fn hands(args: &Args) -> Hands<HandSpec> {
+    let postures = args.hand_posture.unwrap_or_default();
+    let rolls = args.hand_roll.unwrap_or_default();
+    let pitches = args.hand_pitch.unwrap_or_default();
+    let spec = |posture, roll_deg, pitch_deg| HandSpec {
+        posture,
+        roll_deg,
+        pitch_deg,
+    };
+    Hands {
+        left: spec(postures.left, rolls.left, pitches.left),
+        right: spec(postures.right, rolls.right, pitches.right),
+    }
 }
 
 fn intrinsics(camera: &str, resolution: &str) -> anyhow::Result<Intrinsics> {
@@ -213,6 +252,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             follow: args.follow,
             ..Placement::default()
         },
+        hands: hands(&args),
         seed: args.seed,
     };
     let missing_assets = |e: SynthError| {
