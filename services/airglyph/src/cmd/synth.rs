@@ -346,13 +346,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         println!("{line}");
     } else {
         println!(
-            "wrote {} frames to {} (depth/, frames.csv, joints.csv{})",
+            "wrote {} frames to {} (depth/, frames.csv, joints.csv{}{})",
             summary.frames,
             args.out.display(),
             if summary.gestures.is_empty() {
                 String::new()
             } else {
                 format!(", gestures.csv: {} symbols", summary.gestures.len())
+            },
+            if hands(&args) == Hands::default() {
+                ""
+            } else {
+                ", hands.csv"
             }
         );
     }
