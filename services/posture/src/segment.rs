@@ -241,23 +241,71 @@ pub fn segment(
         (p - arm.hand).norm() < params.reach_m && (p - wrist).dot(&forearm) > 0.0
     };
 
-    // The seed: of the pixels near the joint's, the point nearest the joint.
+    // Seeds: the pixels near the joint's that may be the hand's, nearest the joint
+    // first. A seed on a speck (a fingertip cut off by the reach, a flying pixel of
+    // the sensor) grows too little; the next seed outside what was grown is tried.
     let seed_px = (params.seed_radius_m * px_per_m).ceil().max(1.0);
-    let mut seed: Option<(f32, u32, u32, Point3<f32>)> = None;
+    let mut seeds: Vec<(f32, u32, u32, Point3<f32>)> = Vec::new();
     for v in clamp_v(cv - seed_px)..=clamp_v(cv + seed_px) {
         for u in clamp_u(cu - seed_px)..=clamp_u(cu + seed_px) {
             if let Some(p) = point(u, v).filter(|p| may_be_hand(p)) {
-                let d = (p - arm.hand).norm();
-                if seed.is_none_or(|s| d < s.0) {
-                    seed = Some((d, u, v, p));
-                }
+                seeds.push(((p - arm.hand).norm(), u, v, p));
             }
         }
     }
-    let (_, su, sv, sp) = seed.ok_or(NoHand::NoDepth)?;
+    if seeds.is_empty() {
+        return Err(NoHand::NoDepth);
+    }
+    seeds.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let needed = ((params.min_area_m2 * px_per_m * px_per_m).ceil() as usize).max(12);
+    let mut tried = vec![false; (window.width * window.height) as usize];
+    let mut best: Option<(Vec<bool>, Vec<HandPixel>)> = None;
+    for &(_, su, sv, sp) in seeds.iter() {
+        let Some(i) = window.index(su, sv) else {
+            continue;
+        };
+        if tried[i] {
+            continue;
+        }
+        let (mask, pixels) = grow(&window, (su, sv, sp), &point, &may_be_hand, params.band_m);
+        for (t, m) in tried.iter_mut().zip(&mask) {
+            *t |= *m;
+        }
+        let found = pixels.len();
+        if best.as_ref().is_none_or(|b| found > b.1.len()) {
+            best = Some((mask, pixels));
+        }
+        if found >= needed {
+            break;
+        }
+    }
+    let found = best.as_ref().map_or(0, |b| b.1.len());
+    let Some((mask, pixels)) = best.filter(|_| found >= needed) else {
+        return Err(NoHand::TooSmall {
+            pixels: found,
+            needed,
+        });
+    };
+    Ok(HandRegion {
+        window,
+        mask,
+        pixels,
+        wrist,
+        forearm,
+        focal,
+    })
+}
 
-    // Neighbours join when their depth differs by less than a step that grows with
-    // the sensor's depth resolution (about 2.85e-3 z² m for a Kinect v1).
+/// The region grown from `seed` over 4-neighbours whose depth differs by less than a
+/// step that grows with the sensor's depth resolution (about 2.85e-3 z² m for a
+/// Kinect v1), within `band_m` of the seed's depth, that may be the hand's.
+fn grow(
+    window: &Window,
+    (su, sv, sp): (u32, u32, Point3<f32>),
+    point: &impl Fn(u32, u32) -> Option<Point3<f32>>,
+    may_be_hand: &impl Fn(&Point3<f32>) -> bool,
+    band_m: f32,
+) -> (Vec<bool>, Vec<HandPixel>) {
     let step = 0.02 + 4.0e-3 * sp.z * sp.z;
     let mut mask = vec![false; (window.width * window.height) as usize];
     let mut pixels = Vec::new();
@@ -272,8 +320,8 @@ pub fn segment(
         queue.push_back((su, sv, sp.z));
     }
     while let Some((u, v, z)) = queue.pop_front() {
-        for (du, dv) in [(-1i32, 0i32), (1, 0), (0, -1), (0, 1)] {
-            let (nu, nv) = (u as i64 + du as i64, v as i64 + dv as i64);
+        for (du, dv) in [(-1i64, 0i64), (1, 0), (0, -1), (0, 1)] {
+            let (nu, nv) = (u as i64 + du, v as i64 + dv);
             if nu < 0 || nv < 0 {
                 continue;
             }
@@ -285,26 +333,12 @@ pub fn segment(
                 continue;
             }
             let Some(p) = point(nu, nv) else { continue };
-            if (p.z - z).abs() < step && (p.z - sp.z).abs() < params.band_m && may_be_hand(&p) {
+            if (p.z - z).abs() < step && (p.z - sp.z).abs() < band_m && may_be_hand(&p) {
                 mask[i] = true;
                 pixels.push(HandPixel { u: nu, v: nv, p });
                 queue.push_back((nu, nv, p.z));
             }
         }
     }
-    let needed = (params.min_area_m2 * px_per_m * px_per_m).ceil() as usize;
-    if pixels.len() < needed.max(12) {
-        return Err(NoHand::TooSmall {
-            pixels: pixels.len(),
-            needed: needed.max(12),
-        });
-    }
-    Ok(HandRegion {
-        window,
-        mask,
-        pixels,
-        wrist,
-        forearm,
-        focal,
-    })
+    (mask, pixels)
 }
