@@ -16,8 +16,8 @@ use airglyph_posture::{
     choose, describe, ArmJoints, Classifier, Hand, Method, SegmentParams, TrainingSet,
 };
 use airglyph_synth::{
-    Bone, BodySpec, HandPosture, MakeHumanShape, MotionSpec, ProceduralBody, SceneConfig, ScriptedPose,
-    Synthesizer,
+    BodySpec, Bone, HandPosture, MakeHumanShape, MotionSpec, ProceduralBody, SceneConfig,
+    ScriptedPose, Synthesizer,
 };
 use image::{Rgb, RgbImage};
 use nalgebra::{Point3, Vector3};
@@ -193,7 +193,11 @@ impl Shot {
             for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1), (-1, 0), (0, -1)] {
                 let (x, y) = (x + dx, y + dy);
                 if (0..cell as i64).contains(&x) && (0..cell as i64).contains(&y) {
-                    pic.put_pixel(col * cell + x as u32, row * cell + y as u32, Rgb([255, 230, 0]));
+                    pic.put_pixel(
+                        col * cell + x as u32,
+                        row * cell + y as u32,
+                        Rgb([255, 230, 0]),
+                    );
                 }
             }
         }
@@ -263,7 +267,12 @@ fn label_of(p: HandPosture) -> usize {
     HandPosture::ALL.iter().position(|&q| q == p).unwrap_or(0)
 }
 
-fn plot_confusion(path: &Path, title: &str, m: &[Vec<u32>], labels: &[String]) -> Result<(), Box<dyn std::error::Error>> {
+fn plot_confusion(
+    path: &Path,
+    title: &str,
+    m: &[Vec<u32>],
+    labels: &[String],
+) -> Result<(), Box<dyn std::error::Error>> {
     let n = labels.len();
     let cell = 64u32;
     let size = (cell * n as u32 + 140, cell * n as u32 + 150);
@@ -298,7 +307,11 @@ fn plot_confusion(path: &Path, title: &str, m: &[Vec<u32>], labels: &[String]) -
             for (j, &c) in row.iter().enumerate() {
                 let v = c as f64 / tot as f64;
                 let s = v.sqrt();
-                let colour = RGBColor((255.0 * (1.0 - s)) as u8, (255.0 * (1.0 - 0.8 * s)) as u8, 255);
+                let colour = RGBColor(
+                    (255.0 * (1.0 - s)) as u8,
+                    (255.0 * (1.0 - 0.8 * s)) as u8,
+                    255,
+                );
                 let y = n - 1 - i;
                 rects.push(Rectangle::new(
                     [
@@ -335,19 +348,29 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut params = SegmentParams::default();
     let t0 = Instant::now();
 
-    let procedural = |h: f32, b: f32| BodySpec::Procedural(ProceduralBody { height_m: h, build: b });
+    let procedural = |h: f32, b: f32| {
+        BodySpec::Procedural(ProceduralBody {
+            height_m: h,
+            build: b,
+        })
+    };
     let train_bodies: Vec<(String, BodySpec)> = vec![
         ("procedural 1.60 m build 0.9".into(), procedural(1.60, 0.9)),
         ("procedural 1.75 m build 1.0".into(), procedural(1.75, 1.0)),
         ("procedural 1.90 m build 1.2".into(), procedural(1.90, 1.2)),
     ];
-    let mut test_bodies: Vec<(String, BodySpec)> =
-        vec![("procedural 1.68 m build 1.35".into(), procedural(1.68, 1.35))];
+    let mut test_bodies: Vec<(String, BodySpec)> = vec![(
+        "procedural 1.68 m build 1.35".into(),
+        procedural(1.68, 1.35),
+    )];
     for shape in ["gender=0,height=0.45", "gender=1,height=0.6,weight=0.6"] {
         match MakeHumanShape::parse(shape) {
             Ok(s) => test_bodies.push((
                 format!("MakeHuman {shape}"),
-                BodySpec::MakeHuman { assets: None, shape: s },
+                BodySpec::MakeHuman {
+                    assets: None,
+                    shape: s,
+                },
             )),
             Err(e) => eprintln!("skipping MakeHuman {shape}: {e}"),
         }
@@ -375,28 +398,43 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     // Where the forearm is cut: chosen by the segmentation's IoU on the training
     // bodies (a few turns), never on the test bodies.
-    let mut best_cut = (f32::NEG_INFINITY, params.wrist_back);
-    for wrist_back in [0.1, 0.15, 0.2, 0.25] {
-        let p = SegmentParams { wrist_back, ..params };
+    let mut best_cut = (f32::NEG_INFINITY, params.wrist_back, params.palm_back);
+    for (wrist_back, palm_back) in [0.15, 0.2, 0.25]
+        .into_iter()
+        .flat_map(|w| [0.15, 0.18, 0.21].map(|p| (w, p)))
+    {
+        let p = SegmentParams {
+            wrist_back,
+            palm_back,
+            ..params
+        };
         let (mut sum, mut n) = (0.0, 0);
         for subj in &train_subjects {
-            for (_, _, iou) in collect(subj, &settings(subj.group as u64 * 10_000, &[0, 3, 5]), &p) {
+            for (_, _, iou) in collect(subj, &settings(subj.group as u64 * 10_000, &[0, 3, 5]), &p)
+            {
                 sum += iou;
                 n += 1;
             }
         }
         let mean = sum / n.max(1) as f32;
-        println!("wrist cut {wrist_back} of elbow–hand back: training IoU {mean:.3}");
+        println!("wrist cut {wrist_back} of elbow–hand back, {palm_back} of it behind the palm's centre: training IoU {mean:.3}");
         if mean > best_cut.0 {
-            best_cut = (mean, wrist_back);
+            best_cut = (mean, wrist_back, palm_back);
         }
     }
     params.wrist_back = best_cut.1;
-    println!("Kept wrist cut {} (training IoU {:.3})", best_cut.1, best_cut.0);
+    params.palm_back = best_cut.2;
+    println!(
+        "Kept wrist cut {}, palm cut {} (training IoU {:.3})",
+        best_cut.1, best_cut.2, best_cut.0
+    );
 
     let all_turns: Vec<usize> = (0..TURNS.len()).collect();
     let turns: Vec<usize> = if quick { vec![0, 1, 4] } else { all_turns };
-    let labels: Vec<String> = HandPosture::ALL.iter().map(|p| p.name().to_string()).collect();
+    let labels: Vec<String> = HandPosture::ALL
+        .iter()
+        .map(|p| p.name().to_string())
+        .collect();
     let mut train = TrainingSet::new(labels.clone());
     let mut missed_train = 0;
     for subj in &train_subjects {
@@ -419,9 +457,25 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let softmax = [1e-4, 1e-3, 1e-2, 1e-1].map(|l2| Method::Softmax { l2 });
     let (best_knn, cv_knn) = choose(&train, &knn).ok_or("no k-NN")?;
     let (best_soft, cv_soft) = choose(&train, &softmax).ok_or("no softmax")?;
-    println!("Trained on {} (seeds 1..), {} hands.", train_subjects.iter().map(|s| s.name.as_str()).collect::<Vec<_>>().join(", "), train.len());
-    println!("Leave-one-body-out on training: {best_knn} {:.1}%, {best_soft} {:.1}%", 100.0 * cv_knn, 100.0 * cv_soft);
-    let kept = if cv_knn >= cv_soft { best_knn } else { best_soft };
+    println!(
+        "Trained on {} (seeds 1..), {} hands.",
+        train_subjects
+            .iter()
+            .map(|s| s.name.as_str())
+            .collect::<Vec<_>>()
+            .join(", "),
+        train.len()
+    );
+    println!(
+        "Leave-one-body-out on training: {best_knn} {:.1}%, {best_soft} {:.1}%",
+        100.0 * cv_knn,
+        100.0 * cv_soft
+    );
+    let kept = if cv_knn >= cv_soft {
+        best_knn
+    } else {
+        best_soft
+    };
     println!("Kept (by training cross-validation): {kept}");
     let classifiers = [
         Classifier::train(&train, best_knn)?,
@@ -438,9 +492,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut confusion = vec![vec![0u32; labels.len()]; labels.len()];
     let mut iou_by_distance = vec![(0.0f32, 0usize); DISTANCES.len()];
     let mut not_found = 0;
-    let test_turns: Vec<usize> = if quick { vec![0, 1, 4] } else { (0..TURNS.len()).collect() };
+    let test_turns: Vec<usize> = if quick {
+        vec![0, 1, 4]
+    } else {
+        (0..TURNS.len()).collect()
+    };
     for (bi, subj) in test_subjects.iter().enumerate() {
-        for (s, hand, iou) in collect(subj, &settings(1_000_000 + subj.group as u64 * 10_000, &test_turns), &params) {
+        for (s, hand, iou) in collect(
+            subj,
+            &settings(1_000_000 + subj.group as u64 * 10_000, &test_turns),
+            &params,
+        ) {
             iou_by_distance[s.distance].0 += iou;
             iou_by_distance[s.distance].1 += 1;
             let truth = label_of(s.posture);
@@ -463,25 +525,64 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     let names = [best_knn.to_string(), best_soft.to_string()];
-    println!("\nTest: {} ({} hands, {} with no hand found, counted wrong)", test_subjects.iter().map(|s| s.name.as_str()).collect::<Vec<_>>().join(", "), overall[0].total, not_found);
+    println!(
+        "\nTest: {} ({} hands, {} with no hand found, counted wrong)",
+        test_subjects
+            .iter()
+            .map(|s| s.name.as_str())
+            .collect::<Vec<_>>()
+            .join(", "),
+        overall[0].total,
+        not_found
+    );
     println!("{:<34} {:>16} {:>20}", "", names[0], names[1]);
-    println!("{:<34} {:>16} {:>20}", "all", overall[0].pct(), overall[1].pct());
+    println!(
+        "{:<34} {:>16} {:>20}",
+        "all",
+        overall[0].pct(),
+        overall[1].pct()
+    );
     for (i, d) in DISTANCES.iter().enumerate() {
         let iou = iou_by_distance[i].0 / iou_by_distance[i].1.max(1) as f32;
-        println!("{:<34} {:>16} {:>20}", format!("{d} m (mean IoU {iou:.2})"), by_distance[0][i].pct(), by_distance[1][i].pct());
+        println!(
+            "{:<34} {:>16} {:>20}",
+            format!("{d} m (mean IoU {iou:.2})"),
+            by_distance[0][i].pct(),
+            by_distance[1][i].pct()
+        );
     }
     for &t in &test_turns {
         let (r, p) = TURNS[t];
-        println!("{:<34} {:>16} {:>20}", format!("roll {r:+} pitch {p:+}"), by_turn[0][t].pct(), by_turn[1][t].pct());
+        println!(
+            "{:<34} {:>16} {:>20}",
+            format!("roll {r:+} pitch {p:+}"),
+            by_turn[0][t].pct(),
+            by_turn[1][t].pct()
+        );
     }
     for (n, name) in ["no sensor model", "sensor model"].iter().enumerate() {
-        println!("{:<34} {:>16} {:>20}", name, by_noise[0][n].pct(), by_noise[1][n].pct());
+        println!(
+            "{:<34} {:>16} {:>20}",
+            name,
+            by_noise[0][n].pct(),
+            by_noise[1][n].pct()
+        );
     }
     for (bi, subj) in test_subjects.iter().enumerate() {
-        println!("{:<34} {:>16} {:>20}", subj.name, by_body[0][bi].pct(), by_body[1][bi].pct());
+        println!(
+            "{:<34} {:>16} {:>20}",
+            subj.name,
+            by_body[0][bi].pct(),
+            by_body[1][bi].pct()
+        );
     }
     let path = out.join("confusion.png");
-    plot_confusion(&path, &format!("{kept}, test bodies, all settings"), &confusion, &labels)?;
+    plot_confusion(
+        &path,
+        &format!("{kept}, test bodies, all settings"),
+        &confusion,
+        &labels,
+    )?;
     println!("wrote {}", path.display());
 
     // Overlays: every posture at each distance, the first test body, no turn, with
@@ -489,16 +590,29 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if let Some(subj) = test_subjects.first() {
         for noise in [false, true] {
             let cell = 128;
-            let mut pic = RgbImage::new(cell * HandPosture::ALL.len() as u32, cell * DISTANCES.len() as u32);
+            let mut pic = RgbImage::new(
+                cell * HandPosture::ALL.len() as u32,
+                cell * DISTANCES.len() as u32,
+            );
             for (row, _) in DISTANCES.iter().enumerate() {
                 for (col, &posture) in HandPosture::ALL.iter().enumerate() {
-                    let s = Setting { posture, distance: row, turn: 0, noise, seed: 7 + col as u64 };
+                    let s = Setting {
+                        posture,
+                        distance: row,
+                        turn: 0,
+                        noise,
+                        seed: 7 + col as u64,
+                    };
                     if let Some(shot) = shoot(subj, s, &params) {
                         shot.overlay(&mut pic, col as u32, row as u32, cell);
                     }
                 }
             }
-            let path = out.join(if noise { "overlay_noise.png" } else { "overlay.png" });
+            let path = out.join(if noise {
+                "overlay_noise.png"
+            } else {
+                "overlay.png"
+            });
             pic.save(&path)?;
             println!("wrote {}", path.display());
         }

@@ -167,8 +167,11 @@ impl Classifier {
         // rather than divide by zero.
         let scale = scale.map(|v| if v > 1e-12 { 1.0 / v.sqrt() } else { 0.0 });
         let standard = |x: &[f32; FEATURE_LEN]| standardize(x, &mean, &scale);
-        let data: Vec<([f32; FEATURE_LEN], usize)> =
-            set.samples.iter().map(|s| (standard(&s.x), s.label)).collect();
+        let data: Vec<([f32; FEATURE_LEN], usize)> = set
+            .samples
+            .iter()
+            .map(|s| (standard(&s.x), s.label))
+            .collect();
         let model = match method {
             Method::Knn { .. } => Model::Knn(data),
             Method::Softmax { l2 } => train_softmax(&data, classes, l2),
@@ -198,10 +201,8 @@ impl Classifier {
         let classes = self.labels.len();
         match (&self.model, self.method) {
             (Model::Knn(train), Method::Knn { k }) => {
-                let mut d: Vec<(f32, usize)> = train
-                    .iter()
-                    .map(|(t, l)| (sq_dist(t, &x), *l))
-                    .collect();
+                let mut d: Vec<(f32, usize)> =
+                    train.iter().map(|(t, l)| (sq_dist(t, &x), *l)).collect();
                 let k = k.clamp(1, d.len());
                 d.select_nth_unstable_by(k - 1, |a, b| a.0.total_cmp(&b.0));
                 let mut votes = vec![0.0f32; classes];
@@ -242,10 +243,11 @@ fn sq_dist(a: &[f32; FEATURE_LEN], b: &[f32; FEATURE_LEN]) -> f32 {
 /// The largest score's index and its share of the total.
 fn best_of(scores: &[f32]) -> Prediction {
     let total: f32 = scores.iter().sum();
-    let (label, best) = scores
-        .iter()
-        .enumerate()
-        .fold((0, f32::NEG_INFINITY), |b, (i, &s)| if s > b.1 { (i, s) } else { b });
+    let (label, best) =
+        scores.iter().enumerate().fold(
+            (0, f32::NEG_INFINITY),
+            |b, (i, &s)| if s > b.1 { (i, s) } else { b },
+        );
     Prediction {
         label,
         confidence: if total > 0.0 { best / total } else { 0.0 },
@@ -304,11 +306,17 @@ pub fn cross_validate(set: &TrainingSet, method: Method) -> Option<f32> {
     let folds: Vec<Box<dyn Fn(usize, &Sample) -> bool>> = if groups.len() >= 2 {
         groups
             .iter()
-            .map(|&g| Box::new(move |_: usize, s: &Sample| s.group == g) as Box<dyn Fn(usize, &Sample) -> bool>)
+            .map(|&g| {
+                Box::new(move |_: usize, s: &Sample| s.group == g)
+                    as Box<dyn Fn(usize, &Sample) -> bool>
+            })
             .collect()
     } else {
         (0..5)
-            .map(|f| Box::new(move |i: usize, _: &Sample| i % 5 == f) as Box<dyn Fn(usize, &Sample) -> bool>)
+            .map(|f| {
+                Box::new(move |i: usize, _: &Sample| i % 5 == f)
+                    as Box<dyn Fn(usize, &Sample) -> bool>
+            })
             .collect()
     };
     let (mut right, mut total) = (0usize, 0usize);

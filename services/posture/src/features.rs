@@ -6,6 +6,7 @@
 //! palm and the back) read alike.
 
 use crate::frame::HandFrame;
+use crate::mask::fill_holes;
 use crate::segment::HandRegion;
 use nalgebra::Point3;
 
@@ -68,16 +69,13 @@ pub fn feature_names() -> Vec<String> {
 pub fn features(region: &HandRegion, frame: &HandFrame) -> Features {
     let w = region.window();
     let (ww, wh) = (w.width as usize, w.height as usize);
-    let mask = region.mask();
+    let filled = fill_holes(region.mask(), ww, wh);
+    let mask = &filled[..];
     let area = mask.iter().filter(|&&m| m).count().max(1) as f32;
 
-    let dist = distance_transform(mask, ww, wh);
-    let (centre_i, palm_r) = dist
-        .iter()
-        .enumerate()
-        .fold((0usize, 0.0f32), |best, (i, &d)| if d > best.1 { (i, d) } else { best });
-    let palm_r = palm_r.max(1.0);
-    let (pcx, pcy) = ((centre_i % ww) as f32, (centre_i / ww) as f32);
+    let palm = region.palm();
+    let palm_r = palm.radius_px;
+    let (pcx, pcy) = (palm.u - w.u0 as f32, palm.v - w.v0 as f32);
 
     let mut out = Vec::with_capacity(FEATURE_LEN);
     out.extend(hu_moments(mask, ww, wh));
@@ -87,31 +85,27 @@ pub fn features(region: &HandRegion, frame: &HandFrame) -> Features {
     // The hull through pixel centres misses half a pixel all round.
     out.push(area / (hull_area + 0.5 * hull_perimeter + 1.0));
     let defects = defect_depths(mask, ww, wh, &hull);
-    out.push(defects.iter().filter(|&&d| d > DEEP_DEFECT * palm_r).count() as f32);
+    out.push(
+        defects
+            .iter()
+            .filter(|&&d| d > DEEP_DEFECT * palm_r)
+            .count() as f32,
+    );
     out.extend((0..DEFECTS).map(|i| defects.get(i).copied().unwrap_or(0.0) / palm_r));
 
     let radial = radial_profile(mask, ww, wh, (pcx, pcy), frame.image_angle, palm_r);
     out.push(count_fingers(&radial) as f32);
     out.push(area / (std::f32::consts::PI * palm_r * palm_r));
-    out.extend(radial);
+    out.extend(fold_mirror(&radial));
 
     let s = frame.spread_m;
     let s0 = s[0].max(1e-4);
     out.push(s[1] / s0);
     out.push(s[2] / s0);
 
-    // The palm's centre in space and its radius in metres: the hand's own size.
-    let centre = region
-        .pixels()
-        .iter()
-        .min_by(|a, b| {
-            let da = (a.u as f32 - w.u0 as f32 - pcx).powi(2) + (a.v as f32 - w.v0 as f32 - pcy).powi(2);
-            let db = (b.u as f32 - w.u0 as f32 - pcx).powi(2) + (b.v as f32 - w.v0 as f32 - pcy).powi(2);
-            da.total_cmp(&db)
-        })
-        .map(|h| h.p)
-        .unwrap_or(frame.centroid);
-    let palm_m = (palm_r * centre.z / region.focal_px()).max(1e-3);
+    // The palm's radius in metres: the hand's own size in space.
+    let palm_m = (palm_r * palm.centre.z / region.focal_px()).max(1e-3);
+    let centre = palm.centre;
     out.extend(depth_histograms(region, frame, centre, palm_m));
 
     let values: Vec<f32> = out
@@ -123,45 +117,6 @@ pub fn features(region: &HandRegion, frame: &HandFrame) -> Features {
         *a = v;
     }
     Features(arr)
-}
-
-/// The chamfer (3-4) distance of each mask pixel to the nearest pixel outside the
-/// mask or the window, in pixels.
-fn distance_transform(mask: &[bool], w: usize, h: usize) -> Vec<f32> {
-    const BIG: f32 = 1e9;
-    let mut d: Vec<f32> = mask.iter().map(|&m| if m { BIG } else { 0.0 }).collect();
-    let at = |d: &[f32], x: i64, y: i64| {
-        if x < 0 || y < 0 || x >= w as i64 || y >= h as i64 {
-            0.0
-        } else {
-            d[y as usize * w + x as usize]
-        }
-    };
-    for y in 0..h as i64 {
-        for x in 0..w as i64 {
-            let i = y as usize * w + x as usize;
-            if d[i] > 0.0 {
-                let m = (at(&d, x - 1, y) + 3.0)
-                    .min(at(&d, x, y - 1) + 3.0)
-                    .min(at(&d, x - 1, y - 1) + 4.0)
-                    .min(at(&d, x + 1, y - 1) + 4.0);
-                d[i] = d[i].min(m);
-            }
-        }
-    }
-    for y in (0..h as i64).rev() {
-        for x in (0..w as i64).rev() {
-            let i = y as usize * w + x as usize;
-            if d[i] > 0.0 {
-                let m = (at(&d, x + 1, y) + 3.0)
-                    .min(at(&d, x, y + 1) + 3.0)
-                    .min(at(&d, x + 1, y + 1) + 4.0)
-                    .min(at(&d, x - 1, y + 1) + 4.0);
-                d[i] = d[i].min(m);
-            }
-        }
-    }
-    d.iter().map(|v| v / 3.0).collect()
 }
 
 /// Hu's seven moment invariants of the mask, each as sign × log10 of its magnitude
@@ -207,9 +162,11 @@ fn hu_moments(mask: &[bool], w: usize, h: usize) -> [f32; 7] {
         (n20 - n02).powi(2) + 4.0 * n11 * n11,
         (n30 - 3.0 * n12).powi(2) + (3.0 * n21 - n03).powi(2),
         a * a + b * b,
-        (n30 - 3.0 * n12) * a * (a * a - 3.0 * b * b) + (3.0 * n21 - n03) * b * (3.0 * a * a - b * b),
+        (n30 - 3.0 * n12) * a * (a * a - 3.0 * b * b)
+            + (3.0 * n21 - n03) * b * (3.0 * a * a - b * b),
         (n20 - n02) * (a * a - b * b) + 4.0 * n11 * a * b,
-        ((3.0 * n21 - n03) * a * (a * a - 3.0 * b * b) - (n30 - 3.0 * n12) * b * (3.0 * a * a - b * b))
+        ((3.0 * n21 - n03) * a * (a * a - 3.0 * b * b)
+            - (n30 - 3.0 * n12) * b * (3.0 * a * a - b * b))
             .abs(),
     ];
     // Below 1e-12 a moment is noise; the floor keeps the logarithm bounded.
@@ -272,7 +229,11 @@ fn defect_depths(mask: &[bool], w: usize, h: usize, hull: &[(f32, f32)]) -> Vec<
     let edges: Vec<((f32, f32), (f32, f32), f32)> = (0..n)
         .map(|i| {
             let (a, b) = (hull[i], hull[(i + 1) % n]);
-            (a, b, ((b.0 - a.0).powi(2) + (b.1 - a.1).powi(2)).sqrt().max(1e-6))
+            (
+                a,
+                b,
+                ((b.0 - a.0).powi(2) + (b.1 - a.1).powi(2)).sqrt().max(1e-6),
+            )
         })
         .collect();
     // The hull's orientation: the sign of its signed area.
@@ -347,8 +308,7 @@ fn defect_depths(mask: &[bool], w: usize, h: usize, hull: &[(f32, f32)]) -> Vec<
 }
 
 /// The farthest mask pixel from the palm's centre in each direction, in palm radii,
-/// bin 0 along the hand's main axis; turned over (mirrored) when the second half of
-/// the circle holds more, so that mirror images give the same profile.
+/// bin 0 along the hand's main axis.
 fn radial_profile(
     mask: &[bool],
     w: usize,
@@ -370,15 +330,24 @@ fn radial_profile(
             }
         }
     }
-    let first: f32 = prof[1..RADIAL_BINS / 2].iter().sum();
-    let second: f32 = prof[RADIAL_BINS / 2 + 1..].iter().sum();
-    if second > first {
-        let copy = prof;
-        for (i, p) in prof.iter_mut().enumerate() {
-            *p = copy[(RADIAL_BINS - i) % RADIAL_BINS];
+    prof
+}
+
+/// The profile folded about the main axis, bin 0 the axis: first the mean of the two
+/// directions either side at each angle (0 to 180°), then the size of their
+/// difference (the angles strictly between). Mirror images (a left hand and a right,
+/// the palm and the back) swap the directions either side and fold alike.
+fn fold_mirror(prof: &[f32; RADIAL_BINS]) -> [f32; RADIAL_BINS] {
+    let mut out = [0.0f32; RADIAL_BINS];
+    let half = RADIAL_BINS / 2;
+    for i in 0..=half {
+        let (a, b) = (prof[i], prof[(RADIAL_BINS - i) % RADIAL_BINS]);
+        out[i] = 0.5 * (a + b);
+        if i > 0 && i < half {
+            out[half + i] = 0.5 * (a - b).abs();
         }
     }
-    prof
+    out
 }
 
 /// Fingers: runs of the profile reaching past [`FINGER_REACH`] palm radii within

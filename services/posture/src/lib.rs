@@ -13,12 +13,17 @@ pub mod classify;
 pub mod features;
 pub mod frame;
 mod geometry;
+mod mask;
 pub mod segment;
 
-pub use classify::{choose, cross_validate, Classifier, Method, Prediction, TrainError, TrainingSet};
+pub use classify::{
+    choose, cross_validate, Classifier, Method, Prediction, TrainError, TrainingSet,
+};
 pub use features::{feature_names, features, Features, FEATURE_LEN};
 pub use frame::{hand_frame, HandFrame};
-pub use segment::{segment, ArmJoints, HandPixel, HandRegion, NoHand, SegmentParams, Side, Window};
+pub use segment::{
+    segment, ArmJoints, HandPixel, HandRegion, NoHand, Palm, SegmentParams, Side, Window,
+};
 
 use airglyph_core::{DepthView, Intrinsics};
 

@@ -5,6 +5,7 @@
 //! wrist across the forearm).
 
 use crate::geometry::{back_project, pixel_at};
+use crate::mask::{fill_holes, largest_circle};
 use airglyph_core::{DepthView, Intrinsics, Joint, Skeleton};
 use nalgebra::{Point3, Vector3};
 use std::collections::VecDeque;
@@ -99,6 +100,12 @@ pub struct SegmentParams {
     pub wrist_back: f32,
     /// The least area of a hand, square metres (a fist seen edge-on is about 0.004).
     pub min_area_m2: f32,
+    /// Points farther back towards the elbow than this fraction of the elbow–hand
+    /// distance from the palm's centre (the largest circle in the mask) are the
+    /// forearm's: a second cut, from the hand's own shape, for what the wrist
+    /// estimated from the joints left on. The palm's radius in the image would be
+    /// the natural unit, but a hand seen edge-on is thin in the image.
+    pub palm_back: f32,
 }
 
 impl Default for SegmentParams {
@@ -110,6 +117,7 @@ impl Default for SegmentParams {
             seed_radius_m: 0.05,
             wrist_back: 0.2,
             min_area_m2: 0.0012,
+            palm_back: 0.18,
         }
     }
 }
@@ -132,9 +140,23 @@ pub struct HandRegion {
     window: Window,
     mask: Vec<bool>,
     pixels: Vec<HandPixel>,
+    palm: Palm,
     wrist: Point3<f32>,
     forearm: Vector3<f32>,
     focal: f32,
+}
+
+/// The largest circle inside the hand's mask: the palm.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Palm {
+    /// Its centre's column in the image (fractional).
+    pub u: f32,
+    /// Its centre's row in the image (fractional).
+    pub v: f32,
+    /// Its radius, pixels.
+    pub radius_px: f32,
+    /// The hand's point nearest its centre, camera frame, metres.
+    pub centre: Point3<f32>,
 }
 
 /// A rectangle of the image: the first column and row, and its size.
@@ -176,6 +198,11 @@ impl HandRegion {
     /// The mask over the window, row-major: what the contour and region features read.
     pub fn mask(&self) -> &[bool] {
         &self.mask
+    }
+
+    /// The palm: the largest circle inside the mask.
+    pub fn palm(&self) -> Palm {
+        self.palm
     }
 
     /// Where the forearm was cut off.
@@ -237,9 +264,8 @@ pub fn segment(
     let point = |u: u32, v: u32| pixel_at(depth, u, v).map(|z| back_project(k, u, v, z));
     // A pixel may be the hand's when it is within reach of the joint and beyond the
     // wrist: the forearm and what lies far behind or beside the hand never are.
-    let may_be_hand = |p: &Point3<f32>| {
-        (p - arm.hand).norm() < params.reach_m && (p - wrist).dot(&forearm) > 0.0
-    };
+    let may_be_hand =
+        |p: &Point3<f32>| (p - arm.hand).norm() < params.reach_m && (p - wrist).dot(&forearm) > 0.0;
 
     // Seeds: the pixels near the joint's that may be the hand's, nearest the joint
     // first. A seed on a speck (a fingertip cut off by the reach, a flying pixel of
@@ -286,10 +312,25 @@ pub fn segment(
             needed,
         });
     };
+    let (mask, pixels) = trim_forearm(
+        &window,
+        mask,
+        pixels,
+        forearm,
+        params.palm_back * forearm_len,
+    );
+    if pixels.len() < needed {
+        return Err(NoHand::TooSmall {
+            pixels: pixels.len(),
+            needed,
+        });
+    }
+    let palm = palm_of(&window, &mask, &pixels);
     Ok(HandRegion {
         window,
         mask,
         pixels,
+        palm,
         wrist,
         forearm,
         focal,
@@ -341,4 +382,48 @@ fn grow(
         }
     }
     (mask, pixels)
+}
+
+/// The palm of a region.
+fn palm_of(window: &Window, mask: &[bool], pixels: &[HandPixel]) -> Palm {
+    let (w, h) = (window.width as usize, window.height as usize);
+    let (x, y, r) = largest_circle(&fill_holes(mask, w, h), w, h);
+    let (u, v) = (x + window.u0 as f32, y + window.v0 as f32);
+    let centre = pixels
+        .iter()
+        .min_by(|a, b| {
+            let da = (a.u as f32 - u).powi(2) + (a.v as f32 - v).powi(2);
+            let db = (b.u as f32 - u).powi(2) + (b.v as f32 - v).powi(2);
+            da.total_cmp(&db)
+        })
+        .map_or(Point3::origin(), |h| h.p);
+    Palm {
+        u,
+        v,
+        radius_px: r,
+        centre,
+    }
+}
+
+/// Drops the points more than `back_m` behind the palm's centre along the forearm:
+/// the wrist guessed from the joints is a few centimetres off, and a forearm's stub
+/// changes a fist's outline more than any posture.
+fn trim_forearm(
+    window: &Window,
+    mut mask: Vec<bool>,
+    pixels: Vec<HandPixel>,
+    forearm: Vector3<f32>,
+    back_m: f32,
+) -> (Vec<bool>, Vec<HandPixel>) {
+    let palm = palm_of(window, &mask, &pixels);
+    let limit = -back_m;
+    let (keep, drop): (Vec<HandPixel>, Vec<HandPixel>) = pixels
+        .into_iter()
+        .partition(|h| (h.p - palm.centre).dot(&forearm) >= limit);
+    for h in &drop {
+        if let Some(i) = window.index(h.u, h.v) {
+            mask[i] = false;
+        }
+    }
+    (mask, keep)
 }
