@@ -90,6 +90,8 @@ struct Shot {
     arm: ArmJoints,
     hand: Option<Hand>,
     palm: Point3<f32>,
+    /// Seconds the segmentation, frame and features took.
+    cost_s: f64,
 }
 
 fn shoot(subject: &Subject, s: Setting, params: &SegmentParams) -> Option<Shot> {
@@ -122,7 +124,9 @@ fn shoot(subject: &Subject, s: Setting, params: &SegmentParams) -> Option<Shot> 
         hand: jitter(truth.skeleton.get(Joint::RightHand)),
         elbow: jitter(truth.skeleton.get(Joint::RightElbow)),
     };
+    let started = Instant::now();
     let hand = describe(img.view(), &k, arm, params);
+    let cost_s = started.elapsed().as_secs_f64();
     if let Err(e) = &hand {
         if std::env::var_os("POSTURE_DEBUG").is_some() {
             eprintln!("{:?} {:?}: {e}", subject.name, s);
@@ -136,6 +140,7 @@ fn shoot(subject: &Subject, s: Setting, params: &SegmentParams) -> Option<Shot> 
         arm,
         hand,
         palm: truth.hands.right.palm_centre,
+        cost_s,
     })
 }
 
@@ -225,18 +230,28 @@ impl Tally {
     }
 }
 
-/// Features of every setting for one subject; `None` where no hand was found.
-fn collect(
-    subject: &Subject,
-    settings: &[Setting],
-    params: &SegmentParams,
-) -> Vec<(Setting, Option<Hand>, f32)> {
+/// What one setting gave: the hand (`None` where none was found), the segmentation's
+/// IoU against the renderer's hand pixels, and the seconds describing it took.
+struct Row {
+    setting: Setting,
+    hand: Option<Hand>,
+    iou: f32,
+    cost_s: f64,
+}
+
+/// Every setting for one subject.
+fn collect(subject: &Subject, settings: &[Setting], params: &SegmentParams) -> Vec<Row> {
     settings
         .iter()
         .filter_map(|&s| {
             let shot = shoot(subject, s, params)?;
             let iou = shot.iou();
-            Some((s, shot.hand, iou))
+            Some(Row {
+                setting: s,
+                iou,
+                cost_s: shot.cost_s,
+                hand: shot.hand,
+            })
         })
         .collect()
 }
@@ -410,7 +425,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         };
         let (mut sum, mut n) = (0.0, 0);
         for subj in &train_subjects {
-            for (_, _, iou) in collect(subj, &settings(subj.group as u64 * 10_000, &[0, 3, 5]), &p)
+            for Row { iou, .. } in collect(subj, &settings(subj.group as u64 * 10_000, &[0, 3, 5]), &p)
             {
                 sum += iou;
                 n += 1;
@@ -437,10 +452,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .collect();
     let mut train = TrainingSet::new(labels.clone());
     let mut missed_train = 0;
+    let mut train_rows = Vec::new();
     for subj in &train_subjects {
-        for (s, hand, _) in collect(subj, &settings(subj.group as u64 * 10_000, &turns), &params) {
-            match hand {
-                Some(h) => train.add(&h.features, label_of(s.posture), subj.group)?,
+        for row in collect(subj, &settings(subj.group as u64 * 10_000, &turns), &params) {
+            match &row.hand {
+                Some(h) => {
+                    train.add(&h.features, label_of(row.setting.posture), subj.group)?;
+                    train_rows.push((subj.group, row.setting, h.features));
+                }
                 None => missed_train += 1,
             }
         }
@@ -497,12 +516,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     } else {
         (0..TURNS.len()).collect()
     };
+    let mut test_rows = Vec::new();
+    let mut cost_by_distance = vec![Vec::new(); DISTANCES.len()];
     for (bi, subj) in test_subjects.iter().enumerate() {
-        for (s, hand, iou) in collect(
+        for Row {
+            setting: s,
+            hand,
+            iou,
+            cost_s,
+        } in collect(
             subj,
             &settings(1_000_000 + subj.group as u64 * 10_000, &test_turns),
             &params,
         ) {
+            test_rows.push((s, hand.as_ref().map(|h| h.features)));
+            cost_by_distance[s.distance].push(cost_s);
             iou_by_distance[s.distance].0 += iou;
             iou_by_distance[s.distance].1 += 1;
             let truth = label_of(s.posture);
@@ -576,6 +604,68 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             by_body[1][bi].pct()
         );
     }
+    for (i, d) in DISTANCES.iter().enumerate() {
+        let c = &mut cost_by_distance[i];
+        c.sort_by(f64::total_cmp);
+        if let (Some(med), Some(max)) = (c.get(c.len() / 2), c.last()) {
+            println!(
+                "describe (segment, frame, features) at {d} m: median {:.3} ms, max {:.3} ms",
+                med * 1e3,
+                max * 1e3
+            );
+        }
+    }
+
+    // Turns held out: trained on some of the wrist's turns, tested on the others
+    // (other bodies and seeds as well).
+    if !quick {
+        let (seen, unseen) = ([0usize, 1, 4, 5], [2usize, 3, 6]);
+        let mut part = TrainingSet::new(labels.clone());
+        for (g, s, f) in &train_rows {
+            if seen.contains(&s.turn) {
+                part.add(f, label_of(s.posture), *g)?;
+            }
+        }
+        let methods: Vec<Method> = knn.iter().chain(softmax.iter()).copied().collect();
+        let (m_knn, _) = choose(&part, &knn).ok_or("no k-NN")?;
+        let (m_soft, _) = choose(&part, &softmax).ok_or("no softmax")?;
+        let (m_kept, cv) = choose(&part, &methods).ok_or("no method")?;
+        let cs = [Classifier::train(&part, m_knn)?, Classifier::train(&part, m_soft)?];
+        let describe_turns = |ts: &[usize]| {
+            ts.iter()
+                .map(|&t| format!("roll {:+} pitch {:+}", TURNS[t].0, TURNS[t].1))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        println!(
+            "\nTurns held out: trained on {} ({} hands; kept {m_kept}, cross-validated {:.1}%), tested on {}",
+            describe_turns(&seen),
+            part.len(),
+            100.0 * cv,
+            describe_turns(&unseen)
+        );
+        println!("{:<34} {:>16} {:>20}", "", m_knn.to_string(), m_soft.to_string());
+        let mut all = [Tally::default(), Tally::default()];
+        for &t in &unseen {
+            let mut tally = [Tally::default(), Tally::default()];
+            for (s, f) in test_rows.iter().filter(|(s, _)| s.turn == t) {
+                for (ci, c) in cs.iter().enumerate() {
+                    let ok = f.as_ref().map(|f| c.predict(f).label) == Some(label_of(s.posture));
+                    tally[ci].add(ok);
+                    all[ci].add(ok);
+                }
+            }
+            let (r, p) = TURNS[t];
+            println!(
+                "{:<34} {:>16} {:>20}",
+                format!("roll {r:+} pitch {p:+}"),
+                tally[0].pct(),
+                tally[1].pct()
+            );
+        }
+        println!("{:<34} {:>16} {:>20}", "all unseen turns", all[0].pct(), all[1].pct());
+    }
+
     let path = out.join("confusion.png");
     plot_confusion(
         &path,
@@ -616,6 +706,28 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             pic.save(&path)?;
             println!("wrote {}", path.display());
         }
+    }
+    // Overlays of the turns: rows are the turns, at 1.2 m, with the sensor model.
+    if let Some(subj) = test_subjects.first() {
+        let cell = 128;
+        let mut pic = RgbImage::new(cell * HandPosture::ALL.len() as u32, cell * TURNS.len() as u32);
+        for row in 0..TURNS.len() {
+            for (col, &posture) in HandPosture::ALL.iter().enumerate() {
+                let s = Setting {
+                    posture,
+                    distance: 1,
+                    turn: row,
+                    noise: true,
+                    seed: 11 + col as u64,
+                };
+                if let Some(shot) = shoot(subj, s, &params) {
+                    shot.overlay(&mut pic, col as u32, row as u32, cell);
+                }
+            }
+        }
+        let path = out.join("overlay_turns.png");
+        pic.save(&path)?;
+        println!("wrote {}", path.display());
     }
     eprintln!("done in {:.1} s", t0.elapsed().as_secs_f32());
     Ok(())

@@ -115,9 +115,9 @@ impl Default for SegmentParams {
             reach_m: 0.19,
             band_m: 0.15,
             seed_radius_m: 0.05,
-            wrist_back: 0.2,
+            wrist_back: 0.25,
             min_area_m2: 0.0012,
-            palm_back: 0.18,
+            palm_back: 0.15,
         }
     }
 }
