@@ -425,7 +425,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         };
         let (mut sum, mut n) = (0.0, 0);
         for subj in &train_subjects {
-            for Row { iou, .. } in collect(subj, &settings(subj.group as u64 * 10_000, &[0, 3, 5]), &p)
+            for Row { iou, .. } in
+                collect(subj, &settings(subj.group as u64 * 10_000, &[0, 3, 5]), &p)
             {
                 sum += iou;
                 n += 1;
@@ -630,7 +631,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let (m_knn, _) = choose(&part, &knn).ok_or("no k-NN")?;
         let (m_soft, _) = choose(&part, &softmax).ok_or("no softmax")?;
         let (m_kept, cv) = choose(&part, &methods).ok_or("no method")?;
-        let cs = [Classifier::train(&part, m_knn)?, Classifier::train(&part, m_soft)?];
+        let cs = [
+            Classifier::train(&part, m_knn)?,
+            Classifier::train(&part, m_soft)?,
+        ];
         let describe_turns = |ts: &[usize]| {
             ts.iter()
                 .map(|&t| format!("roll {:+} pitch {:+}", TURNS[t].0, TURNS[t].1))
@@ -644,7 +648,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             100.0 * cv,
             describe_turns(&unseen)
         );
-        println!("{:<34} {:>16} {:>20}", "", m_knn.to_string(), m_soft.to_string());
+        println!(
+            "{:<34} {:>16} {:>20}",
+            "",
+            m_knn.to_string(),
+            m_soft.to_string()
+        );
         let mut all = [Tally::default(), Tally::default()];
         for &t in &unseen {
             let mut tally = [Tally::default(), Tally::default()];
@@ -663,7 +672,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 tally[1].pct()
             );
         }
-        println!("{:<34} {:>16} {:>20}", "all unseen turns", all[0].pct(), all[1].pct());
+        println!(
+            "{:<34} {:>16} {:>20}",
+            "all unseen turns",
+            all[0].pct(),
+            all[1].pct()
+        );
     }
 
     let path = out.join("confusion.png");
@@ -710,7 +724,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // Overlays of the turns: rows are the turns, at 1.2 m, with the sensor model.
     if let Some(subj) = test_subjects.first() {
         let cell = 128;
-        let mut pic = RgbImage::new(cell * HandPosture::ALL.len() as u32, cell * TURNS.len() as u32);
+        let mut pic = RgbImage::new(
+            cell * HandPosture::ALL.len() as u32,
+            cell * TURNS.len() as u32,
+        );
         for row in 0..TURNS.len() {
             for (col, &posture) in HandPosture::ALL.iter().enumerate() {
                 let s = Setting {

@@ -7,7 +7,7 @@
 
 use crate::frame::HandFrame;
 use crate::mask::fill_holes;
-use crate::segment::HandRegion;
+use crate::segment::{HandPixel, HandRegion};
 use nalgebra::Point3;
 
 /// Bins of the radial profile around the palm's centre.
@@ -68,14 +68,18 @@ pub fn feature_names() -> Vec<String> {
 /// The features of a segmented hand and its frame.
 pub fn features(region: &HandRegion, frame: &HandFrame) -> Features {
     let w = region.window();
-    let (ww, wh) = (w.width as usize, w.height as usize);
-    let filled = fill_holes(region.mask(), ww, wh);
+    // The hand's bounding box (a pixel of margin all round), not the whole window:
+    // the window near the camera is ten times the hand's area, and the hull's work is
+    // per pixel.
+    let (x0, y0, cw, ch, cropped) = crop(region.pixels(), w.u0, w.v0);
+    let (ww, wh) = (cw, ch);
+    let filled = fill_holes(&cropped, ww, wh);
     let mask = &filled[..];
     let area = mask.iter().filter(|&&m| m).count().max(1) as f32;
 
     let palm = region.palm();
     let palm_r = palm.radius_px;
-    let (pcx, pcy) = (palm.u - w.u0 as f32, palm.v - w.v0 as f32);
+    let (pcx, pcy) = (palm.u - x0 as f32, palm.v - y0 as f32);
 
     let mut out = Vec::with_capacity(FEATURE_LEN);
     out.extend(hu_moments(mask, ww, wh));
@@ -117,6 +121,26 @@ pub fn features(region: &HandRegion, frame: &HandFrame) -> Features {
         *a = v;
     }
     Features(arr)
+}
+
+/// The hand's pixels as a mask over their bounding box with a pixel of margin: its
+/// first column and row in the image, its size, the mask.
+fn crop(pixels: &[HandPixel], u0: u32, v0: u32) -> (u32, u32, usize, usize, Vec<bool>) {
+    let (mut a, mut b) = ((u32::MAX, u32::MAX), (0u32, 0u32));
+    for h in pixels {
+        a = (a.0.min(h.u), a.1.min(h.v));
+        b = (b.0.max(h.u), b.1.max(h.v));
+    }
+    if pixels.is_empty() {
+        return (u0, v0, 1, 1, vec![false]);
+    }
+    let (x0, y0) = (a.0.saturating_sub(1), a.1.saturating_sub(1));
+    let (w, h) = ((b.0 + 2 - x0) as usize, (b.1 + 2 - y0) as usize);
+    let mut mask = vec![false; w * h];
+    for p in pixels {
+        mask[(p.v - y0) as usize * w + (p.u - x0) as usize] = true;
+    }
+    (x0, y0, w, h, mask)
 }
 
 /// Hu's seven moment invariants of the mask, each as sign × log10 of its magnitude
