@@ -297,27 +297,33 @@ fn train_softmax(data: &[([f32; FEATURE_LEN], usize)], classes: usize, l2: f32) 
     Model::Softmax { w, b }
 }
 
+/// Which samples one fold of cross-validation holds out.
+enum Fold {
+    /// Every sample of a group.
+    Group(u32),
+    /// Every fifth sample by index, from this one.
+    Index(usize),
+}
+
+impl Fold {
+    fn holds(&self, i: usize, s: &Sample) -> bool {
+        match *self {
+            Fold::Group(g) => s.group == g,
+            Fold::Index(f) => i % 5 == f,
+        }
+    }
+}
+
 /// The accuracy of `method` when each group in turn is left out of training and
 /// classified (leave-one-group-out); with a single group, five folds by index.
 pub fn cross_validate(set: &TrainingSet, method: Method) -> Option<f32> {
     let mut groups: Vec<u32> = set.samples.iter().map(|s| s.group).collect();
     groups.sort_unstable();
     groups.dedup();
-    let folds: Vec<Box<dyn Fn(usize, &Sample) -> bool>> = if groups.len() >= 2 {
-        groups
-            .iter()
-            .map(|&g| {
-                Box::new(move |_: usize, s: &Sample| s.group == g)
-                    as Box<dyn Fn(usize, &Sample) -> bool>
-            })
-            .collect()
+    let folds: Vec<Fold> = if groups.len() >= 2 {
+        groups.iter().map(|&g| Fold::Group(g)).collect()
     } else {
-        (0..5)
-            .map(|f| {
-                Box::new(move |i: usize, _: &Sample| i % 5 == f)
-                    as Box<dyn Fn(usize, &Sample) -> bool>
-            })
-            .collect()
+        (0..5).map(Fold::Index).collect()
     };
     let (mut right, mut total) = (0usize, 0usize);
     for held in &folds {
@@ -326,7 +332,7 @@ pub fn cross_validate(set: &TrainingSet, method: Method) -> Option<f32> {
             labels: set.labels.clone(),
             samples: idx
                 .iter()
-                .filter(|&&i| !held(i, &set.samples[i]))
+                .filter(|&&i| !held.holds(i, &set.samples[i]))
                 .map(|&i| set.samples[i])
                 .collect(),
         };
@@ -334,7 +340,7 @@ pub fn cross_validate(set: &TrainingSet, method: Method) -> Option<f32> {
             continue;
         };
         for (i, s) in set.samples.iter().enumerate() {
-            if held(i, s) {
+            if held.holds(i, s) {
                 total += 1;
                 let f = Features::from_values(s.x);
                 right += (c.predict(&f).label == s.label) as usize;

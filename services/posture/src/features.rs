@@ -250,14 +250,17 @@ fn defect_depths(mask: &[bool], w: usize, h: usize, hull: &[(f32, f32)]) -> Vec<
         return Vec::new();
     }
     let n = hull.len();
-    let edges: Vec<((f32, f32), (f32, f32), f32)> = (0..n)
+    // Each hull edge: its two ends and its length.
+    struct Edge {
+        a: (f32, f32),
+        b: (f32, f32),
+        len: f32,
+    }
+    let edges: Vec<Edge> = (0..n)
         .map(|i| {
             let (a, b) = (hull[i], hull[(i + 1) % n]);
-            (
-                a,
-                b,
-                ((b.0 - a.0).powi(2) + (b.1 - a.1).powi(2)).sqrt().max(1e-6),
-            )
+            let len = ((b.0 - a.0).powi(2) + (b.1 - a.1).powi(2)).sqrt().max(1e-6);
+            Edge { a, b, len }
         })
         .collect();
     // The hull's orientation: the sign of its signed area.
@@ -274,7 +277,7 @@ fn defect_depths(mask: &[bool], w: usize, h: usize, hull: &[(f32, f32)]) -> Vec<
     // least distance to an edge.
     let depth_inside = |x: f32, y: f32| -> Option<f32> {
         let mut least = f32::INFINITY;
-        for &(a, b, len) in &edges {
+        for &Edge { a, b, len } in &edges {
             let c = sign * ((b.0 - a.0) * (y - a.1) - (b.1 - a.1) * (x - a.0)) / len;
             if c < 0.0 {
                 return None;

@@ -238,7 +238,7 @@ pub fn segment(
     }
     let along = arm.hand - arm.elbow;
     let forearm_len = along.norm();
-    if !(forearm_len > 0.05) {
+    if !forearm_len.is_finite() || forearm_len <= 0.05 {
         return Err(NoHand::BadJoints);
     }
     let forearm = along / forearm_len;

@@ -188,13 +188,13 @@ fn spread(all: &[Features]) -> [f32; FEATURE_LEN] {
     let mut mean = [0.0; FEATURE_LEN];
     let mut sd = [0.0; FEATURE_LEN];
     for f in all {
-        for i in 0..FEATURE_LEN {
-            mean[i] += f.values()[i] / n;
+        for (m, v) in mean.iter_mut().zip(f.values()) {
+            *m += v / n;
         }
     }
     for f in all {
-        for i in 0..FEATURE_LEN {
-            sd[i] += (f.values()[i] - mean[i]).powi(2) / n;
+        for ((s, v), m) in sd.iter_mut().zip(f.values()).zip(&mean) {
+            *s += (v - m).powi(2) / n;
         }
     }
     sd.map(|v: f32| v.sqrt().max(1e-3))
