@@ -1,0 +1,751 @@
+//! Measures posture recognition on synthetic hands: trains on procedural bodies and
+//! tests on MakeHuman bodies (and a procedural body of its own) never seen in
+//! training, with other seeds; prints accuracy by distance, by the hand's turn at the
+//! wrist and with and without the sensor model, for both classifiers; writes the
+//! confusion matrix and a few segmentation overlays as PNGs.
+//!
+//! cargo run --release -p airglyph-posture --example eval -- [OUT_DIR] [--quick]
+//!
+//! The hand joint and elbow given to the segmentation are the truth's moved by
+//! Gaussian noise (2 cm a coordinate), standing in for the pose estimate's error.
+//! Classifier settings are chosen by leave-one-body-out cross-validation on the
+//! training bodies only.
+
+use airglyph_core::{Intrinsics, Joint};
+use airglyph_posture::{
+    choose, describe, ArmJoints, Classifier, Hand, Method, SegmentParams, TrainingSet,
+};
+use airglyph_synth::{
+    BodySpec, Bone, HandPosture, MakeHumanShape, MotionSpec, ProceduralBody, SceneConfig,
+    ScriptedPose, Synthesizer,
+};
+use image::{Rgb, RgbImage};
+use nalgebra::{Point3, Vector3};
+use plotters::prelude::*;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+const DISTANCES: [f32; 4] = [0.8, 1.2, 2.0, 2.7];
+/// The hand's turn at the wrist on top of palm-to-camera: (roll, pitch) degrees.
+const TURNS: [(f32, f32); 7] = [
+    (0.0, 0.0),
+    (45.0, 0.0),
+    (-45.0, 0.0),
+    (90.0, 0.0),
+    (180.0, 0.0),
+    (0.0, 40.0),
+    (0.0, -40.0),
+];
+/// The pose estimate's error stood in for: per coordinate, metres.
+const JOINT_NOISE_M: f32 = 0.02;
+
+/// One scene's setting, all that a sample varies by.
+#[derive(Debug, Clone, Copy)]
+struct Setting {
+    posture: HandPosture,
+    distance: usize,
+    turn: usize,
+    noise: bool,
+    seed: u64,
+}
+
+/// A body and the scene calibrated for it at each distance: the roll that turns the
+/// palm to the camera and the placement that puts the palm at the distance.
+struct Subject {
+    name: String,
+    group: u32,
+    base: Vec<SceneConfig>,
+}
+
+fn calibrate(body: &BodySpec) -> Option<Vec<SceneConfig>> {
+    let mut out = Vec::new();
+    for &d in &DISTANCES {
+        let mut cfg = SceneConfig {
+            body: body.clone(),
+            motion: MotionSpec::Pose(ScriptedPose::Wave),
+            ..SceneConfig::default()
+        };
+        cfg.placement.distance_m = d;
+        cfg = cfg.framing_upper_body().ok()?;
+        cfg.hands.right.posture = Some(HandPosture::Open);
+        let truth = |cfg: &SceneConfig| Some(Synthesizer::new(cfg.clone()).ok()?.render(0).1);
+        let h = truth(&cfg)?.hands.right;
+        cfg.hands.right.roll_deg = (-h.thumb_side.z).atan2(-h.palm_normal.z).to_degrees();
+        for _ in 0..2 {
+            let z = truth(&cfg)?.hands.right.palm_centre.z;
+            cfg.placement.distance_m += d - z;
+        }
+        out.push(cfg);
+    }
+    Some(out)
+}
+
+/// A rendered hand: what the segmentation got and the truth's own hand pixels.
+struct Shot {
+    k: Intrinsics,
+    depth: Vec<u16>,
+    truth_hand: Vec<bool>,
+    arm: ArmJoints,
+    hand: Option<Hand>,
+    palm: Point3<f32>,
+    /// Seconds the segmentation, frame and features took.
+    cost_s: f64,
+}
+
+fn shoot(subject: &Subject, s: Setting, params: &SegmentParams) -> Option<Shot> {
+    let mut cfg = subject.base[s.distance].clone();
+    let (roll, pitch) = TURNS[s.turn];
+    cfg.hands.right.posture = Some(s.posture);
+    cfg.hands.right.roll_deg += roll;
+    cfg.hands.right.pitch_deg += pitch;
+    cfg.sensor_noise = s.noise;
+    cfg.seed = s.seed;
+    let mut synth = Synthesizer::new(cfg).ok()?;
+    let k = synth.intrinsics();
+    let (img, truth) = synth.render(0);
+    let truth_hand: Vec<bool> = synth
+        .labels()
+        .iter()
+        .zip(img.pixels())
+        .map(|(&l, &z)| l == Bone::RightHand as u8 && z > 0)
+        .collect();
+    let mut rng = ChaCha8Rng::seed_from_u64(s.seed ^ 0x9e37_79b9);
+    let mut jitter = |p: Point3<f32>| {
+        let n = Vector3::from_fn(|_, _| {
+            // Box–Muller: a Gaussian from two uniforms.
+            let (a, b): (f32, f32) = (rng.gen_range(1e-6..1.0), rng.gen());
+            (-2.0 * a.ln()).sqrt() * (std::f32::consts::TAU * b).cos() * JOINT_NOISE_M
+        });
+        p + n
+    };
+    let arm = ArmJoints {
+        hand: jitter(truth.skeleton.get(Joint::RightHand)),
+        elbow: jitter(truth.skeleton.get(Joint::RightElbow)),
+    };
+    let started = Instant::now();
+    let hand = describe(img.view(), &k, arm, params);
+    let cost_s = started.elapsed().as_secs_f64();
+    if let Err(e) = &hand {
+        if std::env::var_os("POSTURE_DEBUG").is_some() {
+            eprintln!("{:?} {:?}: {e}", subject.name, s);
+        }
+    }
+    let hand = hand.ok();
+    Some(Shot {
+        k,
+        depth: img.pixels().to_vec(),
+        truth_hand,
+        arm,
+        hand,
+        palm: truth.hands.right.palm_centre,
+        cost_s,
+    })
+}
+
+impl Shot {
+    fn iou(&self) -> f32 {
+        let Some(h) = &self.hand else { return 0.0 };
+        let w = self.k.width;
+        let (mut inter, mut union) = (0usize, 0usize);
+        for (i, &t) in self.truth_hand.iter().enumerate() {
+            let s = h.region.contains(i as u32 % w, i as u32 / w);
+            inter += (s && t) as usize;
+            union += (s || t) as usize;
+        }
+        inter as f32 / union.max(1) as f32
+    }
+
+    /// A close-up around the palm: depth grey, the truth's hand pixels the
+    /// segmentation found green, those it missed blue, pixels it took that are not
+    /// the hand's red; the jittered joint yellow.
+    fn overlay(&self, pic: &mut RgbImage, col: u32, row: u32, cell: u32) {
+        let k = &self.k;
+        let Some((cu, cv)) = k.project(&self.palm) else {
+            return;
+        };
+        let scale = 0.32 * k.fx / self.palm.z / cell as f32;
+        let z0 = self.palm.z * 1000.0;
+        for y in 0..cell {
+            for x in 0..cell {
+                let u = (cu + (x as f32 - cell as f32 / 2.0) * scale).round();
+                let v = (cv + (y as f32 - cell as f32 / 2.0) * scale).round();
+                let px = if u < 0.0 || v < 0.0 || u >= k.width as f32 || v >= k.height as f32 {
+                    Rgb([40, 0, 0])
+                } else {
+                    let (u, v) = (u as u32, v as u32);
+                    let i = (v * k.width + u) as usize;
+                    let seg = self.hand.as_ref().is_some_and(|h| h.region.contains(u, v));
+                    let t = self.truth_hand[i];
+                    let g = match self.depth[i] {
+                        0 => 0,
+                        mm => ((z0 + 200.0 - mm as f32) / 400.0 * 200.0).clamp(0.0, 200.0) as u8,
+                    };
+                    match (seg, t) {
+                        (true, true) => Rgb([0, 120 + g / 2, 0]),
+                        (true, false) => Rgb([230, 40, 40]),
+                        (false, true) => Rgb([40, 80, 240]),
+                        (false, false) => Rgb([g, g, g]),
+                    }
+                };
+                pic.put_pixel(col * cell + x, row * cell + y, px);
+            }
+        }
+        if let Some((u, v)) = k.project(&self.arm.hand) {
+            let x = ((u - cu) / scale + cell as f32 / 2.0) as i64;
+            let y = ((v - cv) / scale + cell as f32 / 2.0) as i64;
+            for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1), (-1, 0), (0, -1)] {
+                let (x, y) = (x + dx, y + dy);
+                if (0..cell as i64).contains(&x) && (0..cell as i64).contains(&y) {
+                    pic.put_pixel(
+                        col * cell + x as u32,
+                        row * cell + y as u32,
+                        Rgb([255, 230, 0]),
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// A tally of right and wrong by some key.
+#[derive(Default, Clone)]
+struct Tally {
+    right: usize,
+    total: usize,
+}
+
+impl Tally {
+    fn add(&mut self, ok: bool) {
+        self.right += ok as usize;
+        self.total += 1;
+    }
+    fn pct(&self) -> String {
+        if self.total == 0 {
+            "   -  ".into()
+        } else {
+            format!("{:5.1}%", 100.0 * self.right as f32 / self.total as f32)
+        }
+    }
+}
+
+/// What one setting gave: the hand (`None` where none was found), the segmentation's
+/// IoU against the renderer's hand pixels, and the seconds describing it took.
+struct Row {
+    setting: Setting,
+    hand: Option<Hand>,
+    iou: f32,
+    cost_s: f64,
+}
+
+/// Every setting for one subject.
+fn collect(subject: &Subject, settings: &[Setting], params: &SegmentParams) -> Vec<Row> {
+    settings
+        .iter()
+        .filter_map(|&s| {
+            let shot = shoot(subject, s, params)?;
+            let iou = shot.iou();
+            Some(Row {
+                setting: s,
+                iou,
+                cost_s: shot.cost_s,
+                hand: shot.hand,
+            })
+        })
+        .collect()
+}
+
+fn settings(seed0: u64, turns: &[usize]) -> Vec<Setting> {
+    let mut out = Vec::new();
+    let mut seed = seed0;
+    for posture in HandPosture::ALL {
+        for distance in 0..DISTANCES.len() {
+            for &turn in turns {
+                for noise in [false, true] {
+                    seed += 1;
+                    out.push(Setting {
+                        posture,
+                        distance,
+                        turn,
+                        noise,
+                        seed,
+                    });
+                }
+            }
+        }
+    }
+    out
+}
+
+fn label_of(p: HandPosture) -> usize {
+    HandPosture::ALL.iter().position(|&q| q == p).unwrap_or(0)
+}
+
+fn plot_confusion(
+    path: &Path,
+    title: &str,
+    m: &[Vec<u32>],
+    labels: &[String],
+) -> Result<(), Box<dyn std::error::Error>> {
+    let n = labels.len();
+    let cell = 64u32;
+    let size = (cell * n as u32 + 140, cell * n as u32 + 150);
+    airglyph_plot::png(path, size, |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(title, ("sans-serif", 16))
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(70)
+            .build_cartesian_2d((0..n - 1).into_segmented(), (0..n - 1).into_segmented())?;
+        let (lx, ly) = (labels.to_vec(), labels.to_vec());
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .x_labels(n)
+            .y_labels(n)
+            .x_desc("predicted")
+            .y_desc("true")
+            .x_label_formatter(&move |v| match v {
+                SegmentValue::CenterOf(i) => lx.get(*i).cloned().unwrap_or_default(),
+                _ => String::new(),
+            })
+            .y_label_formatter(&move |v| match v {
+                SegmentValue::CenterOf(i) if *i < n => ly[n - 1 - *i].clone(),
+                _ => String::new(),
+            })
+            .draw()?;
+        let mut rects = Vec::new();
+        let mut texts = Vec::new();
+        for (i, row) in m.iter().enumerate() {
+            let tot: u32 = row.iter().sum::<u32>().max(1);
+            for (j, &c) in row.iter().enumerate() {
+                let v = c as f64 / tot as f64;
+                let s = v.sqrt();
+                let colour = RGBColor(
+                    (255.0 * (1.0 - s)) as u8,
+                    (255.0 * (1.0 - 0.8 * s)) as u8,
+                    255,
+                );
+                let y = n - 1 - i;
+                rects.push(Rectangle::new(
+                    [
+                        (SegmentValue::Exact(j), SegmentValue::Exact(y)),
+                        (SegmentValue::Exact(j + 1), SegmentValue::Exact(y + 1)),
+                    ],
+                    colour.filled(),
+                ));
+                let tc = if s > 0.6 { WHITE } else { BLACK };
+                texts.push(Text::new(
+                    format!("{c}"),
+                    (SegmentValue::CenterOf(j), SegmentValue::CenterOf(y)),
+                    ("sans-serif", 14).into_font().color(&tc),
+                ));
+            }
+        }
+        chart.draw_series(rects)?;
+        chart.draw_series(texts)?;
+        Ok(())
+    })?;
+    Ok(())
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let quick = args.iter().any(|a| a == "--quick");
+    let out = PathBuf::from(
+        args.iter()
+            .find(|a| !a.starts_with("--"))
+            .cloned()
+            .unwrap_or_else(|| "services/posture/eval".into()),
+    );
+    std::fs::create_dir_all(&out)?;
+    let mut params = SegmentParams::default();
+    let t0 = Instant::now();
+
+    let procedural = |h: f32, b: f32| {
+        BodySpec::Procedural(ProceduralBody {
+            height_m: h,
+            build: b,
+        })
+    };
+    let train_bodies: Vec<(String, BodySpec)> = vec![
+        ("procedural 1.60 m build 0.9".into(), procedural(1.60, 0.9)),
+        ("procedural 1.75 m build 1.0".into(), procedural(1.75, 1.0)),
+        ("procedural 1.90 m build 1.2".into(), procedural(1.90, 1.2)),
+    ];
+    let mut test_bodies: Vec<(String, BodySpec)> = vec![(
+        "procedural 1.68 m build 1.35".into(),
+        procedural(1.68, 1.35),
+    )];
+    for shape in ["gender=0,height=0.45", "gender=1,height=0.6,weight=0.6"] {
+        match MakeHumanShape::parse(shape) {
+            Ok(s) => test_bodies.push((
+                format!("MakeHuman {shape}"),
+                BodySpec::MakeHuman {
+                    assets: None,
+                    shape: s,
+                },
+            )),
+            Err(e) => eprintln!("skipping MakeHuman {shape}: {e}"),
+        }
+    }
+    let subjects = |bodies: Vec<(String, BodySpec)>, group0: u32| -> Vec<Subject> {
+        bodies
+            .into_iter()
+            .enumerate()
+            .filter_map(|(i, (name, body))| match calibrate(&body) {
+                Some(base) => Some(Subject {
+                    name,
+                    group: group0 + i as u32,
+                    base,
+                }),
+                None => {
+                    eprintln!("skipping {name}: it does not load (MakeHuman assets missing?)");
+                    None
+                }
+            })
+            .collect()
+    };
+    let train_subjects = subjects(train_bodies, 0);
+    let test_subjects = subjects(test_bodies, 100);
+    eprintln!("calibrated in {:.1} s", t0.elapsed().as_secs_f32());
+
+    // Where the forearm is cut: chosen by the segmentation's IoU on the training
+    // bodies (a few turns), never on the test bodies.
+    let mut best_cut = (f32::NEG_INFINITY, params.wrist_back, params.palm_back);
+    for (wrist_back, palm_back) in [0.15, 0.2, 0.25]
+        .into_iter()
+        .flat_map(|w| [0.15, 0.18, 0.21].map(|p| (w, p)))
+    {
+        let p = SegmentParams {
+            wrist_back,
+            palm_back,
+            ..params
+        };
+        let (mut sum, mut n) = (0.0, 0);
+        for subj in &train_subjects {
+            for Row { iou, .. } in
+                collect(subj, &settings(subj.group as u64 * 10_000, &[0, 3, 5]), &p)
+            {
+                sum += iou;
+                n += 1;
+            }
+        }
+        let mean = sum / n.max(1) as f32;
+        println!("wrist cut {wrist_back} of elbow–hand back, {palm_back} of it behind the palm's centre: training IoU {mean:.3}");
+        if mean > best_cut.0 {
+            best_cut = (mean, wrist_back, palm_back);
+        }
+    }
+    params.wrist_back = best_cut.1;
+    params.palm_back = best_cut.2;
+    println!(
+        "Kept wrist cut {}, palm cut {} (training IoU {:.3})",
+        best_cut.1, best_cut.2, best_cut.0
+    );
+
+    let all_turns: Vec<usize> = (0..TURNS.len()).collect();
+    let turns: Vec<usize> = if quick { vec![0, 1, 4] } else { all_turns };
+    let labels: Vec<String> = HandPosture::ALL
+        .iter()
+        .map(|p| p.name().to_string())
+        .collect();
+    let mut train = TrainingSet::new(labels.clone());
+    let mut missed_train = 0;
+    let mut train_rows = Vec::new();
+    for subj in &train_subjects {
+        for row in collect(subj, &settings(subj.group as u64 * 10_000, &turns), &params) {
+            match &row.hand {
+                Some(h) => {
+                    train.add(&h.features, label_of(row.setting.posture), subj.group)?;
+                    train_rows.push((subj.group, row.setting, h.features));
+                }
+                None => missed_train += 1,
+            }
+        }
+    }
+    eprintln!(
+        "training: {} hands from {} bodies ({} not found) in {:.1} s",
+        train.len(),
+        train_subjects.len(),
+        missed_train,
+        t0.elapsed().as_secs_f32()
+    );
+
+    let knn = [1, 3, 5, 9].map(|k| Method::Knn { k });
+    let softmax = [1e-4, 1e-3, 1e-2, 1e-1].map(|l2| Method::Softmax { l2 });
+    let (best_knn, cv_knn) = choose(&train, &knn).ok_or("no k-NN")?;
+    let (best_soft, cv_soft) = choose(&train, &softmax).ok_or("no softmax")?;
+    println!(
+        "Trained on {} (seeds 1..), {} hands.",
+        train_subjects
+            .iter()
+            .map(|s| s.name.as_str())
+            .collect::<Vec<_>>()
+            .join(", "),
+        train.len()
+    );
+    println!(
+        "Leave-one-body-out on training: {best_knn} {:.1}%, {best_soft} {:.1}%",
+        100.0 * cv_knn,
+        100.0 * cv_soft
+    );
+    let kept = if cv_knn >= cv_soft {
+        best_knn
+    } else {
+        best_soft
+    };
+    println!("Kept (by training cross-validation): {kept}");
+    let classifiers = [
+        Classifier::train(&train, best_knn)?,
+        Classifier::train(&train, best_soft)?,
+    ];
+    eprintln!("trained in {:.1} s", t0.elapsed().as_secs_f32());
+
+    // Test: other bodies, other seeds.
+    let mut by_distance = vec![vec![Tally::default(); DISTANCES.len()]; 2];
+    let mut by_turn = vec![vec![Tally::default(); TURNS.len()]; 2];
+    let mut by_noise = vec![vec![Tally::default(); 2]; 2];
+    let mut by_body = vec![vec![Tally::default(); test_subjects.len()]; 2];
+    let mut overall = vec![Tally::default(); 2];
+    let mut confusion = vec![vec![0u32; labels.len()]; labels.len()];
+    let mut iou_by_distance = vec![(0.0f32, 0usize); DISTANCES.len()];
+    let mut not_found = 0;
+    let test_turns: Vec<usize> = if quick {
+        vec![0, 1, 4]
+    } else {
+        (0..TURNS.len()).collect()
+    };
+    let mut test_rows = Vec::new();
+    let mut cost_by_distance = vec![Vec::new(); DISTANCES.len()];
+    for (bi, subj) in test_subjects.iter().enumerate() {
+        for Row {
+            setting: s,
+            hand,
+            iou,
+            cost_s,
+        } in collect(
+            subj,
+            &settings(1_000_000 + subj.group as u64 * 10_000, &test_turns),
+            &params,
+        ) {
+            test_rows.push((s, hand.as_ref().map(|h| h.features)));
+            cost_by_distance[s.distance].push(cost_s);
+            iou_by_distance[s.distance].0 += iou;
+            iou_by_distance[s.distance].1 += 1;
+            let truth = label_of(s.posture);
+            for (ci, c) in classifiers.iter().enumerate() {
+                // No hand found counts as wrong.
+                let pred = hand.as_ref().map(|h| c.predict(&h.features).label);
+                let ok = pred == Some(truth);
+                by_distance[ci][s.distance].add(ok);
+                by_turn[ci][s.turn].add(ok);
+                by_noise[ci][s.noise as usize].add(ok);
+                by_body[ci][bi].add(ok);
+                overall[ci].add(ok);
+                if c.method() == kept {
+                    if let Some(p) = pred {
+                        confusion[truth][p] += 1;
+                    }
+                }
+            }
+            not_found += hand.is_none() as usize;
+        }
+    }
+    let names = [best_knn.to_string(), best_soft.to_string()];
+    println!(
+        "\nTest: {} ({} hands, {} with no hand found, counted wrong)",
+        test_subjects
+            .iter()
+            .map(|s| s.name.as_str())
+            .collect::<Vec<_>>()
+            .join(", "),
+        overall[0].total,
+        not_found
+    );
+    println!("{:<34} {:>16} {:>20}", "", names[0], names[1]);
+    println!(
+        "{:<34} {:>16} {:>20}",
+        "all",
+        overall[0].pct(),
+        overall[1].pct()
+    );
+    for (i, d) in DISTANCES.iter().enumerate() {
+        let iou = iou_by_distance[i].0 / iou_by_distance[i].1.max(1) as f32;
+        println!(
+            "{:<34} {:>16} {:>20}",
+            format!("{d} m (mean IoU {iou:.2})"),
+            by_distance[0][i].pct(),
+            by_distance[1][i].pct()
+        );
+    }
+    for &t in &test_turns {
+        let (r, p) = TURNS[t];
+        println!(
+            "{:<34} {:>16} {:>20}",
+            format!("roll {r:+} pitch {p:+}"),
+            by_turn[0][t].pct(),
+            by_turn[1][t].pct()
+        );
+    }
+    for (n, name) in ["no sensor model", "sensor model"].iter().enumerate() {
+        println!(
+            "{:<34} {:>16} {:>20}",
+            name,
+            by_noise[0][n].pct(),
+            by_noise[1][n].pct()
+        );
+    }
+    for (bi, subj) in test_subjects.iter().enumerate() {
+        println!(
+            "{:<34} {:>16} {:>20}",
+            subj.name,
+            by_body[0][bi].pct(),
+            by_body[1][bi].pct()
+        );
+    }
+    for (i, d) in DISTANCES.iter().enumerate() {
+        let c = &mut cost_by_distance[i];
+        c.sort_by(f64::total_cmp);
+        if let (Some(med), Some(max)) = (c.get(c.len() / 2), c.last()) {
+            println!(
+                "describe (segment, frame, features) at {d} m: median {:.3} ms, max {:.3} ms",
+                med * 1e3,
+                max * 1e3
+            );
+        }
+    }
+
+    // Turns held out: trained on some of the wrist's turns, tested on the others
+    // (other bodies and seeds as well).
+    if !quick {
+        let (seen, unseen) = ([0usize, 1, 4, 5], [2usize, 3, 6]);
+        let mut part = TrainingSet::new(labels.clone());
+        for (g, s, f) in &train_rows {
+            if seen.contains(&s.turn) {
+                part.add(f, label_of(s.posture), *g)?;
+            }
+        }
+        let methods: Vec<Method> = knn.iter().chain(softmax.iter()).copied().collect();
+        let (m_knn, _) = choose(&part, &knn).ok_or("no k-NN")?;
+        let (m_soft, _) = choose(&part, &softmax).ok_or("no softmax")?;
+        let (m_kept, cv) = choose(&part, &methods).ok_or("no method")?;
+        let cs = [
+            Classifier::train(&part, m_knn)?,
+            Classifier::train(&part, m_soft)?,
+        ];
+        let describe_turns = |ts: &[usize]| {
+            ts.iter()
+                .map(|&t| format!("roll {:+} pitch {:+}", TURNS[t].0, TURNS[t].1))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        println!(
+            "\nTurns held out: trained on {} ({} hands; kept {m_kept}, cross-validated {:.1}%), tested on {}",
+            describe_turns(&seen),
+            part.len(),
+            100.0 * cv,
+            describe_turns(&unseen)
+        );
+        println!(
+            "{:<34} {:>16} {:>20}",
+            "",
+            m_knn.to_string(),
+            m_soft.to_string()
+        );
+        let mut all = [Tally::default(), Tally::default()];
+        for &t in &unseen {
+            let mut tally = [Tally::default(), Tally::default()];
+            for (s, f) in test_rows.iter().filter(|(s, _)| s.turn == t) {
+                for (ci, c) in cs.iter().enumerate() {
+                    let ok = f.as_ref().map(|f| c.predict(f).label) == Some(label_of(s.posture));
+                    tally[ci].add(ok);
+                    all[ci].add(ok);
+                }
+            }
+            let (r, p) = TURNS[t];
+            println!(
+                "{:<34} {:>16} {:>20}",
+                format!("roll {r:+} pitch {p:+}"),
+                tally[0].pct(),
+                tally[1].pct()
+            );
+        }
+        println!(
+            "{:<34} {:>16} {:>20}",
+            "all unseen turns",
+            all[0].pct(),
+            all[1].pct()
+        );
+    }
+
+    let path = out.join("confusion.png");
+    plot_confusion(
+        &path,
+        &format!("{kept}, test bodies, all settings"),
+        &confusion,
+        &labels,
+    )?;
+    println!("wrote {}", path.display());
+
+    // Overlays: every posture at each distance, the first test body, no turn, with
+    // the sensor model.
+    if let Some(subj) = test_subjects.first() {
+        for noise in [false, true] {
+            let cell = 128;
+            let mut pic = RgbImage::new(
+                cell * HandPosture::ALL.len() as u32,
+                cell * DISTANCES.len() as u32,
+            );
+            for (row, _) in DISTANCES.iter().enumerate() {
+                for (col, &posture) in HandPosture::ALL.iter().enumerate() {
+                    let s = Setting {
+                        posture,
+                        distance: row,
+                        turn: 0,
+                        noise,
+                        seed: 7 + col as u64,
+                    };
+                    if let Some(shot) = shoot(subj, s, &params) {
+                        shot.overlay(&mut pic, col as u32, row as u32, cell);
+                    }
+                }
+            }
+            let path = out.join(if noise {
+                "overlay_noise.png"
+            } else {
+                "overlay.png"
+            });
+            pic.save(&path)?;
+            println!("wrote {}", path.display());
+        }
+    }
+    // Overlays of the turns: rows are the turns, at 1.2 m, with the sensor model.
+    if let Some(subj) = test_subjects.first() {
+        let cell = 128;
+        let mut pic = RgbImage::new(
+            cell * HandPosture::ALL.len() as u32,
+            cell * TURNS.len() as u32,
+        );
+        for row in 0..TURNS.len() {
+            for (col, &posture) in HandPosture::ALL.iter().enumerate() {
+                let s = Setting {
+                    posture,
+                    distance: 1,
+                    turn: row,
+                    noise: true,
+                    seed: 11 + col as u64,
+                };
+                if let Some(shot) = shoot(subj, s, &params) {
+                    shot.overlay(&mut pic, col as u32, row as u32, cell);
+                }
+            }
+        }
+        let path = out.join("overlay_turns.png");
+        pic.save(&path)?;
+        println!("wrote {}", path.display());
+    }
+    eprintln!("done in {:.1} s", t0.elapsed().as_secs_f32());
+    Ok(())
+}
