@@ -21,10 +21,9 @@ use airglyph_synth::{
 };
 use image::{Rgb, RgbImage};
 use nalgebra::{Point3, Vector3};
-use plotters::prelude::*;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 const DISTANCES: [f32; 4] = [0.8, 1.2, 2.0, 2.7];
@@ -280,74 +279,6 @@ fn settings(seed0: u64, turns: &[usize]) -> Vec<Setting> {
 
 fn label_of(p: HandPosture) -> usize {
     HandPosture::ALL.iter().position(|&q| q == p).unwrap_or(0)
-}
-
-fn plot_confusion(
-    path: &Path,
-    title: &str,
-    m: &[Vec<u32>],
-    labels: &[String],
-) -> Result<(), Box<dyn std::error::Error>> {
-    let n = labels.len();
-    let cell = 64u32;
-    let size = (cell * n as u32 + 140, cell * n as u32 + 150);
-    airglyph_plot::png(path, size, |root| {
-        let mut chart = ChartBuilder::on(root)
-            .caption(title, ("sans-serif", 16))
-            .margin(10)
-            .x_label_area_size(40)
-            .y_label_area_size(70)
-            .build_cartesian_2d((0..n - 1).into_segmented(), (0..n - 1).into_segmented())?;
-        let (lx, ly) = (labels.to_vec(), labels.to_vec());
-        chart
-            .configure_mesh()
-            .disable_mesh()
-            .x_labels(n)
-            .y_labels(n)
-            .x_desc("predicted")
-            .y_desc("true")
-            .x_label_formatter(&move |v| match v {
-                SegmentValue::CenterOf(i) => lx.get(*i).cloned().unwrap_or_default(),
-                _ => String::new(),
-            })
-            .y_label_formatter(&move |v| match v {
-                SegmentValue::CenterOf(i) if *i < n => ly[n - 1 - *i].clone(),
-                _ => String::new(),
-            })
-            .draw()?;
-        let mut rects = Vec::new();
-        let mut texts = Vec::new();
-        for (i, row) in m.iter().enumerate() {
-            let tot: u32 = row.iter().sum::<u32>().max(1);
-            for (j, &c) in row.iter().enumerate() {
-                let v = c as f64 / tot as f64;
-                let s = v.sqrt();
-                let colour = RGBColor(
-                    (255.0 * (1.0 - s)) as u8,
-                    (255.0 * (1.0 - 0.8 * s)) as u8,
-                    255,
-                );
-                let y = n - 1 - i;
-                rects.push(Rectangle::new(
-                    [
-                        (SegmentValue::Exact(j), SegmentValue::Exact(y)),
-                        (SegmentValue::Exact(j + 1), SegmentValue::Exact(y + 1)),
-                    ],
-                    colour.filled(),
-                ));
-                let tc = if s > 0.6 { WHITE } else { BLACK };
-                texts.push(Text::new(
-                    format!("{c}"),
-                    (SegmentValue::CenterOf(j), SegmentValue::CenterOf(y)),
-                    ("sans-serif", 14).into_font().color(&tc),
-                ));
-            }
-        }
-        chart.draw_series(rects)?;
-        chart.draw_series(texts)?;
-        Ok(())
-    })?;
-    Ok(())
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -681,11 +612,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
 
     let path = out.join("confusion.png");
-    plot_confusion(
+    airglyph_plot::confusion(
         &path,
         &format!("{kept}, test bodies, all settings"),
-        &confusion,
         &labels,
+        &confusion,
+        true,
     )?;
     println!("wrote {}", path.display());
 

@@ -82,6 +82,80 @@ pub fn png(
     airglyph_core::file::write_whole(path, encoded.into_inner()).map_err(|e| fail(e.to_string()))
 }
 
+/// Draws a confusion matrix `m[truth][predicted]` over `labels` as a PNG heat map, each
+/// row normalized (white to dark blue, by the square root so small confusions show),
+/// with the counts written in the cells when `counts`.
+pub fn confusion(
+    path: &Path,
+    title: &str,
+    labels: &[String],
+    m: &[Vec<u32>],
+    counts: bool,
+) -> Result<(), PlotError> {
+    let n = labels.len().max(1);
+    let cell = if n <= 12 { 56 } else { 24 };
+    let size = (cell * n as u32 + 140, cell * n as u32 + 150);
+    png(path, size, |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(title, ("sans-serif", 16))
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(70)
+            .build_cartesian_2d((0..n - 1).into_segmented(), (0..n - 1).into_segmented())?;
+        let (lx, ly) = (labels.to_vec(), labels.to_vec());
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .x_labels(n)
+            .y_labels(n)
+            .x_desc("predicted")
+            .y_desc("true")
+            .x_label_formatter(&move |v| match v {
+                SegmentValue::CenterOf(i) => lx.get(*i).cloned().unwrap_or_default(),
+                _ => String::new(),
+            })
+            .y_label_formatter(&move |v| match v {
+                SegmentValue::CenterOf(i) if *i < n => {
+                    ly.get(n - 1 - *i).cloned().unwrap_or_default()
+                }
+                _ => String::new(),
+            })
+            .draw()?;
+        let mut rects = Vec::new();
+        let mut texts = Vec::new();
+        for (i, row) in m.iter().enumerate().take(n) {
+            let total = row.iter().sum::<u32>().max(1);
+            for (j, &c) in row.iter().enumerate().take(n) {
+                let s = (c as f64 / total as f64).sqrt();
+                let colour = RGBColor(
+                    (255.0 * (1.0 - s)) as u8,
+                    (255.0 * (1.0 - 0.8 * s)) as u8,
+                    255,
+                );
+                let y = n - 1 - i;
+                rects.push(Rectangle::new(
+                    [
+                        (SegmentValue::Exact(j), SegmentValue::Exact(y)),
+                        (SegmentValue::Exact(j + 1), SegmentValue::Exact(y + 1)),
+                    ],
+                    colour.filled(),
+                ));
+                if counts {
+                    let ink = if s > 0.6 { WHITE } else { BLACK };
+                    texts.push(Text::new(
+                        format!("{c}"),
+                        (SegmentValue::CenterOf(j), SegmentValue::CenterOf(y)),
+                        ("sans-serif", 14).into_font().color(&ink),
+                    ));
+                }
+            }
+        }
+        chart.draw_series(rects)?;
+        chart.draw_series(texts)?;
+        Ok(())
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -75,59 +75,7 @@ impl Confusion {
 
     /// Draws the row-normalized matrix as a PNG heat map.
     pub fn plot(&self, path: &Path, title: &str) -> Result<(), PlotError> {
-        let n = self.labels.len().max(1);
-        let cell = if n <= 12 { 48 } else { 24 };
-        let size = (cell * n as u32 + 120, cell * n as u32 + 140);
-        airglyph_plot::png(path, size, |root| {
-            let mut chart = ChartBuilder::on(root)
-                .caption(title, ("sans-serif", 18))
-                .margin(10)
-                .x_label_area_size(40)
-                .y_label_area_size(40)
-                .build_cartesian_2d((0..n - 1).into_segmented(), (0..n - 1).into_segmented())?;
-            let labels = self.labels.clone();
-            let labels2 = self.labels.clone();
-            chart
-                .configure_mesh()
-                .disable_mesh()
-                .x_labels(n)
-                .y_labels(n)
-                .x_desc("predicted")
-                .y_desc("true")
-                .x_label_formatter(&move |v| match v {
-                    SegmentValue::CenterOf(i) => labels.get(*i).cloned().unwrap_or_default(),
-                    _ => String::new(),
-                })
-                .y_label_formatter(&move |v| match v {
-                    SegmentValue::CenterOf(i) if *i < n => labels2[n - 1 - *i].clone(),
-                    _ => String::new(),
-                })
-                .draw()?;
-            let mut rects = Vec::new();
-            for i in 0..self.m.len() {
-                let tot: u32 = self.m[i].iter().sum::<u32>().max(1);
-                for j in 0..self.m.len() {
-                    let v = self.m[i][j] as f64 / tot as f64;
-                    // White to dark blue; sqrt to make small confusions visible.
-                    let s = v.sqrt();
-                    let c = RGBColor(
-                        (255.0 * (1.0 - s)) as u8,
-                        (255.0 * (1.0 - 0.8 * s)) as u8,
-                        255,
-                    );
-                    let y = n - 1 - i;
-                    rects.push(Rectangle::new(
-                        [
-                            (SegmentValue::Exact(j), SegmentValue::Exact(y)),
-                            (SegmentValue::Exact(j + 1), SegmentValue::Exact(y + 1)),
-                        ],
-                        c.filled(),
-                    ));
-                }
-            }
-            chart.draw_series(rects)?;
-            Ok(())
-        })
+        airglyph_plot::confusion(path, title, &self.labels, &self.m, false)
     }
 }
 
