@@ -408,7 +408,7 @@ fn skeleton_json(sel: &Selection<'_>, hand: Option<Hand>) -> Value {
         "sequence": msg.sequence,
         "joints": joints,
         "hand": hand.map(Hand::name),
-        "postures": airglyph_ipc::json::postures(msg),
+        "postures": airglyph_ipc::json::postures(&msg.postures),
     })
 }
 

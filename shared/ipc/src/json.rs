@@ -2,7 +2,7 @@
 //! --json`, `echo … --json`, `top --json` and the viewer's push stream (README, "JSON
 //! output"). A program that reads one reads them all.
 
-use crate::wire::{Hand, Percentiles};
+use crate::wire::{Hand, Percentiles, PostureMsg};
 use crate::{DecisionMsg, GestureEventMsg, SkeletonMsg, Stage, StageStatsMsg};
 use airglyph_core::Joint;
 use serde::Serialize;
@@ -143,7 +143,7 @@ pub fn skeleton(m: &SkeletonMsg) -> Value {
         "joints": by_joint(&|i| json!(m.joints[i])),
         "confidence": by_joint(&|i| json!(m.confidence[i])),
         "visible": by_joint(&|i| json!(m.visible & (1 << i) != 0)),
-        "postures": postures(m),
+        "postures": postures(&m.postures),
         "capture_ns": m.chain.capture_ns,
         "latency_ms": latency_ms(
             m.chain.capture_ns,
@@ -152,10 +152,10 @@ pub fn skeleton(m: &SkeletonMsg) -> Value {
     })
 }
 
-/// Each hand's posture: `{"left": {"label","confidence"} | null, "right": …}`, null
-/// when the hand was not classified.
-pub fn postures(m: &SkeletonMsg) -> Value {
-    let one = |hand: Hand| match m.posture(hand) {
+/// Each hand's posture (a skeleton's, in [`Hand`] order): `{"left": {"label",
+/// "confidence"} | null, "right": …}`, null when the hand was not classified.
+pub fn postures(p: &[PostureMsg; 2]) -> Value {
+    let one = |hand: Hand| match p[hand as usize].get() {
         Ok(Some(p)) => json!({"label": p.label, "confidence": p.confidence}),
         // A receiver has validated the message; what is not a posture is shown as none.
         Ok(None) | Err(_) => Value::Null,
@@ -208,7 +208,6 @@ pub fn stats_event(stage: Stage, s: &StageStatsMsg) -> Value {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::wire::PostureMsg;
 
     #[test]
     fn a_live_gesture_has_the_keys_of_run_json() {
