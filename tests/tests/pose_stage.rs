@@ -169,23 +169,22 @@ fn seen_from_the_waist_up_the_legs_are_reported_out_of_view() {
     }
 }
 
-/// A person 1.2 m from the camera holding a fist before them (the synthetic hand, at
-/// 640×480 through the sensor model, played by the capture stage): the pose stage
+/// A person 2 m from the camera holding an open hand before them (the synthetic hand,
+/// at 640×480 through the sensor model, played by the capture stage): the pose stage
 /// classifies the right hand from the frame it estimated the skeleton from, and its
-/// skeletons carry a label of the built-in model's; with `--postures off` they carry
-/// none. (Which label: the built-in model on the estimated skeleton's hand joint is
-/// another matter, measured in services/posture; here the step must run and arrive.)
+/// skeletons carry the built-in model's "open" for it, most of the time; with
+/// `--postures off` they carry none.
 #[test]
 fn skeletons_carry_the_right_hands_posture_unless_postures_are_off() {
     let p = Isolated::new();
     let tmp = tempfile::tempdir().unwrap();
-    let rec = tmp.path().join("fist");
+    let rec = tmp.path().join("open");
     let frames = 30usize;
     succeed(
         p.command("airglyph")
             .args(["synth", "--motion", "pose:hands-in-front"])
-            .args(["--hand-posture", "right=fist"])
-            .args(["--distance", "1.2", "--framing", "upper-body", "--noise"])
+            .args(["--hand-posture", "right=open"])
+            .args(["--distance", "2", "--noise"])
             .args(["--frames", &frames.to_string()])
             .arg("--out")
             .arg(&rec),
@@ -225,10 +224,10 @@ fn skeletons_carry_the_right_hands_posture_unless_postures_are_off() {
         .filter_map(|s| s["postures"]["right"]["label"].as_str())
         .collect();
     println!("right hand: {right:?}");
+    let open = right.iter().filter(|&&l| l == "open").count();
     assert!(
-        right.len() * 2 >= with.len(),
-        "the right hand is classified in {} of {} skeletons",
-        right.len(),
+        open * 2 > with.len(),
+        "the open right hand is called open in {open} of {} skeletons: {right:?}",
         with.len()
     );
     for s in &with {
