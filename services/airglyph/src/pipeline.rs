@@ -292,7 +292,11 @@ mod tests {
             ["stage", "pose", "--postures", "off"]
         );
         let plan = parse(&[]).plan().unwrap();
-        assert_eq!(args_of(&plan, Stage::Pose), ["stage", "pose"], "its default");
+        assert_eq!(
+            args_of(&plan, Stage::Pose),
+            ["stage", "pose"],
+            "its default"
+        );
     }
 
     #[test]
@@ -314,7 +318,8 @@ mod tests {
         assert!(err(&["--truth", "--postures", "off"]).contains("--postures"));
         let bad = err(&["--postures", "/no/such/postures.json"]);
         assert!(
-            bad.contains("the arguments of the pose stage") && bad.contains("/no/such/postures.json"),
+            bad.contains("the arguments of the pose stage")
+                && bad.contains("/no/such/postures.json"),
             "{bad}"
         );
         assert!(err(&["--stages", "capture,lens"]).contains("unknown stage \"lens\""));

@@ -555,7 +555,10 @@ pub(crate) mod tests {
             .flat_map(|y| (k.width - 90..k.width).map(move |x| (x, y)))
             .filter(|&(x, y)| *img.get_pixel(x, y) == TEXT)
             .count();
-        assert!(right_edge > 50, "{right_edge} text pixels at the right edge");
+        assert!(
+            right_edge > 50,
+            "{right_edge} text pixels at the right edge"
+        );
     }
 
     #[test]
@@ -583,7 +586,10 @@ pub(crate) mod tests {
             assert_eq!(tags.len(), 2);
             assert!(!overlap(&tags[0].1, &tags[1].1), "{tags:?}");
             for (_, r) in &tags {
-                assert!(r[0] >= 0 && r[1] >= 0 && r[0] + r[2] <= 640 && r[1] + r[3] <= 480, "{r:?}");
+                assert!(
+                    r[0] >= 0 && r[1] >= 0 && r[0] + r[2] <= 640 && r[1] + r[3] <= 480,
+                    "{r:?}"
+                );
             }
         }
     }
