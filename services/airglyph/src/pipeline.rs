@@ -35,7 +35,7 @@ pub struct PipelineArgs {
     #[arg(long, value_name = "FILE")]
     pub model: Option<PathBuf>,
     /// The pose stage's posture model: builtin (the default: open, fist, point,
-    /// thumb_up, v, pinch), off (skeletons carry no posture) or a posture model FILE,
+    /// thumb-up, v, pinch), off (skeletons carry no posture) or a posture model FILE,
     /// checked before the pipeline starts (`airglyph stage pose --help`).
     #[arg(long, value_name = "builtin|off|FILE")]
     pub postures: Option<String>,

@@ -18,8 +18,8 @@ use std::time::Duration;
 ///
 /// The posture step runs here, not in a stage of its own, because it needs the very
 /// depth frame the skeleton was estimated from, which this stage holds at that moment.
-/// It classifies a hand whose joint and elbow are in view (about 2.4 ms a hand at
-/// 0.8 m, under 1 ms at 2 m); --postures off leaves it out.
+/// It classifies a hand whose joint and elbow are in view, in a few milliseconds a hand
+/// close to the camera (docs/architecture.md); --postures off leaves it out.
 ///
 /// Takes frames from `airglyph/depth` (always the newest: a frame that waited behind a
 /// slower estimate is dropped and counted, never queued) and publishes on

@@ -14,7 +14,7 @@ const _: () = assert!(MAX_POSTURE_LABEL_BYTES <= POSTURE_LABEL_CAPACITY);
 
 /// The help of `--postures`, for the stage and for the commands that pass it on.
 pub const HELP: &str = "Classify each visible hand's static posture with this model: \
-    builtin (the six postures of the synthetic hands: open, fist, point, thumb_up, v, \
+    builtin (the six postures of the synthetic hands: open, fist, point, thumb-up, v, \
     pinch), off (none: skeletons carry no posture), or a posture model FILE (JSON; \
     ./off for a file named off). A FILE that does not load is refused at start";
 
