@@ -68,7 +68,8 @@ impl Writer {
         let Some(skeleton) = msg.skeleton() else {
             return Ok(());
         };
-        if !self.due(frame.session, frame.sequence) {
+        // One poll may match several skeletons: never more than asked for.
+        if self.written >= self.count || !self.due(frame.session, frame.sequence) {
             return Ok(());
         }
         // A frame tried counts as taken, found or not, so that a hand that cannot be

@@ -118,7 +118,10 @@ pub fn run(files: &[PathBuf], out: &Path, confusable: f64) -> anyhow::Result<()>
         match cross_validate(&set, m) {
             Some(a) => {
                 eprintln!("  {:<22} {:5.1} %", m.to_string(), 100.0 * a);
-                accuracies.insert(m.to_string(), serde_json::json!((a * 1e4).round() / 1e4));
+                accuracies.insert(
+                    m.to_string(),
+                    serde_json::json!((a as f64 * 1e4).round() / 1e4),
+                );
             }
             None => eprintln!(
                 "  {:<22} not measured (a fold had too few labels)",
