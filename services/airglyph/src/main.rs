@@ -70,7 +70,8 @@ enum Command {
     #[cfg(feature = "lab")]
     Collect(cmd::collect::Args),
     #[cfg(feature = "lab")]
-    /// Train a gesture model from trajectory JSONL files.
+    /// Train a gesture model from trajectory JSONL files (or, with --postures, a hand
+    /// posture model from posture sample JSONL).
     Train(cmd::train::Args),
     #[cfg(feature = "lab")]
     /// Accuracy, per-class recall and confusion matrices of a gesture model.

@@ -72,7 +72,8 @@ pub struct SourceOptions {
 pub enum SourceSpec {
     /// `recording:DIR`
     Recording(PathBuf),
-    /// `synthetic[:SCRIPT]`
+    /// `synthetic[:SCRIPT]`: a motion (`draw:SYMBOLS`, `poses`, `pose:NAME`, a BVH
+    /// file) or `posture:NAME` (a hand posture held; `synthetic::posture_scenes`).
     Synthetic(Option<String>),
     /// `v4l2:/dev/videoN[?OPTIONS]`
     V4l2(PathBuf, CameraOptions),

@@ -354,6 +354,15 @@ impl Fold {
 /// The accuracy of `method` when each group in turn is left out of training and
 /// classified (leave-one-group-out); with a single group, five folds by index.
 pub fn cross_validate(set: &TrainingSet, method: Method) -> Option<f32> {
+    let confusion = cross_validated_confusion(set, method)?;
+    let total: usize = confusion.iter().flatten().sum();
+    let right: usize = (0..confusion.len()).map(|i| confusion[i][i]).sum();
+    Some(right as f32 / total as f32)
+}
+
+/// How [`cross_validate`]'s held-out samples were classified: `[truth][predicted]`
+/// counts over the set's labels; `None` when no fold could be trained and tested.
+pub fn cross_validated_confusion(set: &TrainingSet, method: Method) -> Option<Vec<Vec<usize>>> {
     let mut groups: Vec<u32> = set.samples.iter().map(|s| s.group).collect();
     groups.sort_unstable();
     groups.dedup();
@@ -362,7 +371,9 @@ pub fn cross_validate(set: &TrainingSet, method: Method) -> Option<f32> {
     } else {
         (0..5).map(Fold::Index).collect()
     };
-    let (mut right, mut total) = (0usize, 0usize);
+    let n = set.labels.len();
+    let mut confusion = vec![vec![0usize; n]; n];
+    let mut total = 0usize;
     for held in &folds {
         let idx: Vec<usize> = (0..set.samples.len()).collect();
         let train = TrainingSet {
@@ -380,11 +391,11 @@ pub fn cross_validate(set: &TrainingSet, method: Method) -> Option<f32> {
             if held.holds(i, s) {
                 total += 1;
                 let f = Features::from_values(s.x);
-                right += (c.predict(&f).label == s.label) as usize;
+                confusion[s.label][c.predict(&f).label] += 1;
             }
         }
     }
-    (total > 0).then(|| right as f32 / total as f32)
+    (total > 0).then_some(confusion)
 }
 
 /// Of `candidates`, the one with the best cross-validated accuracy on `set`, and that
@@ -402,6 +413,14 @@ pub fn choose(set: &TrainingSet, candidates: &[Method]) -> Option<(Method, f32)>
 }
 
 impl TrainingSet {
+    /// How many groups the samples are in.
+    pub fn group_count(&self) -> usize {
+        let mut groups: Vec<u32> = self.samples.iter().map(|s| s.group).collect();
+        groups.sort_unstable();
+        groups.dedup();
+        groups.len()
+    }
+
     /// The samples of these groups only.
     pub fn groups(&self, keep: &[u32]) -> TrainingSet {
         self.subset(|s| keep.contains(&s.group))

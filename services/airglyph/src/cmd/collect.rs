@@ -1,5 +1,8 @@
 //! `airglyph collect`: records a person drawing one gesture again and again, for a
-//! vocabulary of one's own; every repetition becomes a line of trajectory JSONL.
+//! vocabulary of one's own; every repetition becomes a line of trajectory JSONL. With
+//! `--posture`, a hand held in a posture instead ([`posture`]).
+
+mod posture;
 
 use crate::interrupt::Interrupted;
 use crate::pipeline::PipelineArgs;
@@ -31,20 +34,43 @@ const MAX_COUNT: usize = 10_000;
 /// trajectory JSONL (body-frame points in shoulder widths, x right, y down, with the
 /// time in ms), written and flushed at once, so an interrupted session loses nothing.
 /// Progress goes to stderr. `airglyph train --data FILE …` takes the file.
+///
+/// With --posture NAME instead of --label: hold the hand in a posture (a static hand
+/// shape: open, fist, a pointing finger, …) in front of the camera, turning it a little
+/// and coming nearer and going farther now and then. Of each skeleton the pose stage
+/// estimates, the --hand is cut out of the depth frame it came from, at most one
+/// every --every frames, and its features appended to --out as a line of posture
+/// sample JSONL (label, subject, hand, its depth in metres, the features), written and
+/// flushed at once; --count hands are recorded. `airglyph train --postures FILE …`
+/// takes the file. Without --source, a posture of the synthetic hand (open, fist,
+/// point, thumb-up, v, pinch) is held by the synthetic person (`synthetic:posture:NAME`:
+/// the right hand raised, at 1–2.5 m and six turns of the wrist).
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// The gesture's name: any text up to 32 bytes (UTF-8).
-    #[arg(long)]
-    label: String,
-    /// How many repetitions to record (1–10000).
+    #[arg(long, required_unless_present = "posture", conflicts_with = "posture")]
+    label: Option<String>,
+    /// Record a hand posture of this name (up to 16 bytes, UTF-8) instead of a gesture.
+    #[arg(long, value_name = "NAME")]
+    posture: Option<String>,
+    /// With --posture: the person's hand to record.
+    #[arg(long, default_value = "right", value_parser = ["left", "right"], requires = "posture")]
+    hand: String,
+    /// With --posture: at most one hand every this many frames (1–1000), so that the
+    /// samples are not all alike.
+    #[arg(long, default_value_t = 3, value_parser = options::within(1u64, 1000), allow_negative_numbers = true, requires = "posture")]
+    every: u64,
+    /// How many repetitions (or hands, with --posture) to record (1–10000).
     #[arg(long, value_parser = options::within(1usize, MAX_COUNT), allow_negative_numbers = true)]
     count: usize,
-    /// The trajectory JSONL file to append to (created if missing).
+    /// The trajectory JSONL (posture sample JSONL with --posture) file to append to
+    /// (created if missing).
     #[arg(long)]
     out: PathBuf,
-    /// Where frames come from: v4l2:/dev/videoN, openni2 or openni2:URI, recording:DIR, or
-    /// synthetic:draw:SYMBOLS. Default for a built-in symbol (0–9, A–Z): the synthetic
-    /// person drawing it --count times.
+    /// Where frames come from: v4l2:/dev/videoN, openni2 or openni2:URI, recording:DIR,
+    /// synthetic:draw:SYMBOLS or synthetic:posture:NAME. Default for a built-in symbol
+    /// (0–9, A–Z): the synthetic person drawing it --count times; for a posture of the
+    /// synthetic hand: the synthetic person holding it.
     #[arg(long)]
     source: Option<SourceSpec>,
     /// Who draws (the `subject` field; keeps writers apart in cross-validation).
@@ -130,31 +156,41 @@ impl Listener for Collector<'_> {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    if args.label.is_empty() {
+    let label = match (&args.label, &args.posture) {
+        (_, Some(posture)) => return posture::run(&args, posture),
+        (Some(label), None) => label.clone(),
+        (None, None) => bail!("--label or --posture is needed"),
+    };
+    gesture(&args, &label)
+}
+
+/// Records repetitions of the gesture `label`.
+fn gesture(args: &Args, label: &str) -> anyhow::Result<()> {
+    if label.is_empty() {
         bail!("--label must not be empty");
     }
-    if args.label.len() > MAX_LABEL_BYTES {
+    if label.len() > MAX_LABEL_BYTES {
         bail!(
             "--label {:?} is {} bytes long; labels are at most {MAX_LABEL_BYTES} bytes (UTF-8), the size of a gesture event's label",
-            args.label,
-            args.label.len()
+            label,
+            label.len()
         );
     }
     let source = match args.source.clone() {
         Some(s) => s,
         // A gesture of the 3-D vocabulary, drawn in depth by the synthetic person.
-        None if airglyph_synth::shapes3d::shape(&args.label).is_some() => {
-            let script = vec![args.label.as_str(); args.count].join(",");
+        None if airglyph_synth::shapes3d::shape(label).is_some() => {
+            let script = vec![label; args.count].join(",");
             SourceSpec::Synthetic(Some(format!("draw:{script}")))
         }
         None => {
-            let c = args.label.chars().next().unwrap_or(' ');
-            if args.label.chars().count() != 1
+            let c = label.chars().next().unwrap_or(' ');
+            if label.chars().count() != 1
                 || !airglyph_synth::glyphs::BUILT_IN.contains(c.to_ascii_uppercase())
             {
                 bail!(
                     "--label {:?} has no built-in synthetic drawing (0–9, A–Z, or a gesture of the 3-D vocabulary: {}); give --source (e.g. v4l2:/dev/video0)",
-                    args.label,
+                    label,
                     airglyph_synth::shapes3d::VOCABULARY.join(", ")
                 );
             }
@@ -170,7 +206,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     eprintln!(
         "recording {} repetitions of {:?} from {source} into {}; rest the hand between repetitions",
         args.count,
-        args.label,
+        label,
         args.out.display()
     );
     let plan = PipelineArgs {
@@ -182,7 +218,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut c = Writer {
         seg: RepetitionSegmenter::new(RepetitionConfig::default()),
         file,
-        label: args.label.clone(),
+        label: label.to_string(),
         subject: args.subject.clone(),
         source: "airglyph collect".into(),
         count: args.count,

@@ -1,4 +1,7 @@
-//! `airglyph train`: trains a gesture model from trajectory JSONL files.
+//! `airglyph train`: trains a gesture model from trajectory JSONL files, or with
+//! `--postures` a posture model from posture sample JSONL ([`postures`]).
+
+mod postures;
 
 use crate::interrupt::unless_interrupted;
 use airglyph_gesture::lab::{
@@ -15,8 +18,19 @@ use std::path::PathBuf;
 #[derive(clap::Args, Clone)]
 pub struct Args {
     /// Trajectory JSONL files (.jsonl or .jsonl.gz).
-    #[arg(long, num_args = 1.., required = true)]
+    #[arg(long, num_args = 1.., required_unless_present = "postures")]
     pub data: Vec<PathBuf>,
+    /// Train a posture model instead, from these posture sample JSONL files (`airglyph
+    /// collect --posture`): k-NN and softmax in several settings are cross-validated
+    /// with each subject's samples held out in turn (five folds by sample when there is
+    /// one subject), the best is kept, and the pairs of postures it confuses are named.
+    /// Only --out and --confusable apply.
+    #[arg(long, num_args = 1.., value_name = "FILE", conflicts_with_all = ["data", "reuse_classifier", "recalibrate", "no_spotting"])]
+    pub postures: Vec<PathBuf>,
+    /// With --postures: warn about a posture whose held-out samples were read as one
+    /// other at least this often (0–1).
+    #[arg(long, default_value_t = 0.1, value_parser = options::within(0.0f64, 1.0), allow_negative_numbers = true, requires = "postures")]
+    pub confusable: f64,
     /// Where to write the model JSON.
     #[arg(long)]
     pub out: PathBuf,
@@ -124,6 +138,11 @@ pub fn config(args: &Args) -> anyhow::Result<TrainConfig> {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
+    if !args.postures.is_empty() {
+        // Quick (seconds for thousands of samples) and written whole at the end: an
+        // interruption leaves the old file as it was.
+        return postures::run(&args.postures, &args.out, args.confusable);
+    }
     let cfg = config(&args)?;
     // Training writes nothing until it is done: a signal leaves it where it is.
     let kept = format!("no model was written ({} is as it was)", args.out.display());
