@@ -164,4 +164,5 @@ def gesture_dict(g):
         "end_ns": g.end_ns,
         "session": g.session,
         "latency_ms": max(0, g.chain.gesture_publish_ns - g.chain.capture_ns) * 1e-6,
+        "posture": g.posture_text(),
     }

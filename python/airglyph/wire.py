@@ -23,8 +23,24 @@ JOINTS = (
 """The 16 joints in index order, the order of every array on the wire."""
 
 LABEL_CAPACITY = 32
-BEZIER_CAPACITY = 64
 """Longest gesture label on the wire, in UTF-8 bytes."""
+BEZIER_CAPACITY = 64
+"""Most Bezier points a gesture event carries."""
+POSTURE_LABEL_CAPACITY = 16
+"""Longest posture label on the wire, in UTF-8 bytes."""
+HANDS = ("left", "right")
+"""The hands in index order, the order of a skeleton's postures."""
+
+
+def _bounded_text(raw, n, capacity):
+    """The first n bytes of raw as text, or None when n is out of range or the bytes
+    are not UTF-8 (what the Rust receivers refuse)."""
+    if n > capacity:
+        return None
+    try:
+        return bytes(raw[:n]).decode("utf-8")
+    except UnicodeDecodeError:
+        return None
 
 
 class _Wire(ctypes.Structure):
@@ -73,10 +89,29 @@ class DepthHeader(_Wire):
     ]
 
 
+class PostureMsg(_Wire):
+    """One hand's static posture in a skeleton; label_len 0 when it was not classified."""
+
+    TYPE_NAME = "airglyph.PostureMsg.v1"
+    _fields_ = [
+        ("label", ctypes.c_uint8 * POSTURE_LABEL_CAPACITY),
+        ("label_len", ctypes.c_uint32),
+        ("confidence", ctypes.c_float),
+    ]
+
+    def posture(self):
+        """(label, confidence), or None when the hand was not classified or what was
+        written is not a posture (the Rust receivers refuse such a skeleton)."""
+        if self.label_len == 0 or not 0.0 <= self.confidence <= 1.0:
+            return None
+        label = _bounded_text(self.label, self.label_len, POSTURE_LABEL_CAPACITY)
+        return None if label is None else (label, self.confidence)
+
+
 class SkeletonMsg(_Wire):
     """The skeleton of one depth frame (`airglyph/skeleton`): metres, camera frame."""
 
-    TYPE_NAME = "airglyph.SkeletonMsg.v2"
+    TYPE_NAME = "airglyph.SkeletonMsg.v3"
     _fields_ = [
         ("sequence", ctypes.c_uint64),
         ("session", ctypes.c_uint64),
@@ -87,13 +122,18 @@ class SkeletonMsg(_Wire):
         ("_pad", ctypes.c_uint8),
         ("visible", ctypes.c_uint16),
         ("_reserved", ctypes.c_uint8 * 4),
+        ("postures", PostureMsg * len(HANDS)),
     ]
+
+    def posture(self, hand):
+        """The posture of hand ("left" or "right") as (label, confidence), or None."""
+        return self.postures[HANDS.index(hand)].posture()
 
 
 class GestureEventMsg(_Wire):
     """A spotted and classified gesture (`airglyph/gesture`)."""
 
-    TYPE_NAME = "airglyph.GestureEventMsg.v2"
+    TYPE_NAME = "airglyph.GestureEventMsg.v3"
     _fields_ = [
         ("label", ctypes.c_uint8 * LABEL_CAPACITY),
         ("label_len", ctypes.c_uint32),
@@ -108,6 +148,9 @@ class GestureEventMsg(_Wire):
         ("_reserved", ctypes.c_uint8 * 3),
         ("bezier_len", ctypes.c_uint32),
         ("bezier", (ctypes.c_float * 2) * BEZIER_CAPACITY),
+        ("posture", ctypes.c_uint8 * POSTURE_LABEL_CAPACITY),
+        ("posture_len", ctypes.c_uint32),
+        ("_reserved_end", ctypes.c_uint8 * 4),
     ]
 
     def bezier_points(self):
@@ -121,13 +164,14 @@ class GestureEventMsg(_Wire):
     def label_text(self):
         """The label, or None when it is not UTF-8 of at most LABEL_CAPACITY bytes
         (what the Rust receivers refuse too)."""
-        n = self.label_len
-        if n > LABEL_CAPACITY:
+        return _bounded_text(self.label, self.label_len, LABEL_CAPACITY)
+
+    def posture_text(self):
+        """The posture the drawing hand held over most of the gesture, or None when it
+        is unknown or not UTF-8 of at most POSTURE_LABEL_CAPACITY bytes."""
+        if self.posture_len == 0:
             return None
-        try:
-            return bytes(self.label[:n]).decode("utf-8")
-        except UnicodeDecodeError:
-            return None
+        return _bounded_text(self.posture, self.posture_len, POSTURE_LABEL_CAPACITY)
 
 
 class DecisionMsg(_Wire):
@@ -180,8 +224,8 @@ class StageStatsMsg(_Wire):
     ]
 
 
-TYPES = (LatencyChain, DepthHeader, SkeletonMsg, GestureEventMsg, DecisionMsg,
-         Percentiles, StageStatsMsg)
+TYPES = (LatencyChain, DepthHeader, PostureMsg, SkeletonMsg, GestureEventMsg,
+         DecisionMsg, Percentiles, StageStatsMsg)
 
 
 def layout():

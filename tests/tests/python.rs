@@ -2,9 +2,10 @@
 //! layout, and its example receiving the demo's gestures through iceoryx2's Python
 //! bindings.
 
-use airglyph_ipc::wire::{type_name, Percentiles};
+use airglyph_ipc::wire::{type_name, Hand, Percentiles};
 use airglyph_ipc::{
-    DecisionMsg, DepthHeader, GestureEventMsg, LatencyChain, SkeletonMsg, StageStatsMsg,
+    DecisionMsg, DepthHeader, GestureEventMsg, LatencyChain, PostureMsg, SkeletonMsg,
+    StageStatsMsg,
 };
 use airglyph_system_tests::{
     demo_first_gesture, gesture_identity, json_lines, one_at_a_time, python3, signal, take_lines,
@@ -89,6 +90,11 @@ fn the_python_wire_types_have_the_rust_layout() {
             source_kind,
             flags
         }),
+        layout!(PostureMsg {
+            label,
+            label_len,
+            confidence
+        }),
         layout!(SkeletonMsg {
             sequence,
             session,
@@ -98,7 +104,8 @@ fn the_python_wire_types_have_the_rust_layout() {
             person_found,
             _pad,
             visible,
-            _reserved
+            _reserved,
+            postures
         }),
         layout!(GestureEventMsg {
             label,
@@ -113,7 +120,10 @@ fn the_python_wire_types_have_the_rust_layout() {
             hand,
             _reserved,
             bezier_len,
-            bezier
+            bezier,
+            posture,
+            posture_len,
+            _reserved_end
         }),
         layout!(DecisionMsg {
             sequence,
@@ -173,6 +183,58 @@ fn the_python_wire_types_have_the_rust_layout() {
             "{name}: Python (left) and Rust (right) differ"
         );
     }
+}
+
+/// What a Rust publisher writes, Python reads: each hand's posture and the drawing
+/// hand's posture of a gesture, and nothing from labels the Rust receivers refuse.
+#[test]
+fn python_reads_the_postures_rust_writes() {
+    let Some(python) = python3() else {
+        eprintln!("skipped: no python3 on PATH");
+        return;
+    };
+    fn bytes<T: Copy>(m: &T) -> Vec<u8> {
+        // SAFETY: the wire types are `#[repr(C)]` with every gap a named field
+        // (`the_python_wire_types_have_the_rust_layout`), so all their bytes are
+        // initialized; the slice lives only while `m` is borrowed.
+        unsafe { std::slice::from_raw_parts((m as *const T).cast::<u8>(), size_of::<T>()) }
+            .to_vec()
+    }
+    let mut s = SkeletonMsg::default();
+    s.set_posture(Hand::Right, Some(PostureMsg::new("thumb_up", 0.5).unwrap()));
+    let mut hostile = s;
+    hostile.postures[Hand::Right as usize].label_len = 99;
+    let mut g = GestureEventMsg::default();
+    g.set_posture(Some("point")).unwrap();
+    let hex = |b: Vec<u8>| b.iter().map(|x| format!("{x:02x}")).collect::<String>();
+    let script = format!(
+        "import json\n\
+         from airglyph import wire\n\
+         s = wire.SkeletonMsg.from_buffer_copy(bytes.fromhex('{}'))\n\
+         h = wire.SkeletonMsg.from_buffer_copy(bytes.fromhex('{}'))\n\
+         g = wire.GestureEventMsg.from_buffer_copy(bytes.fromhex('{}'))\n\
+         print(json.dumps([s.posture('left'), s.posture('right'), h.posture('right'), \
+         g.posture_text(), wire.GestureEventMsg().posture_text()]))\n",
+        hex(bytes(&s)),
+        hex(bytes(&hostile)),
+        hex(bytes(&g))
+    );
+    let out = Command::new(python)
+        .args(["-c", &script])
+        .env("PYTHONPATH", python_dir())
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let got: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(
+        got,
+        json!([null, ["thumb_up", 0.5], null, "point", null]),
+        "left none, right thumb_up, the hostile label refused, the gesture's posture"
+    );
 }
 
 #[test]

@@ -34,6 +34,11 @@ pub struct PipelineArgs {
     /// built-in 36-symbol model).
     #[arg(long, value_name = "FILE")]
     pub model: Option<PathBuf>,
+    /// The pose stage's posture model: builtin (the default: open, fist, point,
+    /// thumb_up, v, pinch), off (skeletons carry no posture) or a posture model FILE,
+    /// checked before the pipeline starts (`airglyph stage pose --help`).
+    #[arg(long, value_name = "builtin|off|FILE")]
+    pub postures: Option<String>,
     /// Extra arguments for one stage, as STAGE=ARGS, split as a shell splits them
     /// (`--stage-args "gesture=--model 'my model.json'"`); repeat it for more stages.
     /// The stages: capture, pose, gesture, viewer; `airglyph stage NAME --help` lists
@@ -129,6 +134,16 @@ impl PipelineArgs {
         if self.model.is_some() && !names.contains(&Stage::Gesture) {
             bail!("--model: the gesture stage does not run here (see --stages)");
         }
+        if self.postures.is_some() && !names.contains(&Stage::Pose) {
+            bail!(
+                "--postures: the pose stage does not run here{}",
+                if self.truth {
+                    " (--truth runs none)"
+                } else {
+                    " (see --stages)"
+                }
+            );
+        }
         let stages = names
             .into_iter()
             .map(|stage| {
@@ -189,7 +204,11 @@ impl PipelineArgs {
                     out.extend(["--model".into(), model.into()]);
                 }
             }
-            Stage::Pose => {}
+            Stage::Pose => {
+                if let Some(postures) = &self.postures {
+                    out.extend(["--postures".into(), postures.into()]);
+                }
+            }
         }
         for extra in self.stage_args.iter().filter(|e| e.stage == stage) {
             out.extend(extra.args.iter().map(OsString::from));
@@ -266,6 +285,17 @@ mod tests {
     }
 
     #[test]
+    fn the_pose_stage_gets_the_posture_model() {
+        let plan = parse(&["--postures", "off"]).plan().unwrap();
+        assert_eq!(
+            args_of(&plan, Stage::Pose),
+            ["stage", "pose", "--postures", "off"]
+        );
+        let plan = parse(&[]).plan().unwrap();
+        assert_eq!(args_of(&plan, Stage::Pose), ["stage", "pose"], "its default");
+    }
+
+    #[test]
     fn truth_runs_no_pose_stage_and_capture_publishes_the_skeletons() {
         let plan = parse(&["--truth", "--max-restarts", "2"]).plan().unwrap();
         assert!(plan.stages.iter().all(|s| s.stage != Stage::Pose));
@@ -281,6 +311,12 @@ mod tests {
             err(&["--truth", "--stage-args", "pose=--recording r"]).contains("--truth runs none")
         );
         assert!(err(&["--stages", "capture", "--model", "m"]).contains("--model"));
+        assert!(err(&["--truth", "--postures", "off"]).contains("--postures"));
+        let bad = err(&["--postures", "/no/such/postures.json"]);
+        assert!(
+            bad.contains("the arguments of the pose stage") && bad.contains("/no/such/postures.json"),
+            "{bad}"
+        );
         assert!(err(&["--stages", "capture,lens"]).contains("unknown stage \"lens\""));
         let bad = err(&["--stage-args", "gesture=--no-such-flag"]);
         assert!(bad.contains("the arguments of the gesture stage"), "{bad}");

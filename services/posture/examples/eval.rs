@@ -11,151 +11,18 @@
 //! Classifier settings are chosen by leave-one-body-out cross-validation on the
 //! training bodies only.
 
-use airglyph_core::{Intrinsics, Joint};
-use airglyph_posture::{
-    choose, describe, ArmJoints, Classifier, Hand, Method, SegmentParams, TrainingSet,
-};
-use airglyph_synth::{
-    BodySpec, Bone, HandPosture, MakeHumanShape, MotionSpec, ProceduralBody, SceneConfig,
-    ScriptedPose, Synthesizer,
-};
+mod synthetic;
+
+use airglyph_posture::{choose, Classifier, Method, SegmentParams, TrainingSet};
+use airglyph_synth::{BodySpec, HandPosture, MakeHumanShape};
 use image::{Rgb, RgbImage};
-use nalgebra::{Point3, Vector3};
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
 use std::path::PathBuf;
 use std::time::Instant;
-
-const DISTANCES: [f32; 4] = [0.8, 1.2, 2.0, 2.7];
-/// The hand's turn at the wrist on top of palm-to-camera: (roll, pitch) degrees.
-const TURNS: [(f32, f32); 7] = [
-    (0.0, 0.0),
-    (45.0, 0.0),
-    (-45.0, 0.0),
-    (90.0, 0.0),
-    (180.0, 0.0),
-    (0.0, 40.0),
-    (0.0, -40.0),
-];
-/// The pose estimate's error stood in for: per coordinate, metres.
-const JOINT_NOISE_M: f32 = 0.02;
-
-/// One scene's setting, all that a sample varies by.
-#[derive(Debug, Clone, Copy)]
-struct Setting {
-    posture: HandPosture,
-    distance: usize,
-    turn: usize,
-    noise: bool,
-    seed: u64,
-}
-
-/// A body and the scene calibrated for it at each distance: the roll that turns the
-/// palm to the camera and the placement that puts the palm at the distance.
-struct Subject {
-    name: String,
-    group: u32,
-    base: Vec<SceneConfig>,
-}
-
-fn calibrate(body: &BodySpec) -> Option<Vec<SceneConfig>> {
-    let mut out = Vec::new();
-    for &d in &DISTANCES {
-        let mut cfg = SceneConfig {
-            body: body.clone(),
-            motion: MotionSpec::Pose(ScriptedPose::Wave),
-            ..SceneConfig::default()
-        };
-        cfg.placement.distance_m = d;
-        cfg = cfg.framing_upper_body().ok()?;
-        cfg.hands.right.posture = Some(HandPosture::Open);
-        let truth = |cfg: &SceneConfig| Some(Synthesizer::new(cfg.clone()).ok()?.render(0).1);
-        let h = truth(&cfg)?.hands.right;
-        cfg.hands.right.roll_deg = (-h.thumb_side.z).atan2(-h.palm_normal.z).to_degrees();
-        for _ in 0..2 {
-            let z = truth(&cfg)?.hands.right.palm_centre.z;
-            cfg.placement.distance_m += d - z;
-        }
-        out.push(cfg);
-    }
-    Some(out)
-}
-
-/// A rendered hand: what the segmentation got and the truth's own hand pixels.
-struct Shot {
-    k: Intrinsics,
-    depth: Vec<u16>,
-    truth_hand: Vec<bool>,
-    arm: ArmJoints,
-    hand: Option<Hand>,
-    palm: Point3<f32>,
-    /// Seconds the segmentation, frame and features took.
-    cost_s: f64,
-}
-
-fn shoot(subject: &Subject, s: Setting, params: &SegmentParams) -> Option<Shot> {
-    let mut cfg = subject.base[s.distance].clone();
-    let (roll, pitch) = TURNS[s.turn];
-    cfg.hands.right.posture = Some(s.posture);
-    cfg.hands.right.roll_deg += roll;
-    cfg.hands.right.pitch_deg += pitch;
-    cfg.sensor_noise = s.noise;
-    cfg.seed = s.seed;
-    let mut synth = Synthesizer::new(cfg).ok()?;
-    let k = synth.intrinsics();
-    let (img, truth) = synth.render(0);
-    let truth_hand: Vec<bool> = synth
-        .labels()
-        .iter()
-        .zip(img.pixels())
-        .map(|(&l, &z)| l == Bone::RightHand as u8 && z > 0)
-        .collect();
-    let mut rng = ChaCha8Rng::seed_from_u64(s.seed ^ 0x9e37_79b9);
-    let mut jitter = |p: Point3<f32>| {
-        let n = Vector3::from_fn(|_, _| {
-            // Box–Muller: a Gaussian from two uniforms.
-            let (a, b): (f32, f32) = (rng.gen_range(1e-6..1.0), rng.gen());
-            (-2.0 * a.ln()).sqrt() * (std::f32::consts::TAU * b).cos() * JOINT_NOISE_M
-        });
-        p + n
-    };
-    let arm = ArmJoints {
-        hand: jitter(truth.skeleton.get(Joint::RightHand)),
-        elbow: jitter(truth.skeleton.get(Joint::RightElbow)),
-    };
-    let started = Instant::now();
-    let hand = describe(img.view(), &k, arm, params);
-    let cost_s = started.elapsed().as_secs_f64();
-    if let Err(e) = &hand {
-        if std::env::var_os("POSTURE_DEBUG").is_some() {
-            eprintln!("{:?} {:?}: {e}", subject.name, s);
-        }
-    }
-    let hand = hand.ok();
-    Some(Shot {
-        k,
-        depth: img.pixels().to_vec(),
-        truth_hand,
-        arm,
-        hand,
-        palm: truth.hands.right.palm_centre,
-        cost_s,
-    })
-}
+use synthetic::{
+    collect, label_of, procedural, settings, shoot, subjects, Row, Setting, Shot, DISTANCES, TURNS,
+};
 
 impl Shot {
-    fn iou(&self) -> f32 {
-        let Some(h) = &self.hand else { return 0.0 };
-        let w = self.k.width;
-        let (mut inter, mut union) = (0usize, 0usize);
-        for (i, &t) in self.truth_hand.iter().enumerate() {
-            let s = h.region.contains(i as u32 % w, i as u32 / w);
-            inter += (s && t) as usize;
-            union += (s || t) as usize;
-        }
-        inter as f32 / union.max(1) as f32
-    }
-
     /// A close-up around the palm: depth grey, the truth's hand pixels the
     /// segmentation found green, those it missed blue, pixels it took that are not
     /// the hand's red; the jittered joint yellow.
@@ -229,58 +96,6 @@ impl Tally {
     }
 }
 
-/// What one setting gave: the hand (`None` where none was found), the segmentation's
-/// IoU against the renderer's hand pixels, and the seconds describing it took.
-struct Row {
-    setting: Setting,
-    hand: Option<Hand>,
-    iou: f32,
-    cost_s: f64,
-}
-
-/// Every setting for one subject.
-fn collect(subject: &Subject, settings: &[Setting], params: &SegmentParams) -> Vec<Row> {
-    settings
-        .iter()
-        .filter_map(|&s| {
-            let shot = shoot(subject, s, params)?;
-            let iou = shot.iou();
-            Some(Row {
-                setting: s,
-                iou,
-                cost_s: shot.cost_s,
-                hand: shot.hand,
-            })
-        })
-        .collect()
-}
-
-fn settings(seed0: u64, turns: &[usize]) -> Vec<Setting> {
-    let mut out = Vec::new();
-    let mut seed = seed0;
-    for posture in HandPosture::ALL {
-        for distance in 0..DISTANCES.len() {
-            for &turn in turns {
-                for noise in [false, true] {
-                    seed += 1;
-                    out.push(Setting {
-                        posture,
-                        distance,
-                        turn,
-                        noise,
-                        seed,
-                    });
-                }
-            }
-        }
-    }
-    out
-}
-
-fn label_of(p: HandPosture) -> usize {
-    HandPosture::ALL.iter().position(|&q| q == p).unwrap_or(0)
-}
-
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let quick = args.iter().any(|a| a == "--quick");
@@ -294,12 +109,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut params = SegmentParams::default();
     let t0 = Instant::now();
 
-    let procedural = |h: f32, b: f32| {
-        BodySpec::Procedural(ProceduralBody {
-            height_m: h,
-            build: b,
-        })
-    };
     let train_bodies: Vec<(String, BodySpec)> = vec![
         ("procedural 1.60 m build 0.9".into(), procedural(1.60, 0.9)),
         ("procedural 1.75 m build 1.0".into(), procedural(1.75, 1.0)),
@@ -321,23 +130,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             Err(e) => eprintln!("skipping MakeHuman {shape}: {e}"),
         }
     }
-    let subjects = |bodies: Vec<(String, BodySpec)>, group0: u32| -> Vec<Subject> {
-        bodies
-            .into_iter()
-            .enumerate()
-            .filter_map(|(i, (name, body))| match calibrate(&body) {
-                Some(base) => Some(Subject {
-                    name,
-                    group: group0 + i as u32,
-                    base,
-                }),
-                None => {
-                    eprintln!("skipping {name}: it does not load (MakeHuman assets missing?)");
-                    None
-                }
-            })
-            .collect()
-    };
     let train_subjects = subjects(train_bodies, 0);
     let test_subjects = subjects(test_bodies, 100);
     eprintln!("calibrated in {:.1} s", t0.elapsed().as_secs_f32());

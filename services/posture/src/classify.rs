@@ -130,13 +130,26 @@ pub struct Classifier {
     model: Model,
 }
 
+/// What a trained classifier keeps, on standardized features: the k-NN's samples with
+/// their label indices, or the softmax's weights and biases (one row per label). Open
+/// to the crate so that a model file can store and restore it.
 #[derive(Debug, Clone, PartialEq)]
-enum Model {
+pub(crate) enum Model {
     Knn(Vec<([f32; FEATURE_LEN], usize)>),
     Softmax {
         w: Vec<[f32; FEATURE_LEN]>,
         b: Vec<f32>,
     },
+}
+
+/// A classifier taken apart: what a model file stores.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Parts {
+    pub labels: Vec<String>,
+    pub method: Method,
+    pub mean: [f32; FEATURE_LEN],
+    pub scale: [f32; FEATURE_LEN],
+    pub model: Model,
 }
 
 impl Classifier {
@@ -193,6 +206,30 @@ impl Classifier {
     /// How it classifies.
     pub fn method(&self) -> Method {
         self.method
+    }
+
+    /// Its pieces, to be stored.
+    pub(crate) fn to_parts(&self) -> Parts {
+        Parts {
+            labels: self.labels.clone(),
+            method: self.method,
+            mean: self.mean,
+            scale: self.scale,
+            model: self.model.clone(),
+        }
+    }
+
+    /// Puts a classifier together from stored pieces. The caller has checked that they
+    /// fit: the method is the model's kind, every label index names a label, and the
+    /// softmax has one row per label.
+    pub(crate) fn from_parts(p: Parts) -> Self {
+        Self {
+            labels: p.labels,
+            method: p.method,
+            mean: p.mean,
+            scale: p.scale,
+            model: p.model,
+        }
     }
 
     /// The posture of one hand.

@@ -40,6 +40,13 @@ impl Features {
         Self(values)
     }
 
+    /// Features read back from a file or another program: `None` unless there are
+    /// exactly [`FEATURE_LEN`] values, all finite.
+    pub fn from_slice(values: &[f32]) -> Option<Self> {
+        let values: [f32; FEATURE_LEN] = values.try_into().ok()?;
+        values.iter().all(|v| v.is_finite()).then_some(Self(values))
+    }
+
     /// The number of fingertips found (a feature, kept readable).
     pub fn fingertips(&self) -> usize {
         self.0[FINGERTIPS] as usize
@@ -47,6 +54,11 @@ impl Features {
 }
 
 const FINGERTIPS: usize = 7 + 1 + 1 + DEFECTS;
+
+/// The version of the features: raised whenever a feature is added, removed or
+/// computed otherwise, so that samples and models of other features are refused
+/// rather than compared.
+pub const FEATURE_VERSION: u32 = 1;
 
 /// The features' names, in order.
 pub fn feature_names() -> Vec<String> {

@@ -14,13 +14,15 @@ pub mod features;
 pub mod frame;
 mod geometry;
 mod mask;
+pub mod model;
 pub mod segment;
 
 pub use classify::{
     choose, cross_validate, Classifier, Method, Prediction, TrainError, TrainingSet,
 };
-pub use features::{feature_names, features, Features, FEATURE_LEN};
+pub use features::{feature_names, features, Features, FEATURE_LEN, FEATURE_VERSION};
 pub use frame::{hand_frame, HandFrame};
+pub use model::{PostureModel, PostureModelError, MAX_POSTURE_LABEL_BYTES};
 pub use segment::{
     segment, ArmJoints, HandPixel, HandRegion, NoHand, Palm, SegmentParams, Side, Window,
 };

@@ -1,7 +1,8 @@
 //! The picture, drawn in one place for the page and for `airglyph snapshot`: the depth
 //! image colour-mapped, the skeleton over it, the recognizer's view of the drawing hand
 //! (its path and the last gesture's Bezier points, in the body frame the gesture stage
-//! measures in), the last gestures with their scores and a caption.
+//! measures in), each hand's posture beside it, the last gestures with their scores
+//! and a caption.
 
 use crate::colormap::colourize;
 use crate::draw::{disc, line, rect, text, text_height, text_width};
@@ -38,11 +39,24 @@ pub struct GestureLine {
     pub age_s: f32,
 }
 
+/// A hand's posture as the picture shows it: beside the hand joint.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HandPosture {
+    /// The hand joint it is drawn beside.
+    pub joint: Joint,
+    /// The posture model's label.
+    pub label: String,
+    /// The classifier's confidence, 0–1.
+    pub confidence: f32,
+}
+
 /// Everything drawn over the depth image.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Overlay {
     /// The skeleton estimated from the frame (camera frame, drawn where it projects).
     pub skeleton: Option<Skeleton>,
+    /// The postures of the skeleton's hands that were classified.
+    pub postures: Vec<HandPosture>,
     /// The drawing hand's recent path as the gesture stage's recognizer took it, oldest
     /// first: body frame (x to the person's right, y down, shoulder widths).
     pub trail: Vec<[f32; 2]>,
@@ -69,6 +83,7 @@ pub fn render(depth: DepthView<'_>, k: &Intrinsics, o: &Overlay) -> RgbImage {
     let sf = s as f32;
     if let Some(sk) = &o.skeleton {
         skeleton(&mut img, sk, k, sf);
+        postures(&mut img, sk, &o.postures, k, s);
     }
     recognizer(&mut img, &o.trail, &o.bezier, s);
     gestures(&mut img, &o.gestures, s);
@@ -121,6 +136,29 @@ fn skeleton(img: &mut RgbImage, sk: &Skeleton, k: &Intrinsics, sf: f32) {
             };
             disc(img, p[0], p[1], 3.0 * sf, c, 1.0);
         }
+    }
+}
+
+/// Each posture's label and confidence on a dark tag up and to the side of its hand,
+/// away from the body (a right hand's is to the image's left), kept inside the picture.
+fn postures(img: &mut RgbImage, sk: &Skeleton, postures: &[HandPosture], k: &Intrinsics, s: u32) {
+    let pad = 2 * s as i64;
+    let gap = 6 * s as i64;
+    for p in postures {
+        let Some((u, v)) = k.project(&sk[p.joint]) else {
+            continue;
+        };
+        let t = format!("{} {:.2}", p.label, p.confidence);
+        let (w, h) = (text_width(&t, s) + 2 * pad, text_height(s) + 2 * pad);
+        let x = if p.joint == Joint::RightHand {
+            u as i64 - gap - w
+        } else {
+            u as i64 + gap
+        };
+        let x = x.clamp(0, (img.width() as i64 - w).max(0));
+        let y = (v as i64 - gap - h).clamp(0, (img.height() as i64 - h).max(0));
+        rect(img, x, y, w, h, PANEL, 0.7);
+        text(img, x + pad, y + pad, &t, s, TEXT);
     }
 }
 
@@ -422,6 +460,64 @@ pub(crate) mod tests {
         // Nothing to show: no panel.
         let bare = render(depth, &k, &Overlay::default());
         assert_eq!(bare.get_pixel(x0 + 10, 20), bare.get_pixel(10, 300));
+    }
+
+    #[test]
+    fn a_hands_posture_is_written_beside_it() {
+        let k = Intrinsics::default();
+        let px = wall(&k, 3000);
+        let depth = DepthView::new(k.width, k.height, &px).unwrap();
+        let sk = person(2.0);
+        let with = |postures: Vec<HandPosture>| {
+            render(
+                depth,
+                &k,
+                &Overlay {
+                    skeleton: Some(sk),
+                    postures,
+                    ..Overlay::default()
+                },
+            )
+        };
+        let bare = with(Vec::new());
+        let tagged = with(vec![HandPosture {
+            joint: Joint::RightHand,
+            label: "thumb_up".into(),
+            confidence: 0.87,
+        }]);
+        // Text pixels near the right hand (raised, at the image's left of the body) that
+        // were not white before (bones are white too): "thumb_up 0.87" is 13 characters
+        // of 16x16 pixels.
+        let (u, v) = k.project(&sk[Joint::RightHand]).unwrap();
+        let (x0, y0) = ((u - 240.0).max(0.0) as u32, (v - 40.0).max(0.0) as u32);
+        let written = (y0..v as u32)
+            .flat_map(|y| (x0..u as u32).map(move |x| (x, y)))
+            .filter(|&(x, y)| *tagged.get_pixel(x, y) == TEXT && *bare.get_pixel(x, y) != TEXT)
+            .count();
+        assert!(written > 13 * 20, "{written} text pixels");
+        // Only text and its tag changed: the joints are all still drawn.
+        assert_eq!(count(&tagged, JOINT), count(&bare, JOINT));
+        // A hand near the picture's edge keeps its tag inside the picture.
+        let mut edge = sk;
+        edge.joints[Joint::LeftHand.index()] = Point3::new(0.55, -0.4, 1.0);
+        let img = render(
+            depth,
+            &k,
+            &Overlay {
+                skeleton: Some(edge),
+                postures: vec![HandPosture {
+                    joint: Joint::LeftHand,
+                    label: "open".into(),
+                    confidence: 0.5,
+                }],
+                ..Overlay::default()
+            },
+        );
+        let right_edge = (0..k.height)
+            .flat_map(|y| (k.width - 90..k.width).map(move |x| (x, y)))
+            .filter(|&(x, y)| *img.get_pixel(x, y) == TEXT)
+            .count();
+        assert!(right_edge > 50, "{right_edge} text pixels at the right edge");
     }
 
     #[test]

@@ -4,7 +4,7 @@
 //! stage's telemetry. It picks what one picture shows ([`Scene::picture`])
 //! and what the page's panels show ([`Scene::state`]), from the same selection.
 
-use crate::render::{project_joints, GestureLine, Overlay};
+use crate::render::{project_joints, GestureLine, HandPosture, Overlay};
 use airglyph_core::{DepthView, Intrinsics, Joint, Skeleton};
 use airglyph_ipc::wire::Hand;
 use airglyph_ipc::{DecisionMsg, DepthHeader, GestureEventMsg, SkeletonMsg, Stage, StageStatsMsg};
@@ -318,6 +318,7 @@ impl Scene {
             intrinsics: h.intrinsics(),
             overlay: Overlay {
                 skeleton: sel.skeleton.map(|(_, s)| s),
+                postures: sel.skeleton.map(|(m, _)| hand_postures(m)).unwrap_or_default(),
                 trail,
                 bezier,
                 gestures: self.gesture_lines(now_ns),
@@ -407,7 +408,23 @@ fn skeleton_json(sel: &Selection<'_>, hand: Option<Hand>) -> Value {
         "sequence": msg.sequence,
         "joints": joints,
         "hand": hand.map(Hand::name),
+        "postures": airglyph_ipc::json::postures(&msg.postures),
     })
+}
+
+/// The hands of `m` whose posture was classified, beside which joint to draw each.
+fn hand_postures(m: &SkeletonMsg) -> Vec<HandPosture> {
+    [(Hand::Left, Joint::LeftHand), (Hand::Right, Joint::RightHand)]
+        .into_iter()
+        .filter_map(|(hand, joint)| {
+            let p = m.posture(hand).ok().flatten()?;
+            Some(HandPosture {
+                joint,
+                label: p.label.to_owned(),
+                confidence: p.confidence,
+            })
+        })
+        .collect()
 }
 
 fn ms(ns: u64) -> f64 {
@@ -498,6 +515,40 @@ mod tests {
         assert_eq!(state["skeleton"]["person_found"], true);
         assert_eq!(state["skeleton"]["joints"].as_array().unwrap().len(), 16);
         assert_eq!(state["frame"]["sequence"], 2);
+        assert_eq!(
+            state["skeleton"]["postures"],
+            json!({"left": null, "right": null})
+        );
+        assert!(p.overlay.postures.is_empty());
+    }
+
+    #[test]
+    fn the_postures_shown_are_those_of_the_skeleton_shown() {
+        let mut scene = Scene::new();
+        for seq in 0..3 {
+            scene.push_depth(header(seq), &pixels(seq), 0);
+        }
+        let mut m = skeleton(1);
+        m.set_posture(
+            Hand::Right,
+            Some(airglyph_ipc::PostureMsg::new("fist", 0.75).unwrap()),
+        );
+        scene.push_skeleton(m);
+        let p = scene.picture(0).unwrap();
+        assert_eq!(p.frame.header.sequence, 1);
+        assert_eq!(
+            p.overlay.postures,
+            [HandPosture {
+                joint: Joint::RightHand,
+                label: "fist".into(),
+                confidence: 0.75
+            }]
+        );
+        let state = scene.state(0);
+        assert_eq!(
+            state["skeleton"]["postures"],
+            json!({"left": null, "right": {"label": "fist", "confidence": 0.75}})
+        );
     }
 
     #[test]

@@ -2,7 +2,7 @@
 //! --json`, `echo … --json`, `top --json` and the viewer's push stream (README, "JSON
 //! output"). A program that reads one reads them all.
 
-use crate::wire::{Hand, Percentiles};
+use crate::wire::{Hand, Percentiles, PostureMsg};
 use crate::{DecisionMsg, GestureEventMsg, SkeletonMsg, Stage, StageStatsMsg};
 use airglyph_core::Joint;
 use serde::Serialize;
@@ -18,8 +18,9 @@ pub fn latency_ms(from_ns: u64, to_ns: u64) -> f64 {
 }
 
 /// One gesture: `{"event":"gesture","label","score","start_frame","end_frame","hand",
-/// "start_ns","end_ns"}`, with `session` (the capture session its frames belong to) and
-/// `latency_ms` (capture to event) when it comes live from the pipeline, and `drawn`
+/// "start_ns","end_ns"}`, with `session` (the capture session its frames belong to),
+/// `latency_ms` (capture to event) and `posture` (the drawing hand's posture over most
+/// of the gesture, or null) when it comes live from the pipeline, and `drawn`
 /// (the symbol drawn over its frames, or null) when the drawn symbols are known.
 #[derive(Debug, Clone, Serialize)]
 pub struct GestureLine<'a> {
@@ -47,6 +48,10 @@ pub struct GestureLine<'a> {
     /// Live only: from the capture of the frame that closed it to the event.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub latency_ms: Option<f64>,
+    /// Live only: the posture the drawing hand held over most of it (None inside:
+    /// unknown).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub posture: Option<Option<&'a str>>,
     /// The symbol drawn over its frames (None inside: none was), when that is known.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub drawn: Option<Option<&'a str>>,
@@ -66,6 +71,7 @@ impl<'a> GestureLine<'a> {
             end_ns: ns[1],
             session: None,
             latency_ms: None,
+            posture: None,
             drawn: None,
         }
     }
@@ -80,6 +86,7 @@ impl<'a> GestureLine<'a> {
         Self {
             session: Some(e.session),
             latency_ms: Some(gesture_latency_ms(e)),
+            posture: Some(e.posture().ok().flatten()),
             ..Self::offline(
                 e.label().unwrap_or("?"),
                 e.score.into(),
@@ -117,8 +124,9 @@ pub fn gesture_latency_ms(e: &GestureEventMsg) -> f64 {
 }
 
 /// A skeleton: `{"event":"skeleton","sequence","session","person_found","joints",
-/// "confidence","visible","capture_ns","latency_ms"}`, the last three objects keyed by
-/// joint name as `airglyph pose --json` writes them.
+/// "confidence","visible","postures","capture_ns","latency_ms"}`, `joints`,
+/// `confidence` and `visible` objects keyed by joint name as `airglyph pose --json`
+/// writes them, `postures` [`postures`].
 pub fn skeleton(m: &SkeletonMsg) -> Value {
     let by_joint = |f: &dyn Fn(usize) -> Value| -> Map<String, Value> {
         Joint::ALL
@@ -135,12 +143,24 @@ pub fn skeleton(m: &SkeletonMsg) -> Value {
         "joints": by_joint(&|i| json!(m.joints[i])),
         "confidence": by_joint(&|i| json!(m.confidence[i])),
         "visible": by_joint(&|i| json!(m.visible & (1 << i) != 0)),
+        "postures": postures(&m.postures),
         "capture_ns": m.chain.capture_ns,
         "latency_ms": latency_ms(
             m.chain.capture_ns,
             m.chain.pose_publish_ns.max(m.chain.capture_publish_ns)
         ),
     })
+}
+
+/// Each hand's posture (a skeleton's, in [`Hand`] order): `{"left": {"label",
+/// "confidence"} | null, "right": …}`, null when the hand was not classified.
+pub fn postures(p: &[PostureMsg; 2]) -> Value {
+    let one = |hand: Hand| match p[hand as usize].get() {
+        Ok(Some(p)) => json!({"label": p.label, "confidence": p.confidence}),
+        // A receiver has validated the message; what is not a posture is shown as none.
+        Ok(None) | Err(_) => Value::Null,
+    };
+    json!({"left": one(Hand::Left), "right": one(Hand::Right)})
 }
 
 /// The gesture stage's decision on one frame: `{"event":"decision","sequence","session",
@@ -208,7 +228,11 @@ mod tests {
         assert_eq!(v["end_frame"], 40);
         assert_eq!(v["session"], 7);
         assert_eq!(v["latency_ms"], 2.5);
+        assert_eq!(v["posture"], Value::Null);
         assert!(v.get("drawn").is_none());
+        m.set_posture(Some("fist")).unwrap();
+        let v: Value = serde_json::from_str(&GestureLine::live(&m).line()).unwrap();
+        assert_eq!(v["posture"], "fist");
         let drawn: Value = serde_json::from_str(&GestureLine::live(&m).drawn(None).line()).unwrap();
         assert_eq!(drawn["drawn"], Value::Null);
     }
@@ -220,6 +244,7 @@ mod tests {
         assert_eq!(v["label"], "7");
         assert_eq!(v["hand"], "right");
         assert!(v.get("session").is_none() && v.get("latency_ms").is_none());
+        assert!(v.get("posture").is_none());
     }
 
     #[test]
@@ -236,6 +261,13 @@ mod tests {
         assert_eq!(v["visible"][Joint::ALL[1].name()], false);
         assert_eq!(v["joints"]["head"][2], 2.0);
         assert_eq!(v["joints"].as_object().unwrap().len(), Joint::ALL.len());
+        assert_eq!(v["postures"], json!({"left": null, "right": null}));
+        m.set_posture(Hand::Right, Some(PostureMsg::new("v", 0.5).unwrap()));
+        let v = skeleton(&m);
+        assert_eq!(
+            v["postures"],
+            json!({"left": null, "right": {"label": "v", "confidence": 0.5}})
+        );
     }
 
     #[test]

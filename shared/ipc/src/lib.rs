@@ -31,5 +31,6 @@ pub use config::IpcConfig;
 pub use error::IpcError;
 pub use port::{DepthPublisher, Pipeline, Publisher, Received, Receiver, Stage};
 pub use wire::{
-    DecisionMsg, DepthHeader, GestureEventMsg, LatencyChain, SkeletonMsg, StageStatsMsg,
+    DecisionMsg, DepthHeader, GestureEventMsg, LatencyChain, PostureMsg, SkeletonMsg,
+    StageStatsMsg,
 };

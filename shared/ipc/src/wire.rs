@@ -197,9 +197,99 @@ impl LatencyChain {
     }
 }
 
+/// Longest posture label on the wire, in UTF-8 bytes (a posture model's labels are held
+/// to it: `airglyph_posture::MAX_POSTURE_LABEL_BYTES`).
+pub const POSTURE_LABEL_CAPACITY: usize = 16;
+
+/// One hand's static posture in a skeleton, as the pose stage's posture step classified
+/// it; "none" (`label_len` 0) when the hand was not classified (not visible, the step
+/// switched off, no hand found in the depth image).
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[type_name("airglyph.PostureMsg.v1")]
+#[repr(C)]
+pub struct PostureMsg {
+    /// The label's UTF-8 bytes, zero-padded.
+    pub label: [u8; POSTURE_LABEL_CAPACITY],
+    /// How many of `label`'s bytes are the label; 0: none.
+    pub label_len: u32,
+    /// The classifier's confidence in [0, 1]; 0 when none.
+    pub confidence: f32,
+}
+
+/// A posture as read from a message: its label and the classifier's confidence.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Posture<'a> {
+    /// The posture model's label.
+    pub label: &'a str,
+    /// The classifier's confidence in [0, 1].
+    pub confidence: f32,
+}
+
+impl PostureMsg {
+    /// A classified posture; refuses an empty label (that is "none"), one longer than
+    /// [`POSTURE_LABEL_CAPACITY`] bytes, and a confidence outside [0, 1].
+    pub fn new(label: &str, confidence: f32) -> Result<Self, MessageError> {
+        if label.is_empty() {
+            return Err(MessageError::PostureLabel);
+        }
+        let mut m = Self {
+            confidence,
+            ..Self::default()
+        };
+        m.label_len = write_bounded(&mut m.label, label).ok_or(MessageError::PostureLabel)?;
+        m.check_confidence()?;
+        Ok(m)
+    }
+
+    /// The posture, None when the hand was not classified; an error when what another
+    /// process wrote is not a posture ([`PostureMsg::validate`]).
+    pub fn get(&self) -> Result<Option<Posture<'_>>, MessageError> {
+        self.check_confidence()?;
+        if self.label_len == 0 {
+            return Ok(None);
+        }
+        let label = read_bounded(&self.label, self.label_len).ok_or(MessageError::PostureLabel)?;
+        Ok(Some(Posture {
+            label,
+            confidence: self.confidence,
+        }))
+    }
+
+    /// Checks a received posture: a UTF-8 label of at most [`POSTURE_LABEL_CAPACITY`]
+    /// bytes, a finite confidence in [0, 1].
+    pub fn validate(&self) -> Result<(), MessageError> {
+        self.get().map(drop)
+    }
+
+    fn check_confidence(&self) -> Result<(), MessageError> {
+        if !(0.0..=1.0).contains(&self.confidence) {
+            return Err(MessageError::PostureConfidence(self.confidence));
+        }
+        Ok(())
+    }
+}
+
+/// Copies `s` into `dst`, zero-padded: its length, or None when it does not fit.
+fn write_bounded(dst: &mut [u8], s: &str) -> Option<u32> {
+    let bytes = s.as_bytes();
+    if bytes.len() > dst.len() {
+        return None;
+    }
+    dst.fill(0);
+    dst[..bytes.len()].copy_from_slice(bytes);
+    Some(bytes.len() as u32)
+}
+
+/// The first `len` bytes of `src` as text; None when `len` claims more than `src` holds
+/// or the bytes are not UTF-8 (another process wrote them).
+fn read_bounded(src: &[u8], len: u32) -> Option<&str> {
+    let bytes = src.get(..usize::try_from(len).ok()?)?;
+    std::str::from_utf8(bytes).ok()
+}
+
 /// The skeleton of one depth frame.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("airglyph.SkeletonMsg.v2")]
+#[type_name("airglyph.SkeletonMsg.v3")]
 #[repr(C)]
 pub struct SkeletonMsg {
     /// The depth frame's sequence number in its capture session.
@@ -221,6 +311,8 @@ pub struct SkeletonMsg {
     pub visible: u16,
     /// Padding to 8 bytes, written as 0.
     pub _reserved: [u8; 4],
+    /// Each hand's posture, in [`Hand`] order (left, right).
+    pub postures: [PostureMsg; 2],
 }
 
 impl Default for SkeletonMsg {
@@ -235,6 +327,7 @@ impl Default for SkeletonMsg {
             _pad: 0,
             visible: 0,
             _reserved: [0; 4],
+            postures: [PostureMsg::default(); 2],
         }
     }
 }
@@ -257,6 +350,13 @@ pub enum MessageError {
     /// A hand that is neither left (0) nor right (1).
     #[error("hand {0} is neither left (0) nor right (1)")]
     Hand(u8),
+    /// A posture label that is empty where one is set, not UTF-8, or longer than
+    /// [`POSTURE_LABEL_CAPACITY`].
+    #[error("posture label is empty, not UTF-8 or longer than {} bytes", POSTURE_LABEL_CAPACITY)]
+    PostureLabel,
+    /// A posture's confidence that is not a number in [0, 1].
+    #[error("posture confidence {0} is not a number in [0, 1]")]
+    PostureConfidence(f32),
 }
 
 impl SkeletonMsg {
@@ -269,7 +369,18 @@ impl SkeletonMsg {
         })
     }
 
-    /// Sets the joints, confidences and visibility, or marks no person found.
+    /// The posture of `hand`, None when it was not classified.
+    pub fn posture(&self, hand: Hand) -> Result<Option<Posture<'_>>, MessageError> {
+        self.postures[hand as usize].get()
+    }
+
+    /// Sets the posture of `hand` (None: not classified).
+    pub fn set_posture(&mut self, hand: Hand, posture: Option<PostureMsg>) {
+        self.postures[hand as usize] = posture.unwrap_or_default();
+    }
+
+    /// Sets the joints, confidences and visibility, or marks no person found (and then
+    /// no posture either).
     pub fn set_skeleton(&mut self, s: Option<&Skeleton>) {
         match s {
             Some(s) => {
@@ -287,11 +398,13 @@ impl SkeletonMsg {
                 self.confidence = [0.0; Joint::COUNT];
                 self.visible = 0;
                 self.person_found = 0;
+                self.postures = [PostureMsg::default(); 2];
             }
         }
     }
 
-    /// Checks a received skeleton: finite joints and confidences, an ordered chain.
+    /// Checks a received skeleton: finite joints and confidences, an ordered chain,
+    /// postures with UTF-8 labels that fit and confidences in [0, 1].
     pub fn validate(&self) -> Result<(), MessageError> {
         if !self
             .joints
@@ -305,7 +418,7 @@ impl SkeletonMsg {
         if !self.chain.is_ordered() {
             return Err(MessageError::Chain);
         }
-        Ok(())
+        self.postures.iter().try_for_each(PostureMsg::validate)
     }
 }
 
@@ -327,7 +440,7 @@ pub const BEZIER_CAPACITY: usize = 64;
 /// A spotted and classified gesture, with the Bezier points of the path it was
 /// recognized from.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("airglyph.GestureEventMsg.v2")]
+#[type_name("airglyph.GestureEventMsg.v3")]
 #[repr(C)]
 pub struct GestureEventMsg {
     /// The label's UTF-8 bytes, zero-padded.
@@ -358,6 +471,13 @@ pub struct GestureEventMsg {
     /// gesture, as the gesture stage measured it (body frame: x to the person's right,
     /// y down, shoulder widths), from its start to its end.
     pub bezier: [[f32; 2]; BEZIER_CAPACITY],
+    /// The posture label the drawing hand held over most of the gesture, UTF-8,
+    /// zero-padded.
+    pub posture: [u8; POSTURE_LABEL_CAPACITY],
+    /// How many of `posture`'s bytes are the label; 0: unknown.
+    pub posture_len: u32,
+    /// Padding to 8 bytes, written as 0.
+    pub _reserved_end: [u8; 4],
 }
 
 /// The hand that drew a gesture.
@@ -405,6 +525,9 @@ impl Default for GestureEventMsg {
             _reserved: [0; 3],
             bezier_len: 0,
             bezier: [[0.0; 2]; BEZIER_CAPACITY],
+            posture: [0; POSTURE_LABEL_CAPACITY],
+            posture_len: 0,
+            _reserved_end: [0; 4],
         }
     }
 }
@@ -451,9 +574,39 @@ impl GestureEventMsg {
         &self.bezier[..(self.bezier_len as usize).min(BEZIER_CAPACITY)]
     }
 
-    /// Checks a received event: its label, finite score and Bezier points, an ordered chain.
+    /// Sets the posture the drawing hand held over most of the gesture (None: unknown);
+    /// refuses an empty label or one longer than [`POSTURE_LABEL_CAPACITY`] bytes.
+    pub fn set_posture(&mut self, posture: Option<&str>) -> Result<(), MessageError> {
+        match posture {
+            Some("") => Err(MessageError::PostureLabel),
+            Some(label) => {
+                self.posture_len =
+                    write_bounded(&mut self.posture, label).ok_or(MessageError::PostureLabel)?;
+                Ok(())
+            }
+            None => {
+                (self.posture, self.posture_len) = ([0; POSTURE_LABEL_CAPACITY], 0);
+                Ok(())
+            }
+        }
+    }
+
+    /// The posture the drawing hand held over most of the gesture, None when unknown;
+    /// an error when the bytes are not UTF-8 or claim more than fits.
+    pub fn posture(&self) -> Result<Option<&str>, MessageError> {
+        if self.posture_len == 0 {
+            return Ok(None);
+        }
+        read_bounded(&self.posture, self.posture_len)
+            .map(Some)
+            .ok_or(MessageError::PostureLabel)
+    }
+
+    /// Checks a received event: its label and posture, finite score and Bezier points,
+    /// an ordered chain.
     pub fn validate(&self) -> Result<(), MessageError> {
         self.label()?;
+        self.posture()?;
         if !self.score.is_finite() {
             return Err(MessageError::NotFinite);
         }
@@ -681,6 +834,97 @@ mod tests {
     }
 
     #[test]
+    fn skeletons_carry_each_hands_posture() {
+        let mut m = SkeletonMsg {
+            chain: captured(),
+            ..Default::default()
+        };
+        m.set_skeleton(Some(&Skeleton::new([Point3::new(0.1, 0.2, 2.0); Joint::COUNT])));
+        assert_eq!(m.posture(Hand::Left), Ok(None));
+        m.set_posture(Hand::Right, Some(PostureMsg::new("thumb_up", 0.75).unwrap()));
+        m.validate().unwrap();
+        assert_eq!(m.posture(Hand::Left), Ok(None));
+        let p = m.posture(Hand::Right).unwrap().unwrap();
+        assert_eq!((p.label, p.confidence), ("thumb_up", 0.75));
+        // Sixteen bytes fit, whatever their characters; seventeen do not.
+        assert_eq!(
+            PostureMsg::new("ΩΩΩΩΩΩΩΩ", 1.0).unwrap().get().unwrap().unwrap().label,
+            "ΩΩΩΩΩΩΩΩ"
+        );
+        assert_eq!(PostureMsg::new(&"x".repeat(17), 0.5), Err(MessageError::PostureLabel));
+        assert_eq!(PostureMsg::new("", 0.5), Err(MessageError::PostureLabel));
+        assert!(matches!(
+            PostureMsg::new("fist", 1.5),
+            Err(MessageError::PostureConfidence(_))
+        ));
+        // No person, no posture.
+        m.set_skeleton(None);
+        assert_eq!(m.posture(Hand::Right), Ok(None));
+    }
+
+    #[test]
+    fn a_hostile_posture_is_refused_not_read() {
+        let mut good = SkeletonMsg {
+            chain: captured(),
+            ..Default::default()
+        };
+        good.set_posture(Hand::Left, Some(PostureMsg::new("open", 0.5).unwrap()));
+        let refused = |f: &dyn Fn(&mut PostureMsg)| {
+            let mut m = good;
+            f(&mut m.postures[Hand::Left as usize]);
+            let err = m.validate().unwrap_err();
+            // (Debug: a NaN confidence is not equal to itself.)
+            let read = m.posture(Hand::Left).unwrap_err();
+            assert_eq!(format!("{read:?}"), format!("{err:?}"));
+            err
+        };
+        assert_eq!(refused(&|p| p.label_len = 17), MessageError::PostureLabel);
+        assert_eq!(refused(&|p| p.label_len = u32::MAX), MessageError::PostureLabel);
+        // Half of a two-byte character.
+        assert_eq!(
+            refused(&|p| {
+                p.label[..2].copy_from_slice("Ω".as_bytes());
+                p.label_len = 1;
+            }),
+            MessageError::PostureLabel
+        );
+        assert_eq!(refused(&|p| p.label[0] = 0xff), MessageError::PostureLabel);
+        for bad in [f32::NAN, f32::INFINITY, -0.1, 1.01] {
+            assert!(matches!(
+                refused(&|p| p.confidence = bad),
+                MessageError::PostureConfidence(_)
+            ));
+        }
+        // A "none" with garbage confidence is refused too: nothing on the wire is unread.
+        let mut m = good;
+        m.postures[Hand::Right as usize].confidence = f32::NAN;
+        assert!(m.validate().is_err());
+        good.validate().unwrap();
+    }
+
+    #[test]
+    fn gesture_events_carry_the_drawing_hands_posture() {
+        let mut g = GestureEventMsg {
+            chain: captured(),
+            ..Default::default()
+        };
+        assert_eq!(g.posture(), Ok(None));
+        g.set_posture(Some("point")).unwrap();
+        assert_eq!(g.posture(), Ok(Some("point")));
+        g.validate().unwrap();
+        assert_eq!(g.set_posture(Some(&"p".repeat(17))), Err(MessageError::PostureLabel));
+        assert_eq!(g.set_posture(Some("")), Err(MessageError::PostureLabel));
+        assert_eq!(g.posture(), Ok(Some("point")), "a refused label leaves the last");
+        g.set_posture(None).unwrap();
+        assert_eq!(g.posture(), Ok(None));
+        g.posture_len = 40;
+        assert_eq!(g.validate(), Err(MessageError::PostureLabel));
+        g.posture = [0xc3; POSTURE_LABEL_CAPACITY];
+        g.posture_len = 3;
+        assert_eq!(g.validate(), Err(MessageError::PostureLabel));
+    }
+
+    #[test]
     fn gesture_labels_are_bounded_utf8() {
         let mut g = GestureEventMsg::default();
         g.set_label("Ω7").unwrap();
@@ -754,9 +998,15 @@ mod tests {
             (size_of::<DepthHeader>(), align_of::<DepthHeader>()),
             (72, 8)
         );
-        assert_eq!(size_of::<SkeletonMsg>(), 328);
+        assert_eq!(size_of::<PostureMsg>(), 24);
+        assert_eq!(offset_of!(PostureMsg, label_len), 16);
+        assert_eq!(offset_of!(PostureMsg, confidence), 20);
+        assert_eq!(size_of::<SkeletonMsg>(), 376);
         assert_eq!(offset_of!(SkeletonMsg, visible), 322);
-        assert_eq!(size_of::<GestureEventMsg>(), 648);
+        assert_eq!(offset_of!(SkeletonMsg, postures), 328);
+        assert_eq!(size_of::<GestureEventMsg>(), 672);
+        assert_eq!(offset_of!(GestureEventMsg, posture), 648);
+        assert_eq!(offset_of!(GestureEventMsg, posture_len), 664);
         assert_eq!(offset_of!(GestureEventMsg, chain), 80);
         assert_eq!(offset_of!(GestureEventMsg, hand), 128);
         assert_eq!(offset_of!(GestureEventMsg, bezier_len), 132);

@@ -2,7 +2,8 @@
 //! Multi-process behaviour is tested in the workspace's `tests/` crate.
 
 use airglyph_core::Intrinsics;
-use airglyph_ipc::{DepthHeader, IpcConfig, Pipeline, SkeletonMsg};
+use airglyph_ipc::wire::Hand;
+use airglyph_ipc::{DepthHeader, IpcConfig, Pipeline, PostureMsg, SkeletonMsg};
 use std::time::Duration;
 
 /// A test's own IPC root and prefix; the root's folder and the files in /dev/shm (the
@@ -110,7 +111,7 @@ fn a_slow_subscriber_loses_the_oldest_frames_and_counts_them() {
 }
 
 #[test]
-fn skeletons_with_nan_are_refused() {
+fn skeletons_with_nan_or_a_hostile_posture_are_refused() {
     let ipc = isolated("k");
     let side = Pipeline::join_with(ipc.config(), "both").unwrap();
     let publisher = side.skeleton_publisher().unwrap();
@@ -120,13 +121,27 @@ fn skeletons_with_nan_are_refused() {
         ..Default::default()
     };
     msg.chain.capture_ns = 1;
-    publisher.send(msg).unwrap();
-    msg.joints[0][0] = f32::NAN;
+    msg.set_posture(Hand::Right, Some(PostureMsg::new("pinch", 0.9).unwrap()));
+    let mut nan = msg;
+    nan.joints[0][0] = f32::NAN;
+    let mut long = msg;
+    long.postures[Hand::Right as usize].label_len = 1 << 20;
+    let mut not_utf8 = msg;
+    not_utf8.postures[Hand::Left as usize].label = [0xff; 16];
+    not_utf8.postures[Hand::Left as usize].label_len = 4;
+    let mut unsure = msg;
+    unsure.postures[Hand::Right as usize].confidence = f32::INFINITY;
+    // One at a time: the stream keeps the newest 4.
+    for bad in [nan, long, not_utf8, unsure] {
+        publisher.send(bad).unwrap();
+        assert!(receiver.recv(Duration::from_millis(50)).unwrap().is_none());
+    }
     publisher.send(msg).unwrap();
     let got = receiver.recv(Duration::from_secs(1)).unwrap().unwrap();
     assert_eq!(got.msg.sequence, 3);
-    assert!(receiver.recv(Duration::from_millis(50)).unwrap().is_none());
-    assert_eq!(receiver.rejected(), 1);
+    let posture = got.msg.posture(Hand::Right).unwrap().unwrap();
+    assert_eq!((posture.label, posture.confidence), ("pinch", 0.9));
+    assert_eq!(receiver.rejected(), 4);
 }
 
 /// A publisher of the pipeline's own user can write to a frame after sending it: what

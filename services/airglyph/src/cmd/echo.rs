@@ -2,6 +2,7 @@
 
 use airglyph_core::Joint;
 use airglyph_ipc::json::{self, GestureLine};
+use airglyph_ipc::wire::Hand;
 use airglyph_ipc::{
     shutdown, site, DecisionMsg, GestureEventMsg, Pipeline, Receiver, SkeletonMsg, Stage,
     StageStatsMsg,
@@ -20,13 +21,16 @@ use std::time::{Duration, Instant};
 ///
 /// gesture: each recognized gesture, with the keys of `run --json` ({"event":"gesture",
 /// "label","score","start_frame","end_frame","hand","start_ns","end_ns","session",
-/// "latency_ms"}). One that joins late first gets the last 8 the gesture stage kept; each
+/// "latency_ms","posture"}; posture: the drawing hand's over most of the gesture, or
+/// null). One that joins late first gets the last 8 the gesture stage kept; each
 /// gesture is printed once, even when a restarted gesture stage reports one again (the
 /// same capture session and frames).
 ///
 /// skeleton: every skeleton ({"event":"skeleton","sequence","session","person_found",
-/// "joints":{"head":[x,y,z],…},"confidence":{…},"visible":{…},"capture_ns",
-/// "latency_ms"}; metres, camera frame), at most --max-rate a second.
+/// "joints":{"head":[x,y,z],…},"confidence":{…},"visible":{…},"postures":{"left":
+/// {"label","confidence"} or null,"right":…},"capture_ns","latency_ms"}; metres, camera
+/// frame; a posture is null when the pose stage did not classify that hand), at most
+/// --max-rate a second.
 ///
 /// decision: the gesture stage's decision on every frame ({"event":"decision",
 /// "sequence","session","gesture","latency_ms"}).
@@ -192,8 +196,16 @@ fn gestures(pipeline: &Pipeline, args: &Args, out: &mut Lines) -> anyhow::Result
             || g.line(),
             || {
                 format!(
-                    "{}  (score {:.2}, frames {}–{}, {} hand)",
-                    g.label, g.score, g.start_frame, g.end_frame, g.hand
+                    "{}  (score {:.2}, frames {}–{}, {} hand{})",
+                    g.label,
+                    g.score,
+                    g.start_frame,
+                    g.end_frame,
+                    g.hand,
+                    match g.posture.flatten() {
+                        Some(p) => format!(", {p}"),
+                        None => String::new(),
+                    }
                 )
             },
         )?;
@@ -220,8 +232,12 @@ fn skeletons(pipeline: &Pipeline, args: &Args, out: &mut Lines) -> anyhow::Resul
                 let head = m.joints[Joint::Head.index()];
                 if m.person_found != 0 {
                     format!(
-                        "frame {}  person found, head at ({:.2}, {:.2}, {:.2}) m",
-                        m.sequence, head[0], head[1], head[2]
+                        "frame {}  person found, head at ({:.2}, {:.2}, {:.2}) m{}",
+                        m.sequence,
+                        head[0],
+                        head[1],
+                        head[2],
+                        postures_text(&m)
                     )
                 } else {
                     format!("frame {}  no person", m.sequence)
@@ -230,6 +246,17 @@ fn skeletons(pipeline: &Pipeline, args: &Args, out: &mut Lines) -> anyhow::Resul
         )?;
     }
     Ok(())
+}
+
+/// ", left hand fist 0.93, right hand open 0.71" for the hands classified, else "".
+fn postures_text(m: &SkeletonMsg) -> String {
+    [Hand::Left, Hand::Right]
+        .into_iter()
+        .filter_map(|hand| {
+            let p = m.posture(hand).ok().flatten()?;
+            Some(format!(", {} hand {} {:.2}", hand.name(), p.label, p.confidence))
+        })
+        .collect()
 }
 
 fn decisions(pipeline: &Pipeline, out: &mut Lines) -> anyhow::Result<()> {
@@ -294,6 +321,19 @@ fn stats(pipeline: &Pipeline, out: &mut Lines) -> anyhow::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_skeletons_text_names_the_classified_hands_postures() {
+        let mut m = SkeletonMsg::default();
+        assert_eq!(postures_text(&m), "");
+        m.set_posture(
+            Hand::Right,
+            Some(airglyph_ipc::PostureMsg::new("fist", 0.934).unwrap()),
+        );
+        assert_eq!(postures_text(&m), ", right hand fist 0.93");
+        m.postures[Hand::Left as usize].label_len = 99;
+        assert_eq!(postures_text(&m), ", right hand fist 0.93", "a bad one is left out");
+    }
 
     fn event(session: u64, end: u64) -> GestureEventMsg {
         GestureEventMsg {

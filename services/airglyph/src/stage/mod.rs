@@ -9,6 +9,7 @@
 pub mod capture;
 pub mod gesture;
 pub mod pose;
+pub mod postures;
 pub mod viewer;
 
 use airglyph_ipc::Stage;
