@@ -4,8 +4,7 @@
 
 use airglyph_ipc::wire::{type_name, Hand, Percentiles};
 use airglyph_ipc::{
-    DecisionMsg, DepthHeader, GestureEventMsg, LatencyChain, PostureMsg, SkeletonMsg,
-    StageStatsMsg,
+    DecisionMsg, DepthHeader, GestureEventMsg, LatencyChain, PostureMsg, SkeletonMsg, StageStatsMsg,
 };
 use airglyph_system_tests::{
     demo_first_gesture, gesture_identity, json_lines, one_at_a_time, python3, signal, take_lines,
@@ -197,8 +196,7 @@ fn python_reads_the_postures_rust_writes() {
         // SAFETY: the wire types are `#[repr(C)]` with every gap a named field
         // (`the_python_wire_types_have_the_rust_layout`), so all their bytes are
         // initialized; the slice lives only while `m` is borrowed.
-        unsafe { std::slice::from_raw_parts((m as *const T).cast::<u8>(), size_of::<T>()) }
-            .to_vec()
+        unsafe { std::slice::from_raw_parts((m as *const T).cast::<u8>(), size_of::<T>()) }.to_vec()
     }
     let mut s = SkeletonMsg::default();
     s.set_posture(Hand::Right, Some(PostureMsg::new("thumb_up", 0.5).unwrap()));

@@ -517,7 +517,10 @@ pub(crate) mod tests {
             .flat_map(|y| (k.width - 90..k.width).map(move |x| (x, y)))
             .filter(|&(x, y)| *img.get_pixel(x, y) == TEXT)
             .count();
-        assert!(right_edge > 50, "{right_edge} text pixels at the right edge");
+        assert!(
+            right_edge > 50,
+            "{right_edge} text pixels at the right edge"
+        );
     }
 
     #[test]

@@ -318,7 +318,10 @@ impl Scene {
             intrinsics: h.intrinsics(),
             overlay: Overlay {
                 skeleton: sel.skeleton.map(|(_, s)| s),
-                postures: sel.skeleton.map(|(m, _)| hand_postures(m)).unwrap_or_default(),
+                postures: sel
+                    .skeleton
+                    .map(|(m, _)| hand_postures(m))
+                    .unwrap_or_default(),
                 trail,
                 bezier,
                 gestures: self.gesture_lines(now_ns),
@@ -414,17 +417,20 @@ fn skeleton_json(sel: &Selection<'_>, hand: Option<Hand>) -> Value {
 
 /// The hands of `m` whose posture was classified, beside which joint to draw each.
 fn hand_postures(m: &SkeletonMsg) -> Vec<HandPosture> {
-    [(Hand::Left, Joint::LeftHand), (Hand::Right, Joint::RightHand)]
-        .into_iter()
-        .filter_map(|(hand, joint)| {
-            let p = m.posture(hand).ok().flatten()?;
-            Some(HandPosture {
-                joint,
-                label: p.label.to_owned(),
-                confidence: p.confidence,
-            })
+    [
+        (Hand::Left, Joint::LeftHand),
+        (Hand::Right, Joint::RightHand),
+    ]
+    .into_iter()
+    .filter_map(|(hand, joint)| {
+        let p = m.posture(hand).ok().flatten()?;
+        Some(HandPosture {
+            joint,
+            label: p.label.to_owned(),
+            confidence: p.confidence,
         })
-        .collect()
+    })
+    .collect()
 }
 
 fn ms(ns: u64) -> f64 {

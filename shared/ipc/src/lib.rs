@@ -31,6 +31,5 @@ pub use config::IpcConfig;
 pub use error::IpcError;
 pub use port::{DepthPublisher, Pipeline, Publisher, Received, Receiver, Stage};
 pub use wire::{
-    DecisionMsg, DepthHeader, GestureEventMsg, LatencyChain, PostureMsg, SkeletonMsg,
-    StageStatsMsg,
+    DecisionMsg, DepthHeader, GestureEventMsg, LatencyChain, PostureMsg, SkeletonMsg, StageStatsMsg,
 };

@@ -352,7 +352,10 @@ pub enum MessageError {
     Hand(u8),
     /// A posture label that is empty where one is set, not UTF-8, or longer than
     /// [`POSTURE_LABEL_CAPACITY`].
-    #[error("posture label is empty, not UTF-8 or longer than {} bytes", POSTURE_LABEL_CAPACITY)]
+    #[error(
+        "posture label is empty, not UTF-8 or longer than {} bytes",
+        POSTURE_LABEL_CAPACITY
+    )]
     PostureLabel,
     /// A posture's confidence that is not a number in [0, 1].
     #[error("posture confidence {0} is not a number in [0, 1]")]
@@ -839,19 +842,32 @@ mod tests {
             chain: captured(),
             ..Default::default()
         };
-        m.set_skeleton(Some(&Skeleton::new([Point3::new(0.1, 0.2, 2.0); Joint::COUNT])));
+        m.set_skeleton(Some(&Skeleton::new(
+            [Point3::new(0.1, 0.2, 2.0); Joint::COUNT],
+        )));
         assert_eq!(m.posture(Hand::Left), Ok(None));
-        m.set_posture(Hand::Right, Some(PostureMsg::new("thumb_up", 0.75).unwrap()));
+        m.set_posture(
+            Hand::Right,
+            Some(PostureMsg::new("thumb_up", 0.75).unwrap()),
+        );
         m.validate().unwrap();
         assert_eq!(m.posture(Hand::Left), Ok(None));
         let p = m.posture(Hand::Right).unwrap().unwrap();
         assert_eq!((p.label, p.confidence), ("thumb_up", 0.75));
         // Sixteen bytes fit, whatever their characters; seventeen do not.
         assert_eq!(
-            PostureMsg::new("ΩΩΩΩΩΩΩΩ", 1.0).unwrap().get().unwrap().unwrap().label,
+            PostureMsg::new("ΩΩΩΩΩΩΩΩ", 1.0)
+                .unwrap()
+                .get()
+                .unwrap()
+                .unwrap()
+                .label,
             "ΩΩΩΩΩΩΩΩ"
         );
-        assert_eq!(PostureMsg::new(&"x".repeat(17), 0.5), Err(MessageError::PostureLabel));
+        assert_eq!(
+            PostureMsg::new(&"x".repeat(17), 0.5),
+            Err(MessageError::PostureLabel)
+        );
         assert_eq!(PostureMsg::new("", 0.5), Err(MessageError::PostureLabel));
         assert!(matches!(
             PostureMsg::new("fist", 1.5),
@@ -879,7 +895,10 @@ mod tests {
             err
         };
         assert_eq!(refused(&|p| p.label_len = 17), MessageError::PostureLabel);
-        assert_eq!(refused(&|p| p.label_len = u32::MAX), MessageError::PostureLabel);
+        assert_eq!(
+            refused(&|p| p.label_len = u32::MAX),
+            MessageError::PostureLabel
+        );
         // Half of a two-byte character.
         assert_eq!(
             refused(&|p| {
@@ -912,9 +931,16 @@ mod tests {
         g.set_posture(Some("point")).unwrap();
         assert_eq!(g.posture(), Ok(Some("point")));
         g.validate().unwrap();
-        assert_eq!(g.set_posture(Some(&"p".repeat(17))), Err(MessageError::PostureLabel));
+        assert_eq!(
+            g.set_posture(Some(&"p".repeat(17))),
+            Err(MessageError::PostureLabel)
+        );
         assert_eq!(g.set_posture(Some("")), Err(MessageError::PostureLabel));
-        assert_eq!(g.posture(), Ok(Some("point")), "a refused label leaves the last");
+        assert_eq!(
+            g.posture(),
+            Ok(Some("point")),
+            "a refused label leaves the last"
+        );
         g.set_posture(None).unwrap();
         assert_eq!(g.posture(), Ok(None));
         g.posture_len = 40;

@@ -254,7 +254,12 @@ fn postures_text(m: &SkeletonMsg) -> String {
         .into_iter()
         .filter_map(|hand| {
             let p = m.posture(hand).ok().flatten()?;
-            Some(format!(", {} hand {} {:.2}", hand.name(), p.label, p.confidence))
+            Some(format!(
+                ", {} hand {} {:.2}",
+                hand.name(),
+                p.label,
+                p.confidence
+            ))
         })
         .collect()
 }
@@ -332,7 +337,11 @@ mod tests {
         );
         assert_eq!(postures_text(&m), ", right hand fist 0.93");
         m.postures[Hand::Left as usize].label_len = 99;
-        assert_eq!(postures_text(&m), ", right hand fist 0.93", "a bad one is left out");
+        assert_eq!(
+            postures_text(&m),
+            ", right hand fist 0.93",
+            "a bad one is left out"
+        );
     }
 
     fn event(session: u64, end: u64) -> GestureEventMsg {

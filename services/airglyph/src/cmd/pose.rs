@@ -74,7 +74,11 @@ pub fn frame_json(
 
 /// " fist 0.93" when `hand` was classified, else "".
 fn posture_text(classified: &Option<[PostureMsg; 2]>, hand: Hand) -> String {
-    match classified.map(|c| c[hand as usize]).as_ref().map(PostureMsg::get) {
+    match classified
+        .map(|c| c[hand as usize])
+        .as_ref()
+        .map(PostureMsg::get)
+    {
         Some(Ok(Some(p))) => format!(" {} {:.2}", p.label, p.confidence),
         _ => String::new(),
     }
@@ -100,9 +104,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         rec.read_frame_into(i, &mut px)?;
         let view = airglyph_core::DepthView::new(k.width, k.height, &px)?;
         let r = est.estimate(view);
-        let classified = model
-            .filter(|_| r.person_found)
-            .map(|m| postures::classify_hands(m, view, &k, &r.skeleton).map(Option::unwrap_or_default));
+        let classified = model.filter(|_| r.person_found).map(|m| {
+            postures::classify_hands(m, view, &k, &r.skeleton).map(Option::unwrap_or_default)
+        });
         if args.json {
             let none = [PostureMsg::default(); 2];
             let p = model.map(|_| classified.as_ref().unwrap_or(&none));

@@ -2,8 +2,8 @@
 //! skeleton for each frame it takes (person-found false when there is none), with each
 //! visible hand's posture classified from the same frame, and its stats.
 
-use airglyph_core::recording::Recording;
 use super::postures::{self, Postures};
+use airglyph_core::recording::Recording;
 use airglyph_core::{DepthView, Intrinsics};
 use airglyph_ipc::clock::monotonic_ns;
 use airglyph_ipc::stats::Telemetry;

@@ -98,11 +98,17 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let missing = dir.path().join("hands.json");
         let err = Postures::parse(missing.to_str().unwrap()).unwrap_err();
-        assert!(err.contains("hands.json") && err.contains("cannot read"), "{err}");
+        assert!(
+            err.contains("hands.json") && err.contains("cannot read"),
+            "{err}"
+        );
         let garbage = dir.path().join("garbage.json");
         std::fs::write(&garbage, "{\"format\": \"something else\"}").unwrap();
         let err = Postures::parse(garbage.to_str().unwrap()).unwrap_err();
-        assert!(err.contains("garbage.json") && err.contains("not an airglyph posture model"), "{err}");
+        assert!(
+            err.contains("garbage.json") && err.contains("not an airglyph posture model"),
+            "{err}"
+        );
         assert!(Postures::parse("").is_err());
     }
 
@@ -116,7 +122,12 @@ mod tests {
         cfg.placement.distance_m = 1.0;
         cfg = cfg.framing_upper_body().unwrap();
         cfg.hands.right.posture = Some(posture);
-        let h = Synthesizer::new(cfg.clone()).unwrap().render(0).1.hands.right;
+        let h = Synthesizer::new(cfg.clone())
+            .unwrap()
+            .render(0)
+            .1
+            .hands
+            .right;
         cfg.hands.right.roll_deg = (-h.thumb_side.z).atan2(-h.palm_normal.z).to_degrees();
         let mut s = Synthesizer::new(cfg).unwrap();
         let (img, truth) = s.render(0);
