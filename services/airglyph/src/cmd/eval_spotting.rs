@@ -120,7 +120,7 @@ pub struct Args {
     /// What puts the pen down: motion (the spotter finds gestures in the motion alone)
     /// or posture[:LABEL] (while the drawing hand holds LABEL, default point; the
     /// postures simulated as above). Overrides a "pen" in --spotter but for its
-    /// min_confidence, down_frames and up_frames.
+    /// min_confidence, down_frames, up_frames and verify.
     #[arg(long, default_value = "motion", value_parser = parse_pen)]
     pub pen: Pen,
     /// With --pen posture: the fraction of frames the posture classifier misreads, on
@@ -145,6 +145,7 @@ fn pen_of(args: &Args, from_json: Pen) -> Pen {
             p.min_confidence = json.min_confidence;
             p.down_frames = json.down_frames;
             p.up_frames = json.up_frames;
+            p.verify = json.verify;
             Pen::Posture(p)
         }
         (pen, _) => pen,
@@ -504,6 +505,7 @@ fn pen_fields(args: &Args, e: &Evaluation) -> serde_json::Map<String, serde_json
         m.insert("pen".into(), json!(format!("posture:{}", p.label)));
         m.insert("down_frames".into(), json!(p.down_frames));
         m.insert("up_frames".into(), json!(p.up_frames));
+        m.insert("verify".into(), json!(p.verify));
         m.insert("posture_error".into(), json!(args.posture_error));
         m.insert("posture_runs".into(), json!(args.posture_runs));
         m.insert(

@@ -394,9 +394,14 @@ impl Spotter {
             return None;
         }
         let mut c = self.score(s, e)?;
-        // The posture says where a gesture is: the verifier, which tells a whole
-        // gesture from movement by the motion, is not asked.
-        c.accepted = self.cfg.margin.is_none_or(|m| c.ratio > m) && c.score >= self.cfg.min_score;
+        // The posture says where a gesture is; the verifier, which tells a whole
+        // gesture from movement by the motion, only when asked.
+        let verified = |pen: &PosturePen| {
+            !pen.verify || c.p_gesture >= self.bars.get(c.class).copied().unwrap_or(0.0)
+        };
+        c.accepted = self.cfg.margin.is_none_or(|m| c.ratio > m)
+            && c.score >= self.cfg.min_score
+            && matches!(self.cfg.pen, Pen::Posture(p) if verified(&p));
         if let Some(t) = self.trace.as_mut() {
             t.push(c);
         }

@@ -159,6 +159,10 @@ pub struct PosturePen {
     /// gesture in two (one shorter than `down_frames`, or than `min_seconds`, starts
     /// none).
     pub up_frames: u32,
+    /// Whether the verifier must also take the span for a whole gesture, as it must a
+    /// stretch the pen by motion finds: a reach made while pointing at something is
+    /// then told from a symbol by its motion.
+    pub verify: bool,
 }
 
 impl Default for PosturePen {
@@ -169,6 +173,7 @@ impl Default for PosturePen {
             // Chosen on the training writers' streams (NOTES.md, "The pen by posture").
             down_frames: 3,
             up_frames: 12,
+            verify: false,
         }
     }
 }
