@@ -150,7 +150,11 @@ fn a_gesture_has_the_same_keys_from_run_demo_and_spot() {
     };
 
     let run = first_gesture(&p, &[]);
-    assert_eq!(keys(&run), with(&["latency_ms", "session"]), "{run}");
+    assert_eq!(
+        keys(&run),
+        with(&["latency_ms", "posture", "session"]),
+        "{run}"
+    );
 
     let out = succeed(
         p.command("airglyph")
@@ -166,7 +170,7 @@ fn a_gesture_has_the_same_keys_from_run_demo_and_spot() {
     assert_eq!(gestures[0]["drawn"], "3", "{}", gestures[0]);
     assert_eq!(
         keys(&gestures[0]),
-        with(&["drawn", "latency_ms", "session"])
+        with(&["drawn", "latency_ms", "posture", "session"])
     );
 
     let tmp = tempfile::tempdir().unwrap();

@@ -168,3 +168,82 @@ fn seen_from_the_waist_up_the_legs_are_reported_out_of_view() {
         }
     }
 }
+
+/// A person 2 m from the camera holding an open hand before them (the synthetic hand,
+/// at 640×480 through the sensor model, played by the capture stage): the pose stage
+/// classifies the right hand from the frame it estimated the skeleton from, and its
+/// skeletons carry the built-in model's "open" for it, most of the time; with
+/// `--postures off` they carry none.
+#[test]
+fn skeletons_carry_the_right_hands_posture_unless_postures_are_off() {
+    let p = Isolated::new();
+    let tmp = tempfile::tempdir().unwrap();
+    let rec = tmp.path().join("open");
+    let frames = 30usize;
+    succeed(
+        p.command("airglyph")
+            .args(["synth", "--motion", "pose:hands-in-front"])
+            .args(["--hand-posture", "right=open"])
+            .args(["--distance", "2", "--noise"])
+            .args(["--frames", &frames.to_string()])
+            .arg("--out")
+            .arg(&rec),
+    );
+    let source = format!("recording:{}", rec.display());
+    let run = |postures: &str| {
+        let mut probe = p
+            .command("airglyph-probe")
+            .args(["--stream", "skeleton", "--idle", "5"])
+            .stdout(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let reader = read_lines(&mut probe);
+        let mut pose = p
+            .stage("pose")
+            .args(["--postures", postures])
+            .spawn()
+            .unwrap();
+        std::thread::sleep(Duration::from_millis(300));
+        let capture = p
+            .stage("capture")
+            .args(["--source", &source])
+            .status()
+            .unwrap();
+        assert!(capture.success());
+        let got = reader.join().unwrap();
+        signal(&pose, libc::SIGTERM);
+        assert!(pose.wait().unwrap().success());
+        let _ = probe.wait();
+        assert!(got.len() >= frames / 2, "{} skeletons", got.len());
+        got
+    };
+    let labels = ["open", "fist", "point", "thumb-up", "v", "pinch"];
+    let with = run("builtin");
+    let right: Vec<&str> = with
+        .iter()
+        .filter_map(|s| s["postures"]["right"]["label"].as_str())
+        .collect();
+    println!("right hand: {right:?}");
+    let open = right.iter().filter(|&&l| l == "open").count();
+    assert!(
+        open * 2 > with.len(),
+        "the open right hand is called open in {open} of {} skeletons: {right:?}",
+        with.len()
+    );
+    for s in &with {
+        let r = &s["postures"]["right"];
+        if !r.is_null() {
+            assert!(labels.contains(&r["label"].as_str().unwrap()), "{s}");
+            let c = r["confidence"].as_f64().unwrap();
+            assert!(c > 0.0 && c <= 1.0, "{s}");
+        }
+    }
+    let without = run("off");
+    assert!(
+        without
+            .iter()
+            .all(|s| s["postures"] == serde_json::json!({"left": null, "right": null})),
+        "--postures off: {:?}",
+        without.iter().map(|s| &s["postures"]).collect::<Vec<_>>()
+    );
+}

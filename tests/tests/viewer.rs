@@ -380,6 +380,79 @@ fn the_page_shows_the_skeleton_and_a_recognized_gesture() {
     shut_down(&p, supervisor);
 }
 
+/// A person holding an open hand before them at 2 m (a recording through the sensor
+/// model): the state the viewer pushes names each hand's posture as the pose stage
+/// classified it, and the page, in a browser, writes it in the skeleton panel.
+#[test]
+fn the_page_shows_each_hands_posture() {
+    let (Some(chromium), Some(chromedriver)) = (
+        program("AIRGLYPH_CHROMIUM", &["chromium", "chromium-browser"]),
+        program("AIRGLYPH_CHROMEDRIVER", &["chromedriver"]),
+    ) else {
+        println!(
+            "SKIPPED: chromium or chromedriver is not installed (scripts/setup installs them)"
+        );
+        return;
+    };
+    let _one = one_at_a_time();
+    let p = Isolated::new();
+    let tmp = tempfile::tempdir().unwrap();
+    let rec = tmp.path().join("open");
+    succeed(
+        p.command("airglyph")
+            .args(["synth", "--motion", "pose:hands-in-front"])
+            .args(["--hand-posture", "right=open"])
+            .args(["--distance", "2", "--noise"])
+            .args(["--frames", "60", "--out"])
+            .arg(&rec),
+    );
+    let addr = free_addr();
+    let supervisor = p
+        .command("airglyph")
+        .args(["run", "--view", "--listen", &addr.to_string()])
+        .args(["--stages", "capture,pose", "--loop", "--source"])
+        .arg(format!("recording:{}", rec.display()))
+        .spawn()
+        .unwrap();
+    let labels = ["open", "fist", "point", "thumb-up", "v", "pinch"];
+    let deadline = Instant::now() + Duration::from_secs(30);
+    let right = loop {
+        let s = state_soon(addr);
+        let r = &s["skeleton"]["postures"]["right"];
+        if let Some(label) = r["label"].as_str() {
+            assert!(labels.contains(&label), "{s}");
+            let c = r["confidence"].as_f64().unwrap();
+            assert!(c > 0.0 && c <= 1.0, "{s}");
+            break label.to_owned();
+        }
+        assert!(
+            Instant::now() < deadline,
+            "the viewer never showed the right hand's posture: {s}"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    println!("the viewer's state: the right hand holds {right}");
+
+    let browser = Browser::start(&chromium, &chromedriver);
+    browser.open(&format!("http://{addr}/"));
+    let shown = |dom: &str| -> Option<String> {
+        let at = dom.find("id=\"postures\"")?;
+        let tag = &dom[dom[..at].rfind('<')?..];
+        let tag = &tag[..tag.find('>')?];
+        let label = tag.split("data-right=\"").nth(1)?.split('"').next()?;
+        (!label.is_empty()).then(|| label.to_owned())
+    };
+    let dom = browser.source_when(|dom| shown(dom).is_some());
+    drop(browser);
+    let label = shown(&dom).unwrap();
+    assert!(labels.contains(&label.as_str()), "{dom}");
+    assert!(
+        dom.contains(&format!("right hand {label} ")),
+        "the panel writes the label it marks: {dom}"
+    );
+    shut_down(&p, supervisor);
+}
+
 #[test]
 fn a_viewer_that_cannot_listen_is_given_up_and_the_pipeline_runs_on() {
     let _one = one_at_a_time();

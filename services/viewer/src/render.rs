@@ -139,27 +139,65 @@ fn skeleton(img: &mut RgbImage, sk: &Skeleton, k: &Intrinsics, sf: f32) {
     }
 }
 
-/// Each posture's label and confidence on a dark tag up and to the side of its hand,
-/// away from the body (a right hand's is to the image's left), kept inside the picture.
+/// Each posture's label and confidence on a dark tag up and to the side of its hand:
+/// away from the other hand when both are tagged (hands held together, or crossed, do
+/// not stack their tags), else away from the body (a right hand's is to the image's
+/// left); a tag that would still cover the other goes above it; all inside the picture.
 fn postures(img: &mut RgbImage, sk: &Skeleton, postures: &[HandPosture], k: &Intrinsics, s: u32) {
     let pad = 2 * s as i64;
+    let size = (img.width() as i64, img.height() as i64);
+    for (t, [x, y, w, h]) in posture_tags(sk, postures, k, s, size) {
+        rect(img, x, y, w, h, PANEL, 0.7);
+        text(img, x + pad, y + pad, &t, s, TEXT);
+    }
+}
+
+/// Each tag's text and rectangle (x, y, width, height) in a picture of `size`.
+fn posture_tags(
+    sk: &Skeleton,
+    postures: &[HandPosture],
+    k: &Intrinsics,
+    s: u32,
+    size: (i64, i64),
+) -> Vec<(String, [i64; 4])> {
+    let pad = 2 * s as i64;
     let gap = 6 * s as i64;
-    for p in postures {
-        let Some((u, v)) = k.project(&sk[p.joint]) else {
+    let at: Vec<Option<(f32, f32)>> = postures.iter().map(|p| k.project(&sk[p.joint])).collect();
+    let mut placed: Vec<(String, [i64; 4])> = Vec::new();
+    for (i, p) in postures.iter().enumerate() {
+        let Some((u, v)) = at[i] else {
             continue;
         };
         let t = format!("{} {:.2}", p.label, p.confidence);
         let (w, h) = (text_width(&t, s) + 2 * pad, text_height(s) + 2 * pad);
-        let x = if p.joint == Joint::RightHand {
+        let other_u = at
+            .iter()
+            .enumerate()
+            .find_map(|(j, a)| a.filter(|_| j != i).map(|(ou, _)| ou));
+        let leftwards = match other_u {
+            Some(ou) => u < ou || (u == ou && p.joint == Joint::RightHand),
+            None => p.joint == Joint::RightHand,
+        };
+        let x = if leftwards {
             u as i64 - gap - w
         } else {
             u as i64 + gap
         };
-        let x = x.clamp(0, (img.width() as i64 - w).max(0));
-        let y = (v as i64 - gap - h).clamp(0, (img.height() as i64 - h).max(0));
-        rect(img, x, y, w, h, PANEL, 0.7);
-        text(img, x + pad, y + pad, &t, s, TEXT);
+        let x = x.clamp(0, (size.0 - w).max(0));
+        let mut y = (v as i64 - gap - h).clamp(0, (size.1 - h).max(0));
+        for (_, r) in &placed {
+            if x < r[0] + r[2] && r[0] < x + w && y < r[1] + r[3] && r[1] < y + h {
+                // Above the other, or below it where there is no room above.
+                y = if r[1] - h - pad >= 0 {
+                    r[1] - h - pad
+                } else {
+                    r[1] + r[3] + pad
+                };
+            }
+        }
+        placed.push((t, [x, y, w, h]));
     }
+    placed
 }
 
 /// The path fades in from its oldest point, so the direction of drawing shows.
@@ -521,6 +559,39 @@ pub(crate) mod tests {
             right_edge > 50,
             "{right_edge} text pixels at the right edge"
         );
+    }
+
+    #[test]
+    fn the_tags_of_two_hands_close_together_or_crossed_do_not_cover_each_other() {
+        let k = Intrinsics::default();
+        let tag = |joint, label: &str| HandPosture {
+            joint,
+            label: label.into(),
+            confidence: 1.0,
+        };
+        let both = [tag(Joint::LeftHand, "thumb-up"), tag(Joint::RightHand, "v")];
+        let overlap = |a: &[i64; 4], b: &[i64; 4]| {
+            a[0] < b[0] + b[2] && b[0] < a[0] + a[2] && a[1] < b[1] + b[3] && b[1] < a[1] + a[3]
+        };
+        let mut sk = person(1.2);
+        // Hands held together before the body, then crossed, then at the bottom edge.
+        for (left, right) in [
+            ([0.03, 0.3], [-0.03, 0.3]),
+            ([-0.05, 0.3], [0.05, 0.3]),
+            ([0.0, 0.5], [0.01, 0.5]),
+        ] {
+            sk.joints[Joint::LeftHand.index()] = Point3::new(left[0], left[1], 1.2);
+            sk.joints[Joint::RightHand.index()] = Point3::new(right[0], right[1], 1.2);
+            let tags = posture_tags(&sk, &both, &k, 2, (640, 480));
+            assert_eq!(tags.len(), 2);
+            assert!(!overlap(&tags[0].1, &tags[1].1), "{tags:?}");
+            for (_, r) in &tags {
+                assert!(
+                    r[0] >= 0 && r[1] >= 0 && r[0] + r[2] <= 640 && r[1] + r[3] <= 480,
+                    "{r:?}"
+                );
+            }
+        }
     }
 
     #[test]

@@ -71,6 +71,7 @@ fn main() -> anyhow::Result<()> {
                 "joints": m.joints,
                 "visible": Joint::ALL.iter().filter(|j| m.visible & (1 << j.index()) != 0)
                     .map(|j| j.name()).collect::<Vec<_>>(),
+                "postures": airglyph_ipc::json::postures(&m.postures),
             })
         }),
         "gesture" => messages(
@@ -81,6 +82,7 @@ fn main() -> anyhow::Result<()> {
                     "label": m.label().unwrap_or("?"), "score": m.score, "start_sequence": m.start_sequence,
                     "end_sequence": m.end_sequence, "capture_ns": m.chain.capture_ns,
                     "gesture_publish_ns": m.chain.gesture_publish_ns, "bezier": m.bezier(),
+                    "posture": m.posture().ok().flatten(),
                 })
             },
         ),
