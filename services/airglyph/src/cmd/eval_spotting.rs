@@ -6,7 +6,7 @@
 use crate::interrupt::unless_interrupted;
 use airglyph_gesture::lab::{
     load_many, matched, measured_error_rate, plot_timeline, posture_signal, Generator,
-    PostureNoise, Sample, Span, SpottingScore, StreamConfig, SyntheticStream,
+    PostureNoise, Sample, Span, SpottingScore, StreamConfig, SyntheticStream, POSTURES,
 };
 use airglyph_gesture::{
     Candidate, Model, Pen, Postures, SpottedGesture, Spotter, SpotterConfig, Trajectory,
@@ -118,10 +118,11 @@ pub struct Args {
     #[arg(long, default_value = "lab", value_parser = ["lab", "everyday", "mixed"])]
     pub generator: String,
     /// What puts the pen down: motion (the spotter finds gestures in the motion alone)
-    /// or posture[:LABEL] (while the drawing hand holds LABEL, default point; the
-    /// postures simulated as above). Overrides a "pen" in --spotter but for its
+    /// or posture[:LABEL] (while the drawing hand holds LABEL, default point: one of
+    /// open, fist, point, thumb_up, v, pinch, which the simulated person draws with;
+    /// the postures simulated as above). Overrides a "pen" in --spotter but for its
     /// min_confidence, down_frames, up_frames and verify.
-    #[arg(long, default_value = "motion", value_parser = parse_pen)]
+    #[arg(long, default_value = "motion", value_name = "motion|posture[:LABEL]", value_parser = parse_pen)]
     pub pen: Pen,
     /// With --pen posture: the fraction of frames the posture classifier misreads, on
     /// average over the postures (0: the true posture; 0.053: the posture crate's k-NN
@@ -156,14 +157,30 @@ fn pen_of(args: &Args, from_json: Pen) -> Pen {
 /// looks at none: its streams and figures are those of before).
 fn postures_for(
     s: &SyntheticStream,
-    scfg: &SpotterConfig,
+    drawing: Option<usize>,
     noise: &PostureNoise,
     seed: u64,
 ) -> Vec<Postures> {
-    match scfg.pen {
-        Pen::Motion => Vec::new(),
+    match drawing {
+        None => Vec::new(),
         // Their own random numbers: the stream is the same with either pen.
-        Pen::Posture(_) => posture_signal(s, noise, &mut ChaCha8Rng::seed_from_u64(seed ^ 0x705E)),
+        Some(d) => posture_signal(s, d, noise, &mut ChaCha8Rng::seed_from_u64(seed ^ 0x705E)),
+    }
+}
+
+/// The simulated posture the person draws with: the pen's (None with the pen by
+/// motion), which must be one the simulated hands take.
+fn drawing_posture(pen: Pen) -> anyhow::Result<Option<usize>> {
+    let Pen::Posture(p) = pen else {
+        return Ok(None);
+    };
+    match POSTURES.iter().position(|&name| name == p.label.as_str()) {
+        Some(i) => Ok(Some(i)),
+        None => bail!(
+            "--pen posture:{}: the simulated hands take only {}",
+            p.label,
+            POSTURES.join(", ")
+        ),
     }
 }
 
@@ -395,6 +412,7 @@ fn evaluate(args: &Args) -> anyhow::Result<Evaluation> {
     };
     let mut scfg = SpotterConfig::with_overrides(args.spotter.as_deref()).context("--spotter")?;
     scfg.pen = pen_of(args, scfg.pen);
+    let drawing = drawing_posture(scfg.pen)?;
     let noise = PostureNoise {
         error_rate: args.posture_error,
         run_frames: args.posture_runs,
@@ -432,7 +450,7 @@ fn evaluate(args: &Args) -> anyhow::Result<Evaluation> {
         .map(|(index, seed, c)| {
             let mut r = ChaCha8Rng::seed_from_u64(*seed);
             let s = generator.stream(c, &cfg, *index, &mut r);
-            let postures = postures_for(&s, &scfg, &noise, *seed);
+            let postures = postures_for(&s, drawing, &noise, *seed);
             let mut spotter = Spotter::new(model.clone(), scfg)?;
             spotter.set_trace(args.verbose || args.dump.is_some());
             let mut cands = Vec::new();
@@ -482,7 +500,7 @@ fn evaluate(args: &Args) -> anyhow::Result<Evaluation> {
         .iter()
         .enumerate()
     {
-        let postures = postures_for(rm, &scfg, &noise, args.seed ^ 0xABCD ^ i as u64);
+        let postures = postures_for(rm, drawing, &noise, args.seed ^ 0xABCD ^ i as u64);
         alarms.extend(run_stream(&model, &scfg, rm, &cfg, &postures)?);
     }
     Ok(Evaluation {

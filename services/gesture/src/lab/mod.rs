@@ -34,7 +34,7 @@ pub use everyday::{everyday_movement, everyday_stream};
 pub use movement::Generator;
 pub use posture_signal::{
     measured_error_rate, posture_signal, read as read_postures, true_postures, PostureNoise,
-    CONFUSION, POSTURES,
+    CONFUSION, POINT, POSTURES,
 };
 pub use scoring::{matched, score, Matching, SpottingScore};
 pub use stream::{

@@ -26,7 +26,8 @@ pub const POSTURES: [&str; 6] = ["open", "fist", "point", "thumb_up", "v", "pinc
 
 const OPEN: usize = 0;
 const FIST: usize = 1;
-const POINT: usize = 2;
+/// "point", the pen's posture unless another is named.
+pub const POINT: usize = 2;
 
 /// The posture crate's k-NN (k = 1) on the held-out bodies, all distances, turns and
 /// with and without the sensor model: row the true posture, column the one read
@@ -62,8 +63,14 @@ pub struct PostureNoise {
     pub fps: f32,
 }
 
-/// The true posture of the drawing hand a frame (indices into [`POSTURES`]).
-pub fn true_postures<R: Rng>(s: &SyntheticStream, fps: f32, rng: &mut R) -> Vec<usize> {
+/// The true posture of the drawing hand a frame (indices into [`POSTURES`]); it draws
+/// holding `drawing` (the pen's posture, [`POINT`] for the pen's default).
+pub fn true_postures<R: Rng>(
+    s: &SyntheticStream,
+    drawing: usize,
+    fps: f32,
+    rng: &mut R,
+) -> Vec<usize> {
     let n = s.points.len();
     let frames = |secs: f32| (secs * fps).round() as i64;
     let mut out = Vec::with_capacity(n);
@@ -72,13 +79,13 @@ pub fn true_postures<R: Rng>(s: &SyntheticStream, fps: f32, rng: &mut R) -> Vec<
         let relaxed = if rng.gen_bool(0.5) { OPEN } else { FIST };
         out.extend(std::iter::repeat_n(relaxed, len.min(n - out.len())));
     }
-    let mut set = |from: i64, to: i64| {
+    let mut set = |from: i64, to: i64, posture: usize| {
         let (a, b) = (
             from.max(0) as usize,
             (to.max(-1) + 1).min(n as i64) as usize,
         );
         if a < b {
-            out[a..b].fill(POINT);
+            out[a..b].fill(posture);
         }
     };
     for &(first, last, chance) in &s.pointing {
@@ -86,13 +93,13 @@ pub fn true_postures<R: Rng>(s: &SyntheticStream, fps: f32, rng: &mut R) -> Vec<
             let along = rng.gen_range(0.3..0.9);
             let from = first as i64 + ((last - first) as f64 * along) as i64;
             let to = last as i64 + frames(rng.gen_range(0.0..0.5));
-            set(from, to);
+            set(from, to, POINT);
         }
     }
     for t in &s.truth {
         let from = t.start as i64 - frames(rng.gen_range(-0.1..0.3));
         let to = t.end as i64 + frames(rng.gen_range(-0.1..0.3));
-        set(from, to);
+        set(from, to, drawing);
     }
     out
 }
@@ -144,13 +151,15 @@ pub fn read<R: Rng>(truth: &[usize], noise: &PostureNoise, rng: &mut R) -> Vec<u
 }
 
 /// Both hands' postures a frame, as the classifier reads them: the drawing (right)
-/// hand's from [`true_postures`], the other resting open or as a fist.
+/// hand's from [`true_postures`] (drawing while it holds `drawing`), the other resting
+/// open or as a fist.
 pub fn posture_signal<R: Rng>(
     s: &SyntheticStream,
+    drawing: usize,
     noise: &PostureNoise,
     rng: &mut R,
 ) -> Vec<Postures> {
-    let right = read(&true_postures(s, noise.fps, rng), noise, rng);
+    let right = read(&true_postures(s, drawing, noise.fps, rng), noise, rng);
     let rest = if rng.gen_bool(0.5) { OPEN } else { FIST };
     let left = read(&vec![rest; s.points.len()], noise, rng);
     let labels: Vec<Option<PostureLabel>> =
@@ -227,7 +236,7 @@ mod tests {
             pointing: vec![(220, 250, 1.0)],
         };
         for seed in 0..10 {
-            let t = true_postures(&s, 30.0, &mut ChaCha8Rng::seed_from_u64(seed));
+            let t = true_postures(&s, POINT, 30.0, &mut ChaCha8Rng::seed_from_u64(seed));
             // Pointing over the drawing but for its first and last 3 frames at most…
             assert!(t[103..=157].iter().all(|&p| p == POINT), "seed {seed}");
             // …not before the 0.3 s lead, and pointing in the pointing stretch's end.
