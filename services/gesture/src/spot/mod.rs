@@ -264,8 +264,8 @@ impl Spotter {
         let last = self.seg.next_index().checked_sub(1);
         let open = last.and_then(|last| self.pen.open_span(last));
         self.pen = PenState::Up;
-        if let Some((s, e)) = open {
-            out.extend(self.pen_span(s, e));
+        if let (Some((s, e)), Pen::Posture(pen)) = (open, self.cfg.pen) {
+            out.extend(self.pen_span(s, e, pen));
         }
         while let Some(e) = self.waiting.pop_front() {
             out.extend(self.candidates_ending(e));
@@ -354,7 +354,7 @@ impl Spotter {
                 let debounce = (pen.down_frames, pen.up_frames);
                 let (state, span) = self.pen.step(now, pen.holds(posture), debounce);
                 self.pen = state;
-                span.and_then(|(s, e)| self.pen_span(s, e))
+                span.and_then(|(s, e)| self.pen_span(s, e, pen))
             }
         };
         self.trim();
@@ -384,7 +384,7 @@ impl Spotter {
 
     /// The pen by posture was down over points s..=e: the gesture drawn there, if the
     /// span is long, large and sure enough, published at once.
-    fn pen_span(&mut self, s: usize, e: usize) -> Option<SpottedGesture> {
+    fn pen_span(&mut self, s: usize, e: usize, pen: PosturePen) -> Option<SpottedGesture> {
         let fps = self.seg.fps();
         let (min_len, max_len) = (
             (self.cfg.min_seconds * fps) as usize,
@@ -396,12 +396,10 @@ impl Spotter {
         let mut c = self.score(s, e)?;
         // The posture says where a gesture is; the verifier, which tells a whole
         // gesture from movement by the motion, only when asked.
-        let verified = |pen: &PosturePen| {
-            !pen.verify || c.p_gesture >= self.bars.get(c.class).copied().unwrap_or(0.0)
-        };
+        let verified = !pen.verify || c.p_gesture >= self.bars.get(c.class).copied().unwrap_or(0.0);
         c.accepted = self.cfg.margin.is_none_or(|m| c.ratio > m)
             && c.score >= self.cfg.min_score
-            && matches!(self.cfg.pen, Pen::Posture(p) if verified(&p));
+            && verified;
         if let Some(t) = self.trace.as_mut() {
             t.push(c);
         }
