@@ -39,6 +39,12 @@ pub struct PipelineArgs {
     /// checked before the pipeline starts (`airglyph stage pose --help`).
     #[arg(long, value_name = "builtin|off|FILE")]
     pub postures: Option<String>,
+    /// What puts the gesture stage's pen down: motion (the default: gestures found in
+    /// the hand's motion alone) or posture[:LABEL] (while the drawing hand holds LABEL,
+    /// default point, as the pose stage reads it; not with --postures off or --truth,
+    /// whose skeletons carry no posture).
+    #[arg(long, value_name = "motion|posture[:LABEL]", value_parser = stage::gesture::parse_pen)]
+    pub pen: Option<airglyph_gesture::Pen>,
     /// Extra arguments for one stage, as STAGE=ARGS, split as a shell splits them
     /// (`--stage-args "gesture=--model 'my model.json'"`); repeat it for more stages.
     /// The stages: capture, pose, gesture, viewer; `airglyph stage NAME --help` lists
@@ -134,6 +140,17 @@ impl PipelineArgs {
         if self.model.is_some() && !names.contains(&Stage::Gesture) {
             bail!("--model: the gesture stage does not run here (see --stages)");
         }
+        if self.pen.is_some() && !names.contains(&Stage::Gesture) {
+            bail!("--pen: the gesture stage does not run here (see --stages)");
+        }
+        if let Some(airglyph_gesture::Pen::Posture(_)) = self.pen {
+            if self.truth
+                || self.postures.as_deref() == Some("off")
+                || !names.contains(&Stage::Pose)
+            {
+                bail!("--pen posture: the skeletons would carry no posture (the pose stage's posture step reads them; not with --truth, --postures off or without the pose stage)");
+            }
+        }
         if self.postures.is_some() && !names.contains(&Stage::Pose) {
             bail!(
                 "--postures: the pose stage does not run here{}",
@@ -174,6 +191,14 @@ impl PipelineArgs {
         })
     }
 
+    /// `--pen` as the gesture stage takes it.
+    fn pen_arg(&self) -> Option<String> {
+        self.pen.map(|pen| match pen {
+            airglyph_gesture::Pen::Motion => "motion".to_owned(),
+            airglyph_gesture::Pen::Posture(p) => format!("posture:{}", p.label),
+        })
+    }
+
     /// The command-line arguments the pipeline gives one stage.
     fn stage_args(&self, stage: Stage) -> Vec<OsString> {
         let mut out: Vec<OsString> = Vec::new();
@@ -202,6 +227,9 @@ impl PipelineArgs {
             Stage::Gesture => {
                 if let Some(model) = &self.model {
                     out.extend(["--model".into(), model.into()]);
+                }
+                if let Some(pen) = &self.pen_arg() {
+                    out.extend(["--pen".into(), pen.into()]);
                 }
             }
             Stage::Pose => {
@@ -297,6 +325,36 @@ mod tests {
             ["stage", "pose"],
             "its default"
         );
+    }
+
+    #[test]
+    fn the_gesture_stage_gets_the_pen_and_a_posture_pen_needs_postures() {
+        let plan = parse(&["--pen", "posture:v"]).plan().unwrap();
+        assert_eq!(
+            args_of(&plan, Stage::Gesture),
+            ["stage", "gesture", "--pen", "posture:v"]
+        );
+        let plan = parse(&["--pen", "motion", "--truth"]).plan().unwrap();
+        assert_eq!(
+            args_of(&plan, Stage::Gesture),
+            ["stage", "gesture", "--pen", "motion"]
+        );
+        let err = |line: &[&str]| parse(line).plan().unwrap_err().to_string();
+        for line in [
+            &["--pen", "posture", "--truth"][..],
+            &["--pen", "posture", "--postures", "off"],
+            &["--pen", "posture", "--stages", "gesture"],
+        ] {
+            assert!(err(line).contains("no posture"), "{line:?}");
+        }
+        assert!(err(&["--pen", "motion", "--stages", "capture,pose"]).contains("--pen"));
+        #[derive(clap::Parser)]
+        struct Run {
+            #[command(flatten)]
+            _args: PipelineArgs,
+        }
+        let bad = <Run as clap::Parser>::try_parse_from(["run", "--pen", "pencil"]);
+        assert!(bad.is_err_and(|e| e.to_string().contains("pencil")));
     }
 
     #[test]

@@ -6,7 +6,9 @@ use airglyph_gesture::lab::{
     FewShotPlan, Sample, StreamConfig, SyntheticStream, TrainConfig,
 };
 use airglyph_gesture::model::Classifier;
-use airglyph_gesture::{Model, Spotter, SpotterConfig};
+use airglyph_gesture::{
+    HandPosture, Model, Pen, PostureLabel, PosturePen, Postures, Spotter, SpotterConfig,
+};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::path::Path;
@@ -464,4 +466,133 @@ fn look_alike_labels_are_found_and_distinct_ones_are_not() {
         line.contains(" % of ") && line.contains(" read as "),
         "{line}"
     );
+}
+
+/// The right hand `label` at every frame but the spans of `point`, where it points.
+fn hand_postures(frames: usize, point: &[(u64, u64)], label: &str) -> Vec<Postures> {
+    let hand = |l: &str| {
+        Some(HandPosture {
+            label: PostureLabel::new(l).unwrap(),
+            confidence: 0.9,
+        })
+    };
+    (0..frames as u64)
+        .map(|i| Postures {
+            left: hand("fist"),
+            right: if point.iter().any(|&(a, b)| (a..=b).contains(&i)) {
+                hand("point")
+            } else {
+                hand(label)
+            },
+        })
+        .collect()
+}
+
+fn posture_pen(debounce: u32) -> SpotterConfig {
+    SpotterConfig {
+        pen: Pen::Posture(PosturePen {
+            down_frames: debounce,
+            up_frames: debounce,
+            ..PosturePen::default()
+        }),
+        ..SpotterConfig::default()
+    }
+}
+
+#[test]
+fn the_pen_by_posture_spots_what_is_drawn_pointing_and_not_the_same_motion_open() {
+    let model = train(
+        &samples(40, 4),
+        &small_config(ClassifierKind::Mlp),
+        &|_, _| {},
+    )
+    .unwrap();
+    let test = samples(4, 5);
+    let refs: Vec<&Sample> = test.iter().collect();
+    let scfg = StreamConfig::default();
+    let stream = build_stream(&refs, &scfg, &mut ChaCha8Rng::seed_from_u64(6));
+    let n = stream.points.len();
+    let drawn: Vec<(u64, u64)> = stream.truth.iter().map(|t| (t.start, t.end)).collect();
+
+    // Pointing while drawing, open otherwise: every symbol is found where it was drawn,
+    // with the posture it was drawn in, and nothing else.
+    let pointing = hand_postures(n, &drawn, "open");
+    let mut spotter = Spotter::new(model.clone(), posture_pen(3)).unwrap();
+    let found = stream.spot_posed(&mut spotter, &scfg, &pointing);
+    let sc = score(&stream.truth, &found);
+    assert!(sc.correct >= 10 && sc.insertions == 0, "{sc:?}");
+    for g in &found {
+        assert!(
+            drawn.contains(&(g.start_seq, g.end_seq)),
+            "{g:?} in {drawn:?}"
+        );
+        assert_eq!(g.posture.map(|p| p.to_string()).as_deref(), Some("point"));
+    }
+
+    // The same motion with an open hand throughout: nothing, however gesture-like.
+    let open = hand_postures(n, &[], "open");
+    let mut spotter = Spotter::new(model.clone(), posture_pen(3)).unwrap();
+    assert!(stream.spot_posed(&mut spotter, &scfg, &open).is_empty());
+
+    // One misread frame in the middle of each symbol: debounced, the same spans; taken
+    // at once, each symbol is cut in two.
+    let mut flicker = pointing.clone();
+    for &(a, b) in &drawn {
+        flicker[((a + b) / 2) as usize].right = Some(HandPosture {
+            label: PostureLabel::new("open").unwrap(),
+            confidence: 0.9,
+        });
+    }
+    let mut spotter = Spotter::new(model.clone(), posture_pen(3)).unwrap();
+    let debounced = stream.spot_posed(&mut spotter, &scfg, &flicker);
+    assert_eq!(debounced, found);
+    let mut spotter = Spotter::new(model.clone(), posture_pen(1)).unwrap();
+    let cut = stream.spot_posed(&mut spotter, &scfg, &flicker);
+    assert!(score(&stream.truth, &cut).correct < sc.correct, "{cut:?}");
+
+    // A pointing posture read with too little confidence does not put the pen down.
+    let unsure: Vec<Postures> = pointing
+        .iter()
+        .map(|p| Postures {
+            right: p.right.map(|h| HandPosture {
+                confidence: 0.3,
+                ..h
+            }),
+            ..*p
+        })
+        .collect();
+    let mut spotter = Spotter::new(model.clone(), posture_pen(3)).unwrap();
+    assert!(stream.spot_posed(&mut spotter, &scfg, &unsure).is_empty());
+
+    // The pen by motion finds what it found without postures, and tells the posture.
+    let mut spotter = Spotter::new(model.clone(), SpotterConfig::default()).unwrap();
+    let by_motion = stream.spot(&mut spotter, &scfg);
+    let mut spotter = Spotter::new(model, SpotterConfig::default()).unwrap();
+    let posed = stream.spot_posed(&mut spotter, &scfg, &pointing);
+    let strip = |v: &[airglyph_gesture::SpottedGesture]| {
+        v.iter()
+            .map(|g| (g.label.clone(), g.start_seq, g.end_seq, g.score))
+            .collect::<Vec<_>>()
+    };
+    assert!(!by_motion.is_empty());
+    assert_eq!(strip(&posed), strip(&by_motion));
+    assert!(by_motion.iter().all(|g| g.posture.is_none()));
+    for g in &posed {
+        // Drawn pointing over at least 80 % of its frames, or over none.
+        let len = g.end_seq - g.start_seq + 1;
+        let pointed: u64 = drawn
+            .iter()
+            .map(|&(a, b)| (g.end_seq.min(b) + 1).saturating_sub(g.start_seq.max(a)))
+            .sum();
+        let want = match pointed {
+            0 => "open",
+            p if 5 * p >= 4 * len => "point",
+            _ => continue,
+        };
+        assert_eq!(
+            g.posture.map(|p| p.to_string()).as_deref(),
+            Some(want),
+            "{g:?}"
+        );
+    }
 }

@@ -4,7 +4,10 @@
 //! recognizer took from it (what the viewer draws).
 
 use airglyph_core::bezier::bezier_points;
-use airglyph_gesture::{Hand, ModelSource, SpottedGesture, Spotter, SpotterConfig};
+use airglyph_gesture::{
+    Hand, HandPosture, ModelSource, Pen, PostureLabel, Postures, SpottedGesture, Spotter,
+    SpotterConfig,
+};
 use airglyph_ipc::clock::monotonic_ns;
 use airglyph_ipc::stats::Telemetry;
 use airglyph_ipc::wire::{Hand as WireHand, BEZIER_CAPACITY};
@@ -27,6 +30,13 @@ pub struct Args {
     /// built-in 36-symbol model.
     #[arg(long)]
     model: Option<PathBuf>,
+    /// What puts the pen down: motion (gestures found in the hand's motion alone) or
+    /// posture (while the drawing hand points, as the pose stage's posture step reads
+    /// it: its skeletons must carry postures) or posture:LABEL (while it holds LABEL,
+    /// a posture of the pose stage's model). Every gesture event carries the posture its
+    /// hand held over most of it, whichever the pen.
+    #[arg(long, default_value = "motion", value_name = "motion|posture[:LABEL]", value_parser = parse_pen)]
+    pen: Pen,
     /// Fault-injection for tests: sleep this long on every skeleton (a slow stage).
     #[arg(long, hide = true, default_value_t = 0, value_parser = airglyph_ipc::options::within(0u64, 10_000))]
     delay_ms: u64,
@@ -95,6 +105,28 @@ impl Reported {
     }
 }
 
+/// `--pen`'s parser.
+pub fn parse_pen(s: &str) -> Result<Pen, String> {
+    Pen::parse(s).map_err(|e| e.to_string())
+}
+
+/// Both hands' postures as a skeleton message carries them, for the spotter. A hand
+/// whose posture does not read (the receiver checked it: it does) or whose label the
+/// spotter cannot hold counts as not classified.
+fn postures_of(msg: &SkeletonMsg) -> Postures {
+    let of = |hand: WireHand| {
+        let p = msg.posture(hand).ok().flatten()?;
+        Some(HandPosture {
+            label: PostureLabel::new(p.label).ok()?,
+            confidence: p.confidence,
+        })
+    };
+    Postures {
+        left: of(WireHand::Left),
+        right: of(WireHand::Right),
+    }
+}
+
 /// The wire's name for the gesture library's hand.
 pub fn wire_hand(hand: Hand) -> WireHand {
     match hand {
@@ -142,6 +174,10 @@ fn publish(
     event
         .set_label(&g.label)
         .with_context(|| format!("label {:?}", g.label))?;
+    // The spotter's labels are as long as the wire's at most.
+    event
+        .set_posture(g.posture.as_ref().map(PostureLabel::as_str))
+        .with_context(|| format!("posture {:?}", g.posture))?;
     if let Err(e) = event.set_bezier(&bezier_of(g, bezier)) {
         // The gesture matters more than its picture: it goes out without the points.
         tracing::warn!(label = %g.label, error = %e, "the gesture's Bezier points are not sent");
@@ -237,7 +273,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let model = source.load().with_context(|| {
         format!("cannot load the gesture model {source} (train one with `airglyph train`, or pass --model)")
     })?;
-    let mut spotter = Spotter::new(model, SpotterConfig::default())?;
+    let cfg = SpotterConfig {
+        pen: args.pen,
+        ..SpotterConfig::default()
+    };
+    let mut spotter = Spotter::new(model, cfg)?;
     // As many as the model's descriptor takes.
     let bezier = spotter.model().training.bezier_points;
     let pipeline = Pipeline::join("gesture")?;
@@ -247,7 +287,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let events = pipeline.gesture_publisher()?;
     let decisions = pipeline.decision_publisher()?;
     let mut telemetry = Telemetry::new(&pipeline, Stage::Gesture)?;
-    tracing::info!(model = %source, "waiting for skeletons");
+    tracing::info!(model = %source, pen = ?args.pen, "waiting for skeletons");
     // The capture session and frame of the last skeleton taken.
     let mut last: Option<(u64, u64)> = None;
     // When the skeletons stop (the camera stopped, the person left), what the spotter
@@ -310,7 +350,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         chain.gesture_receive_ns = r.receive_ns;
         last_seen = Some((Instant::now(), chain));
         let (point, spotted) = match msg.skeleton() {
-            Some(s) => spotter.push_tracked(&s, msg.sequence, msg.chain.capture_ns),
+            Some(s) => {
+                let postures = postures_of(&msg);
+                spotter.push_posed(&s, &postures, msg.sequence, msg.chain.capture_ns)
+            }
             None => (None, None),
         };
         if let Some(g) = &spotted {
@@ -345,6 +388,26 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_spotter_gets_the_postures_the_skeleton_carries() {
+        let mut msg = SkeletonMsg::default();
+        assert_eq!(postures_of(&msg), Postures::NONE);
+        msg.set_posture(
+            WireHand::Right,
+            airglyph_ipc::PostureMsg::new("point", 0.8).ok(),
+        );
+        let p = postures_of(&msg);
+        assert_eq!(p.left, None);
+        let right = p.right.expect("the right hand's posture");
+        assert_eq!((right.label.as_str(), right.confidence), ("point", 0.8));
+        // What the stage takes on its command line.
+        assert_eq!(parse_pen("motion"), Ok(Pen::Motion));
+        assert!(
+            matches!(parse_pen("posture:fist"), Ok(Pen::Posture(p)) if p.label.as_str() == "fist")
+        );
+        assert!(parse_pen("posture:").unwrap_err().contains("empty"));
+    }
 
     #[test]
     fn a_gesture_starting_before_the_last_reported_end_was_reported() {

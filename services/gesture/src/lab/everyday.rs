@@ -136,6 +136,8 @@ struct Hand<'a, R: Rng> {
     rng: &'a mut R,
     who: &'a Person,
     points: Vec<P3>,
+    /// The pointing actions ([`SyntheticStream::pointing`]).
+    pointing: Vec<(u64, u64, f64)>,
 }
 
 fn lerp(a: P3, b: P3, t: f32) -> P3 {
@@ -294,9 +296,12 @@ impl<R: Rng> Hand<'_, R> {
                     range(self.rng, -0.6, 0.7),
                     range(self.rng, 0.45, 0.7),
                 ];
+                let first = self.points.len() as u64;
                 self.go(to, 0.8);
                 let secs = range(self.rng, 0.4, 2.0);
                 self.hold(secs);
+                let last = self.points.len().saturating_sub(1) as u64;
+                self.pointing.push((first, last.max(first), 1.0));
             }
             67..=76 => {
                 // Scratch: head, neck or the other arm, small and fast.
@@ -496,8 +501,14 @@ fn noisy<R: Rng>(points: &[P3], who: &Person, rng: &mut R) -> Vec<[f32; 2]> {
 }
 
 fn finish<R: Rng>(hand: Hand<'_, R>, truth: Vec<TruthGesture>) -> SyntheticStream {
-    let Hand { rng, who, points } = hand;
+    let Hand {
+        rng,
+        who,
+        points,
+        pointing,
+    } = hand;
     let xy = noisy(&points, who, rng);
+    let frames = points.len() as u64;
     SyntheticStream {
         points: xy,
         truth,
@@ -506,6 +517,7 @@ fn finish<R: Rng>(hand: Hand<'_, R>, truth: Vec<TruthGesture>) -> SyntheticStrea
             forward: points.iter().map(|p| p[2]).collect(),
             left: who.left,
         }),
+        pointing: pointing.into_iter().filter(|p| p.0 < frames).collect(),
     }
 }
 
@@ -516,6 +528,7 @@ pub fn everyday_stream<R: Rng>(samples: &[&Sample], rng: &mut R) -> SyntheticStr
         rng,
         who: &who,
         points: vec![who.rest],
+        pointing: Vec::new(),
     };
     let secs = range(hand.rng, 0.3, 1.5);
     hand.hold(secs);
@@ -567,6 +580,7 @@ pub fn everyday_movement<R: Rng>(seconds: f32, rng: &mut R) -> SyntheticStream {
         rng,
         who: &who,
         points: vec![who.rest],
+        pointing: Vec::new(),
     };
     while hand.points.len() < frames {
         hand.action();

@@ -16,6 +16,7 @@ mod dtw3d;
 mod eval;
 mod everyday;
 mod movement;
+mod posture_signal;
 mod scoring;
 mod stream;
 mod train;
@@ -31,6 +32,10 @@ pub use dtw3d::Dtw3dClassifier;
 pub use eval::{plot_timeline, Confusion, Span};
 pub use everyday::{everyday_movement, everyday_stream};
 pub use movement::Generator;
+pub use posture_signal::{
+    measured_error_rate, posture_signal, read as read_postures, true_postures, PostureNoise,
+    CONFUSION, POINT, POSTURES,
+};
 pub use scoring::{matched, score, Matching, SpottingScore};
 pub use stream::{
     build_stream, drawn_in_stream, random_movement, training_stream, Body, StreamConfig,

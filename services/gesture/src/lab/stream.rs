@@ -21,7 +21,7 @@
 use crate::body_frame::skeleton_with_hand;
 use crate::features::resample;
 use crate::lab::data::Sample;
-use crate::spot::{Candidate, SpottedGesture, Spotter};
+use crate::spot::{Candidate, Postures, SpottedGesture, Spotter};
 use crate::tracker::{HandFilter, TrackerConfig};
 use crate::trajectory::Trajectory;
 use airglyph_core::{Joint, Skeleton};
@@ -97,6 +97,11 @@ pub struct SyntheticStream {
     /// The person's body when the generator models it (the everyday generator): None
     /// for the lab generator's, whose hand is always 0.35 m in front of the chest.
     pub body: Option<Body>,
+    /// Stretches of ordinary movement in which the person may point at something with
+    /// the drawing hand: (first frame, last frame, the chance that they do). For a
+    /// posture signal beside the path (`crate::lab::posture_signal`); the path does not
+    /// depend on it.
+    pub pointing: Vec<(u64, u64, f64)>,
 }
 
 /// What a generator knows of the person besides the hand's path in the plane.
@@ -137,18 +142,46 @@ impl SyntheticStream {
         self.spot_traced(spotter, cfg, |_| {})
     }
 
+    /// [`Self::spot`] with each frame's hand postures (`postures[i]` for frame i; frames
+    /// past its end have none).
+    pub fn spot_posed(
+        &self,
+        spotter: &mut Spotter,
+        cfg: &StreamConfig,
+        postures: &[Postures],
+    ) -> Vec<SpottedGesture> {
+        self.spot_traced_posed(spotter, cfg, postures, |_| {})
+    }
+
     /// [`Self::spot`], handing `trace` what the spotter traced (its scored
     /// candidates, with [`Spotter::set_trace`]) after every frame.
     pub fn spot_traced(
         &self,
         spotter: &mut Spotter,
         cfg: &StreamConfig,
+        trace: impl FnMut(Vec<Candidate>),
+    ) -> Vec<SpottedGesture> {
+        self.spot_traced_posed(spotter, cfg, &[], trace)
+    }
+
+    /// [`Self::spot_traced`] with each frame's hand postures, as [`Self::spot_posed`].
+    pub fn spot_traced_posed(
+        &self,
+        spotter: &mut Spotter,
+        cfg: &StreamConfig,
+        postures: &[Postures],
         mut trace: impl FnMut(Vec<Candidate>),
     ) -> Vec<SpottedGesture> {
         let dt = (1e9 / cfg.fps as f64) as u64;
         let mut out = Vec::new();
         for i in 0..self.points.len() {
-            out.extend(spotter.push(&self.skeleton(i, cfg.distance), i as u64, i as u64 * dt));
+            let pose = postures.get(i).unwrap_or(&Postures::NONE);
+            let skeleton = self.skeleton(i, cfg.distance);
+            out.extend(
+                spotter
+                    .push_posed(&skeleton, pose, i as u64, i as u64 * dt)
+                    .1,
+            );
             trace(spotter.take_trace());
         }
         out.extend(spotter.finish());
@@ -310,6 +343,8 @@ struct Mover<'a, R: Rng> {
     /// …and its direction (unit vector), which the next movement continues when the
     /// hand has not stopped: a moving hand cannot turn on the spot.
     dir: [f32; 2],
+    /// The reaches in which the person may point ([`SyntheticStream::pointing`]).
+    pointing: Vec<(u64, u64, f64)>,
 }
 
 fn unit(v: [f32; 2]) -> Option<[f32; 2]> {
@@ -458,7 +493,14 @@ impl<R: Rng> Mover<'_, R> {
         } else {
             self.rng.gen_range(0.0..0.6) * mean
         };
+        let first = self.points.len() as u64;
         self.reach(&path, mean, v1);
+        // One reach in ten that is not a fidget may be to point at something (the
+        // generator's movement does not know; the posture signal decides).
+        if r >= 0.35 {
+            let last = self.points.len().saturating_sub(1) as u64;
+            self.pointing.push((first, last.max(first), 0.1));
+        }
     }
 }
 
@@ -475,6 +517,7 @@ pub fn build_stream<R: Rng>(
         points: vec![start],
         speed: 0.0,
         dir: [1.0, 0.0],
+        pointing: Vec::new(),
     };
     let mut truth = Vec::new();
     for sample in samples {
@@ -523,12 +566,13 @@ pub fn build_stream<R: Rng>(
     }
     // Movement after the last gesture.
     m.ordinary();
-    let mut points = m.points;
+    let (mut points, pointing) = (m.points, m.pointing);
     add_noise(&mut points, cfg.noise, rng);
     SyntheticStream {
         points,
         truth,
         body: None,
+        pointing,
     }
 }
 
@@ -612,17 +656,20 @@ pub fn random_movement<R: Rng>(seconds: f32, cfg: &StreamConfig, rng: &mut R) ->
         points: vec![REST],
         speed: 0.0,
         dir: [1.0, 0.0],
+        pointing: Vec::new(),
     };
     while m.points.len() < frames {
         m.ordinary();
     }
-    let mut points = m.points;
+    let (mut points, pointing) = (m.points, m.pointing);
     points.truncate(frames);
     add_noise(&mut points, cfg.noise, rng);
+    let pointing = pointing.into_iter().filter(|p| p.0 < frames as u64);
     SyntheticStream {
         points,
         truth: Vec::new(),
         body: None,
+        pointing: pointing.collect(),
     }
 }
 

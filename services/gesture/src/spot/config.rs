@@ -1,5 +1,6 @@
 //! The spotter's run-time settings, and how overlapping candidates are ranked.
 
+use super::pen::Pen;
 use crate::tracker::TrackerConfig;
 use serde::{Deserialize, Serialize};
 
@@ -83,6 +84,10 @@ pub struct SpotterConfig {
     /// larger side across is not one: a symbol is drawn facing the camera, a reach from
     /// a hanging arm or a hand to the face is not (None: depth is not looked at).
     pub max_depth_ratio: Option<f32>,
+    /// What puts the pen down: the motion (every setting above) or a posture of the
+    /// drawing hand ([`Pen::Posture`]; `min_seconds`, `max_seconds`, `min_size`,
+    /// `max_size`, `max_depth_ratio` and `min_score` still reject its spans).
+    pub pen: Pen,
 }
 
 impl Default for SpotterConfig {
@@ -114,6 +119,7 @@ impl Default for SpotterConfig {
             // tan 35°: a symbol drawn on a plane turned as far from facing the camera as
             // the 3-D synthetic people turn theirs (`airglyph_synth::air3d`) still passes.
             max_depth_ratio: Some(0.7),
+            pen: Pen::Motion,
         }
     }
 }

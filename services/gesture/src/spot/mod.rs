@@ -18,12 +18,24 @@
 //!    a whole gesture of the classifier's label times the classifier's confidence
 //!    ([`RankBy`]); the winner is published once nothing better has come for
 //!    `hold_seconds` or the hand rests.
+//!
+//! With the pen by posture ([`Pen::Posture`]) the posture of the drawing hand, read by
+//! a posture classifier each frame, marks the gestures instead: the stretch between the
+//! pen put down (the hand takes the posture, "point") and lifted is classified and
+//! published at once, if it is long, large and sure enough. In either mode a gesture
+//! carries the posture its hand held over most of it.
 
 mod config;
+mod pen;
 mod segmenter;
 mod threshold;
 
 pub use config::{RankBy, SettingsError, SpotterConfig};
+pub use pen::{
+    HandPosture, Pen, PenParseError, PostureLabel, PostureLabelError, PosturePen, Postures,
+    MAX_POSTURE_LABEL_BYTES,
+};
+use pen::{PenState, PostureTrack};
 pub(crate) use segmenter::Segmenter;
 pub(crate) use threshold::LeeKim;
 
@@ -81,6 +93,9 @@ pub struct SpottedGesture {
     pub end_ns: u64,
     /// The hand that drew it.
     pub hand: Hand,
+    /// The posture that hand held over most of the gesture's frames (None when no
+    /// posture was known for most of them).
+    pub posture: Option<PostureLabel>,
     /// The hand's path over the gesture as the spotter classified it: body frame, x to
     /// the person's right, y down, shoulder widths.
     #[serde(skip)]
@@ -165,6 +180,10 @@ pub struct Spotter {
     /// Whether the model reads depth: then the hand's depth is kept, counts in its
     /// speed and size, and goes to the classifier.
     in_depth: bool,
+    /// The drawing hand's posture at every point kept.
+    postures: PostureTrack,
+    /// Where the pen by posture is (always up with the pen by motion).
+    pen: PenState,
 }
 
 impl Spotter {
@@ -202,6 +221,8 @@ impl Spotter {
             barrier: 0,
             hand: Hand::Right,
             trace: None,
+            postures: PostureTrack::default(),
+            pen: PenState::Up,
         })
     }
 
@@ -232,12 +253,20 @@ impl Spotter {
         self.waiting.clear();
         self.pending = None;
         self.barrier = self.seg.next_index();
+        self.postures.clear();
+        self.pen = PenState::Up;
     }
 
     /// The stream has ended: judges what waits for more context and publishes what is
     /// pending (at most two gestures).
     pub fn finish(&mut self) -> Vec<SpottedGesture> {
         let mut out = Vec::new();
+        let last = self.seg.next_index().checked_sub(1);
+        let open = last.and_then(|last| self.pen.open_span(last));
+        self.pen = PenState::Up;
+        if let (Some((s, e)), Pen::Posture(pen)) = (open, self.cfg.pen) {
+            out.extend(self.pen_span(s, e, pen));
+        }
         while let Some(e) = self.waiting.pop_front() {
             out.extend(self.candidates_ending(e));
         }
@@ -253,6 +282,24 @@ impl Spotter {
         self.push_tracked(skeleton, seq, time_ns).1
     }
 
+    /// [`Spotter::push_tracked`] with the frame's hand postures: the spotter goes on the
+    /// drawing hand's (for the pen by posture, and the posture a gesture is drawn in).
+    pub fn push_posed(
+        &mut self,
+        skeleton: &Skeleton,
+        postures: &Postures,
+        seq: u64,
+        time_ns: u64,
+    ) -> (Option<HandPoint>, Option<SpottedGesture>) {
+        let Some(p) = self.tracker.update(skeleton, time_ns) else {
+            return (None, None);
+        };
+        (
+            Some(p),
+            self.push_point_posed(p, postures.of(p.hand), seq, time_ns),
+        )
+    }
+
     /// Feeds one skeleton like [`Spotter::push`], and tells the body-frame hand point
     /// the tracker made of it, the one the spotter went on (None for an unusable
     /// skeleton): what the gesture stage publishes for others to draw.
@@ -262,14 +309,22 @@ impl Spotter {
         seq: u64,
         time_ns: u64,
     ) -> (Option<HandPoint>, Option<SpottedGesture>) {
-        let Some(p) = self.tracker.update(skeleton, time_ns) else {
-            return (None, None);
-        };
-        (Some(p), self.push_point(p, seq, time_ns))
+        self.push_posed(skeleton, &Postures::NONE, seq, time_ns)
     }
 
     /// Feeds one body-frame hand point (shoulder widths, x right, y down).
     pub fn push_point(&mut self, p: HandPoint, seq: u64, time_ns: u64) -> Option<SpottedGesture> {
+        self.push_point_posed(p, None, seq, time_ns)
+    }
+
+    /// Feeds one body-frame hand point with its hand's posture (None: not known).
+    pub fn push_point_posed(
+        &mut self,
+        p: HandPoint,
+        posture: Option<HandPosture>,
+        seq: u64,
+        time_ns: u64,
+    ) -> Option<SpottedGesture> {
         if !(p.x.is_finite() && p.y.is_finite()) {
             return None;
         }
@@ -288,8 +343,27 @@ impl Spotter {
             (true, false) => 0.0,
             (false, false) => f32::NAN,
         };
-        self.waiting
-            .extend(self.seg.push([p.x * inv, p.y * inv], z, seq, time_ns));
+        self.postures.push(now, posture.map(|p| p.label));
+        let cut = self.seg.push([p.x * inv, p.y * inv], z, seq, time_ns);
+        let out = match self.cfg.pen {
+            Pen::Motion => {
+                self.waiting.extend(cut);
+                self.by_motion(now)
+            }
+            Pen::Posture(pen) => {
+                let debounce = (pen.down_frames, pen.up_frames);
+                let (state, span) = self.pen.step(now, pen.holds(posture), debounce);
+                self.pen = state;
+                span.and_then(|(s, e)| self.pen_span(s, e, pen))
+            }
+        };
+        self.trim();
+        out
+    }
+
+    /// The pen by motion after point `now`: judges the breaks whose context is in, and
+    /// publishes what has waited long enough.
+    fn by_motion(&mut self, now: usize) -> Option<SpottedGesture> {
         let mut out = None;
         // A break's candidates are judged once the context after it is in.
         let after = context_steps(self.seg.fps());
@@ -305,8 +379,35 @@ impl Spotter {
         if out.is_none() {
             out = self.decide(now);
         }
-        self.trim();
         out
+    }
+
+    /// The pen by posture was down over points s..=e: the gesture drawn there, if the
+    /// span is long, large and sure enough, published at once.
+    fn pen_span(&mut self, s: usize, e: usize, pen: PosturePen) -> Option<SpottedGesture> {
+        let fps = self.seg.fps();
+        let (min_len, max_len) = (
+            (self.cfg.min_seconds * fps) as usize,
+            (self.cfg.max_seconds * fps) as usize,
+        );
+        if e - s < min_len || e - s > max_len || s < self.barrier {
+            return None;
+        }
+        let mut c = self.score(s, e)?;
+        // The posture says where a gesture is; the verifier, which tells a whole
+        // gesture from movement by the motion, only when asked.
+        let verified = !pen.verify || c.p_gesture >= self.bars.get(c.class).copied().unwrap_or(0.0);
+        c.accepted = self.cfg.margin.is_none_or(|m| c.ratio > m)
+            && c.score >= self.cfg.min_score
+            && verified;
+        if let Some(t) = self.trace.as_mut() {
+            t.push(c);
+        }
+        if c.accepted {
+            self.publish(c)
+        } else {
+            None
+        }
     }
 
     /// Scores the segments from every earlier break to `e`, keeps the best accepted one
@@ -481,15 +582,20 @@ impl Spotter {
         // Back from gesture sizes, the segmenter's unit, to shoulder widths.
         let size = self.cfg.gesture_size.max(1e-3);
         let points = self.seg.points(c.start, c.end)?;
+        let score = match self.cfg.pen {
+            Pen::Motion => c.score * c.p_gesture,
+            Pen::Posture(_) => c.score,
+        };
         Some(SpottedGesture {
             label: self.model.labels[c.class].clone(),
             class: c.class,
-            score: c.score * c.p_gesture,
+            score,
             start_seq: a.1,
             end_seq: b.1,
             start_ns: a.2,
             end_ns: b.2,
             hand: self.hand,
+            posture: self.postures.most_of(c.start, c.end),
             points: points.iter().map(|p| p.map(|v| v * size)).collect(),
         })
     }
@@ -506,6 +612,7 @@ impl Spotter {
             from = from.min(p.start);
         }
         self.seg.forget_before(from);
+        self.postures.forget_before(from);
     }
 }
 
