@@ -1,8 +1,9 @@
 //! Makes the built-in posture model (`models/postures-6.json`): the six postures of
 //! the synthetic hands, rendered on four procedural bodies at 0.8–2.7 m, at the seven
 //! turns of the wrist, with and without the sensor model (the eval's training set,
-//! with one body more), the hand and elbow joints jittered by 2 cm as the pose estimate
-//! would be. The classifier and its setting are chosen by leave-one-body-out
+//! with one body more), in two scenes: the hand raised beside the head, palm to the
+//! camera, and the hand before the chest drawing letters (a frame of the strokes each),
+//! the hand and elbow joints jittered by 2 cm as the pose estimate would be. The classifier and its setting are chosen by leave-one-body-out
 //! cross-validation; it prints every candidate's accuracy and what it kept.
 //!
 //! cargo run --release -p airglyph-posture --example train-builtin -- [OUT] [--quick]
@@ -18,7 +19,10 @@ use airglyph_synth::HandPosture;
 use serde_json::json;
 use std::path::PathBuf;
 use std::time::Instant;
-use synthetic::{collect, label_of, procedural, settings, subjects, DISTANCES, TURNS};
+use synthetic::{
+    collect, label_of, procedural, scene_settings, subjects, Scene, DISTANCES, DRAW_TURNS,
+    TRAIN_SYMBOLS, TURNS,
+};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -41,7 +45,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             procedural(1.68, 1.35),
         ),
     ];
-    let subjects = subjects(bodies, 0);
+    let subjects = subjects(bodies, 0, TRAIN_SYMBOLS);
     let turns: Vec<usize> = if quick {
         vec![0, 1, 4]
     } else {
@@ -54,7 +58,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut set = TrainingSet::new(labels);
     let mut missed = 0;
     for subj in &subjects {
-        for row in collect(subj, &settings(subj.group as u64 * 10_000, &turns), &params) {
+        let seed0 = subj.group as u64 * 10_000;
+        let mut all = scene_settings(Scene::Wave, seed0, &turns);
+        all.extend(scene_settings(Scene::Drawing, seed0 + 5_000, &turns));
+        for row in collect(subj, &all, &params) {
             match &row.hand {
                 Some(h) => set.add(&h.features, label_of(row.setting.posture), subj.group)?,
                 None => missed += 1,
@@ -95,6 +102,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "bodies": subjects.iter().map(|s| s.name.clone()).collect::<Vec<_>>(),
         "distances_m": DISTANCES,
         "turns_deg": turns.iter().map(|&t| TURNS[t]).collect::<Vec<_>>(),
+        "drawing_turns_deg": turns.iter().map(|&t| DRAW_TURNS[t]).collect::<Vec<_>>(),
+        "drawing_symbols": TRAIN_SYMBOLS,
         "hands": set.len(),
         "not_found": missed,
         "chosen": method.to_string(),
