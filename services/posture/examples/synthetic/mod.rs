@@ -133,7 +133,14 @@ pub fn calibrate_drawing(body: &BodySpec, symbols: &str) -> Option<Vec<(SceneCon
             .collect();
         let mid = *frames.get(frames.len() / 2)?;
         for _ in 0..2 {
-            let z = Synthesizer::new(cfg.clone()).ok()?.render(mid).1.hands.right.palm_centre.z;
+            let z = Synthesizer::new(cfg.clone())
+                .ok()?
+                .render(mid)
+                .1
+                .hands
+                .right
+                .palm_centre
+                .z;
             cfg.placement.distance_m += d - z;
         }
         out.push((cfg, frames));
@@ -302,16 +309,18 @@ pub fn subjects(bodies: Vec<(String, BodySpec)>, group0: u32, symbols: &str) -> 
     bodies
         .into_iter()
         .enumerate()
-        .filter_map(|(i, (name, body))| match (calibrate(&body), calibrate_drawing(&body, symbols)) {
-            (Some(base), Some(draw)) => Some(Subject {
-                name,
-                group: group0 + i as u32,
-                base,
-                draw,
-            }),
-            _ => {
-                eprintln!("skipping {name}: it does not load (MakeHuman assets missing?)");
-                None
+        .filter_map(|(i, (name, body))| {
+            match (calibrate(&body), calibrate_drawing(&body, symbols)) {
+                (Some(base), Some(draw)) => Some(Subject {
+                    name,
+                    group: group0 + i as u32,
+                    base,
+                    draw,
+                }),
+                _ => {
+                    eprintln!("skipping {name}: it does not load (MakeHuman assets missing?)");
+                    None
+                }
             }
         })
         .collect()
