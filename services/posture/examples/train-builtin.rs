@@ -8,7 +8,8 @@
 //!
 //! cargo run --release -p airglyph-posture --example train-builtin -- [OUT] [--quick]
 //!
-//! `--quick`: three turns only (0, +45, 180), for a first model in a minute.
+//! `--quick`: three turns only (wave 0, +45, 180; drawing 0, +45, −90), for a first
+//! model in a minute.
 
 mod synthetic;
 
