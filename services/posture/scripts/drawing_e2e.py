@@ -5,7 +5,10 @@ stage on it (`airglyph pose --json`), and prints the share of the drawing frames
 inside gestures.csv's strokes) whose right-hand posture was read as the one drawn.
 These runs are the test: the built-in model is trained on other symbols and bodies.
 
-usage: drawing_e2e.py [AIRGLYPH]   (default: airglyph on the PATH)
+usage: drawing_e2e.py [AIRGLYPH [SYNTH_ARGS...]]   (default: airglyph on the PATH)
+SYNTH_ARGS go to every `airglyph synth`, e.g. `--body makehuman --body-shape gender=0`
+for a body the built-in model was not trained on (the default procedural 1.75 m body
+is one of its training bodies, drawing letters there, digits here).
 """
 import csv
 import json
@@ -15,6 +18,7 @@ import sys
 import tempfile
 
 AIRGLYPH = sys.argv[1] if len(sys.argv) > 1 else "airglyph"
+EXTRA = sys.argv[2:]
 SCENES = [
     ("1.2 m upper body", ["--framing", "upper-body", "--distance", "1.2"]),
     ("2.7 m", ["--distance", "2.7"]),
@@ -25,7 +29,7 @@ POSTURES = ["point", "open", "fist"]
 def run(posture, extra, out):
     subprocess.run(
         [AIRGLYPH, "synth", "--out", out, "--motion", "draw:0123456789",
-         "--hand-posture", f"right={posture}"] + extra,
+         "--hand-posture", f"right={posture}"] + extra + EXTRA,
         check=True, stdout=subprocess.DEVNULL)
     with open(os.path.join(out, "gestures.csv")) as f:
         drawing = set()
