@@ -2,9 +2,14 @@
 //! tests on MakeHuman bodies (and a procedural body of its own) never seen in
 //! training, with other seeds; prints accuracy by distance, by the hand's turn at the
 //! wrist and with and without the sensor model, for both classifiers; writes the
-//! confusion matrix and a few segmentation overlays as PNGs.
+//! confusion matrix and a few segmentation overlays as PNGs. Then the same held-out
+//! bodies drawing (the hand before the chest, other symbols than the training bodies
+//! draw), by distance and with and without the sensor model.
 //!
-//! cargo run --release -p airglyph-posture --example eval -- [OUT_DIR] [--quick]
+//! cargo run --release -p airglyph-posture --example eval -- [OUT_DIR] [--quick] [--wave-only]
+//!
+//! `--wave-only`: train on the wave scene alone (the built-in model's training before
+//! the drawing scene was added), to compare.
 //!
 //! The hand joint and elbow given to the segmentation are the truth's moved by
 //! Gaussian noise (2 cm a coordinate), standing in for the pose estimate's error.
@@ -19,7 +24,8 @@ use image::{Rgb, RgbImage};
 use std::path::PathBuf;
 use std::time::Instant;
 use synthetic::{
-    collect, label_of, procedural, settings, shoot, subjects, Row, Setting, Shot, DISTANCES, TURNS,
+    collect, label_of, procedural, scene_settings, settings, shoot, subjects, Row, Scene, Setting,
+    Shot, DISTANCES, DRAW_TURNS, EVAL_SYMBOLS, TRAIN_SYMBOLS, TURNS,
 };
 
 impl Shot {
@@ -99,6 +105,7 @@ impl Tally {
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let quick = args.iter().any(|a| a == "--quick");
+    let wave_only = args.iter().any(|a| a == "--wave-only");
     let out = PathBuf::from(
         args.iter()
             .find(|a| !a.starts_with("--"))
@@ -130,8 +137,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             Err(e) => eprintln!("skipping MakeHuman {shape}: {e}"),
         }
     }
-    let train_subjects = subjects(train_bodies, 0);
-    let test_subjects = subjects(test_bodies, 100);
+    let train_subjects = subjects(train_bodies, 0, TRAIN_SYMBOLS);
+    let test_subjects = subjects(test_bodies, 100, EVAL_SYMBOLS);
     eprintln!("calibrated in {:.1} s", t0.elapsed().as_secs_f32());
 
     // Where the forearm is cut: chosen by the segmentation's IoU on the training
@@ -178,7 +185,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut missed_train = 0;
     let mut train_rows = Vec::new();
     for subj in &train_subjects {
-        for row in collect(subj, &settings(subj.group as u64 * 10_000, &turns), &params) {
+        let seed0 = subj.group as u64 * 10_000;
+        let mut all = scene_settings(Scene::Wave, seed0, &turns);
+        if !wave_only {
+            all.extend(scene_settings(Scene::Drawing, seed0 + 5_000, &turns));
+        }
+        for row in collect(subj, &all, &params) {
             match &row.hand {
                 Some(h) => {
                     train.add(&h.features, label_of(row.setting.posture), subj.group)?;
@@ -201,13 +213,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (best_knn, cv_knn) = choose(&train, &knn).ok_or("no k-NN")?;
     let (best_soft, cv_soft) = choose(&train, &softmax).ok_or("no softmax")?;
     println!(
-        "Trained on {} (seeds 1..), {} hands.",
+        "Trained on {} (seeds 1..), {} hands{}.",
         train_subjects
             .iter()
             .map(|s| s.name.as_str())
             .collect::<Vec<_>>()
             .join(", "),
-        train.len()
+        train.len(),
+        if wave_only {
+            ", the wave scene only"
+        } else {
+            ", the wave and drawing scenes"
+        }
     );
     println!(
         "Leave-one-body-out on training: {best_knn} {:.1}%, {best_soft} {:.1}%",
@@ -346,7 +363,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let (seen, unseen) = ([0usize, 1, 4, 5], [2usize, 3, 6]);
         let mut part = TrainingSet::new(labels.clone());
         for (g, s, f) in &train_rows {
-            if seen.contains(&s.turn) {
+            if s.scene == Scene::Wave && seen.contains(&s.turn) {
                 part.add(f, label_of(s.posture), *g)?;
             }
         }
@@ -403,6 +420,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
     }
 
+    drawing_test(&test_subjects, &test_turns, &params, &classifiers);
+
     let path = out.join("confusion.png");
     airglyph_plot::confusion(
         &path,
@@ -425,6 +444,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             for (row, _) in DISTANCES.iter().enumerate() {
                 for (col, &posture) in HandPosture::ALL.iter().enumerate() {
                     let s = Setting {
+                        scene: Scene::Wave,
                         posture,
                         distance: row,
                         turn: 0,
@@ -455,6 +475,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         for row in 0..TURNS.len() {
             for (col, &posture) in HandPosture::ALL.iter().enumerate() {
                 let s = Setting {
+                    scene: Scene::Wave,
                     posture,
                     distance: 1,
                     turn: row,
@@ -472,4 +493,63 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     eprintln!("done in {:.1} s", t0.elapsed().as_secs_f32());
     Ok(())
+}
+
+/// The held-out bodies drawing: every posture, at each distance and turn of the
+/// drawing hand, with and without the sensor model, a frame of the strokes each.
+fn drawing_test(
+    subjects: &[synthetic::Subject],
+    turns: &[usize],
+    params: &SegmentParams,
+    classifiers: &[Classifier; 2],
+) {
+    let mut by_cell = vec![vec![vec![Tally::default(); 2]; DISTANCES.len()]; 2];
+    let mut by_turn = vec![vec![Tally::default(); DRAW_TURNS.len()]; 2];
+    let mut overall = vec![Tally::default(); 2];
+    let mut not_found = 0;
+    for subj in subjects {
+        let seed0 = 2_000_000 + subj.group as u64 * 10_000;
+        for row in collect(subj, &scene_settings(Scene::Drawing, seed0, turns), params) {
+            let s = row.setting;
+            for (ci, c) in classifiers.iter().enumerate() {
+                let pred = row.hand.as_ref().map(|h| c.predict(&h.features).label);
+                let ok = pred == Some(label_of(s.posture));
+                by_cell[ci][s.distance][s.noise as usize].add(ok);
+                by_turn[ci][s.turn].add(ok);
+                overall[ci].add(ok);
+            }
+            not_found += row.hand.is_none() as usize;
+        }
+    }
+    println!(
+        "\nDrawing, test bodies ({} hands, {} with no hand found, counted wrong)",
+        overall[0].total, not_found
+    );
+    let names = classifiers.each_ref().map(|c| c.method().to_string());
+    println!("{:<34} {:>16} {:>20}", "", names[0], names[1]);
+    println!(
+        "{:<34} {:>16} {:>20}",
+        "all",
+        overall[0].pct(),
+        overall[1].pct()
+    );
+    for (i, d) in DISTANCES.iter().enumerate() {
+        for (n, name) in ["no sensor model", "sensor model"].iter().enumerate() {
+            println!(
+                "{:<34} {:>16} {:>20}",
+                format!("{d} m, {name}"),
+                by_cell[0][i][n].pct(),
+                by_cell[1][i][n].pct()
+            );
+        }
+    }
+    for &t in turns {
+        let (r, p) = DRAW_TURNS[t];
+        println!(
+            "{:<34} {:>16} {:>20}",
+            format!("drawing roll {r:+} pitch {p:+}"),
+            by_turn[0][t].pct(),
+            by_turn[1][t].pct()
+        );
+    }
 }

@@ -1,13 +1,16 @@
 //! Makes the built-in posture model (`models/postures-6.json`): the six postures of
 //! the synthetic hands, rendered on four procedural bodies at 0.8–2.7 m, at the seven
 //! turns of the wrist, with and without the sensor model (the eval's training set,
-//! with one body more), the hand and elbow joints jittered by 2 cm as the pose estimate
-//! would be. The classifier and its setting are chosen by leave-one-body-out
-//! cross-validation; it prints every candidate's accuracy and what it kept.
+//! with one body more), in two scenes: the hand raised beside the head, palm to the
+//! camera, and the hand before the chest drawing letters (a frame of the strokes each),
+//! the hand and elbow joints jittered by 2 cm as the pose estimate would be. The
+//! classifier and its setting are chosen by leave-one-body-out cross-validation; it
+//! prints every candidate's accuracy and what it kept.
 //!
 //! cargo run --release -p airglyph-posture --example train-builtin -- [OUT] [--quick]
 //!
-//! `--quick`: three turns only (0, +45, 180), for a first model in a minute.
+//! `--quick`: three turns only (wave 0, +45, 180; drawing 0, +45, −90), for a first
+//! model in a minute.
 //!
 //! Then, when the MakeHuman assets are there (`airglyph fetch-assets`), the model is
 //! tested on the eval's two MakeHuman bodies, which no training body resembles, with
@@ -22,7 +25,10 @@ use airglyph_synth::{BodySpec, HandPosture, MakeHumanShape};
 use serde_json::json;
 use std::path::PathBuf;
 use std::time::Instant;
-use synthetic::{collect, label_of, procedural, settings, subjects, DISTANCES, TURNS};
+use synthetic::{
+    collect, label_of, procedural, scene_settings, subjects, Scene, DISTANCES, DRAW_TURNS,
+    EVAL_SYMBOLS, TRAIN_SYMBOLS, TURNS,
+};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -45,7 +51,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             procedural(1.68, 1.35),
         ),
     ];
-    let subjects = subjects(bodies, 0);
+    let subjects = subjects(bodies, 0, TRAIN_SYMBOLS);
     let turns: Vec<usize> = if quick {
         vec![0, 1, 4]
     } else {
@@ -58,7 +64,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut set = TrainingSet::new(labels);
     let mut missed = 0;
     for subj in &subjects {
-        for row in collect(subj, &settings(subj.group as u64 * 10_000, &turns), &params) {
+        let seed0 = subj.group as u64 * 10_000;
+        let mut all = scene_settings(Scene::Wave, seed0, &turns);
+        all.extend(scene_settings(Scene::Drawing, seed0 + 5_000, &turns));
+        for row in collect(subj, &all, &params) {
             match &row.hand {
                 Some(h) => set.add(&h.features, label_of(row.setting.posture), subj.group)?,
                 None => missed += 1,
@@ -100,6 +109,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "bodies": subjects.iter().map(|s| s.name.clone()).collect::<Vec<_>>(),
         "distances_m": DISTANCES.map(|d| rounded(d, 1e2)),
         "turns_deg": turns.iter().map(|&t| [TURNS[t].0, TURNS[t].1].map(|a| rounded(a, 1.0))).collect::<Vec<_>>(),
+
+        "drawing_turns_deg": turns.iter().map(|&t| [DRAW_TURNS[t].0, DRAW_TURNS[t].1].map(|a| rounded(a, 1.0))).collect::<Vec<_>>(),
+        "drawing_symbols": TRAIN_SYMBOLS,
         "hands": set.len(),
         "not_found": missed,
         "chosen": method.to_string(),
@@ -122,33 +134,34 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             },
         ));
     }
-    let (mut right, mut total) = (0, 0);
-    for subj in synthetic::subjects(held_out, 101) {
-        let (mut r, mut n) = (0, 0);
-        for row in collect(
-            &subj,
-            &settings(1_000_000 + subj.group as u64 * 10_000, &turns),
-            model.params(),
-        ) {
-            // No hand found counts as wrong.
-            let said = row
-                .hand
-                .map(|h| model.classifier().predict(&h.features).label);
-            r += (said == Some(label_of(row.setting.posture))) as usize;
-            n += 1;
+    // The eval's held-out MakeHuman bodies, with its test seeds and its own letters.
+    let held_out = synthetic::subjects(held_out, 101, EVAL_SYMBOLS);
+    for (scene, offset) in [(Scene::Wave, 0), (Scene::Drawing, 5_000)] {
+        let (mut right, mut total) = (0, 0);
+        for subj in &held_out {
+            let seed0 = 1_000_000 + subj.group as u64 * 10_000 + offset;
+            let (mut r, mut n) = (0, 0);
+            for row in collect(subj, &scene_settings(scene, seed0, &turns), model.params()) {
+                // No hand found counts as wrong.
+                let said = row
+                    .hand
+                    .map(|h| model.classifier().predict(&h.features).label);
+                r += (said == Some(label_of(row.setting.posture))) as usize;
+                n += 1;
+            }
+            println!(
+                "held out, {scene:?}, {}: {r}/{n} = {:.1}%",
+                subj.name,
+                100.0 * r as f32 / n.max(1) as f32
+            );
+            (right, total) = (right + r, total + n);
         }
-        println!(
-            "held out, {}: {r}/{n} = {:.1}%",
-            subj.name,
-            100.0 * r as f32 / n.max(1) as f32
-        );
-        (right, total) = (right + r, total + n);
-    }
-    if total > 0 {
-        println!(
-            "held out, both: {right}/{total} = {:.1}%",
-            100.0 * right as f32 / total as f32
-        );
+        if total > 0 {
+            println!(
+                "held out, {scene:?}, both: {right}/{total} = {:.1}%",
+                100.0 * right as f32 / total as f32
+            );
+        }
     }
     eprintln!("done in {:.1} s", t0.elapsed().as_secs_f32());
     Ok(())

@@ -1,6 +1,7 @@
 //! The synthetic hands the examples train and test on: bodies calibrated so that the
-//! raised right hand's palm faces the camera at each distance, and every posture
-//! rendered at every distance and turn, with and without the sensor model, the hand
+//! raised right hand's palm faces the camera at each distance (the wave scene), and
+//! the same bodies drawing symbols with the hand before the chest (the drawing scene),
+//! every posture rendered at every distance and turn, with and without the sensor model, the hand
 //! and elbow joints moved by Gaussian noise standing in for the pose estimate's error.
 
 // Shared by the examples, each of which reads only part of what a shot holds.
@@ -28,12 +29,48 @@ pub const TURNS: [(f32, f32); 7] = [
     (0.0, 40.0),
     (0.0, -40.0),
 ];
+/// The drawing hand's turn at the wrist on top of the draw motion's own (which holds
+/// the palm down and forward, the forearm forward and up): (roll, pitch) degrees —
+/// palm down, half and fully sideways either way, bent up and down.
+pub const DRAW_TURNS: [(f32, f32); 7] = [
+    (0.0, 0.0),
+    (45.0, 0.0),
+    (-45.0, 0.0),
+    (90.0, 0.0),
+    (-90.0, 0.0),
+    (0.0, 40.0),
+    (0.0, -40.0),
+];
+/// What the training bodies draw: letters, so that the digits the end-to-end check
+/// draws (`airglyph synth --motion draw:0123456789`) are strokes never trained on.
+pub const TRAIN_SYMBOLS: &str = "ACEKMRSWZ";
+/// What the held-out bodies draw in the eval.
+pub const EVAL_SYMBOLS: &str = "BDGLNPUVX";
 /// The pose estimate's error stood in for: per coordinate, metres.
 pub const JOINT_NOISE_M: f32 = 0.02;
+
+/// Where the hand is: raised beside the head (the wave pose, palm to the camera) or
+/// before the chest drawing (a frame of the draw motion's strokes).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Scene {
+    Wave,
+    Drawing,
+}
+
+impl Scene {
+    /// The turns `Setting::turn` indexes for this scene.
+    pub fn turns(self) -> &'static [(f32, f32)] {
+        match self {
+            Scene::Wave => &TURNS,
+            Scene::Drawing => &DRAW_TURNS,
+        }
+    }
+}
 
 /// One scene's setting, all that a sample varies by.
 #[derive(Debug, Clone, Copy)]
 pub struct Setting {
+    pub scene: Scene,
     pub posture: HandPosture,
     pub distance: usize,
     pub turn: usize,
@@ -47,6 +84,8 @@ pub struct Subject {
     pub name: String,
     pub group: u32,
     pub base: Vec<SceneConfig>,
+    /// The drawing scenes, one a distance, and the frames of their strokes.
+    pub draw: Vec<(SceneConfig, Vec<usize>)>,
 }
 
 pub fn calibrate(body: &BodySpec) -> Option<Vec<SceneConfig>> {
@@ -72,6 +111,43 @@ pub fn calibrate(body: &BodySpec) -> Option<Vec<SceneConfig>> {
     Some(out)
 }
 
+/// The draw motion at each distance: the body placed so that the palm is at the
+/// distance in the middle of the strokes (it moves some 20 cm about that), the hand
+/// as the motion holds it, and the frames of the strokes (not the rest between them).
+pub fn calibrate_drawing(body: &BodySpec, symbols: &str) -> Option<Vec<(SceneConfig, Vec<usize>)>> {
+    let mut out = Vec::new();
+    for &d in &DISTANCES {
+        let mut cfg = SceneConfig {
+            body: body.clone(),
+            motion: MotionSpec::parse(&format!("draw:{symbols}"), None, false).ok()?,
+            ..SceneConfig::default()
+        };
+        cfg.placement.distance_m = d;
+        cfg = cfg.framing_upper_body().ok()?;
+        cfg.hands.right.posture = Some(HandPosture::Open);
+        let frames: Vec<usize> = Synthesizer::new(cfg.clone())
+            .ok()?
+            .gestures()
+            .iter()
+            .flat_map(|g| g.start_frame..=g.end_frame)
+            .collect();
+        let mid = *frames.get(frames.len() / 2)?;
+        for _ in 0..2 {
+            let z = Synthesizer::new(cfg.clone())
+                .ok()?
+                .render(mid)
+                .1
+                .hands
+                .right
+                .palm_centre
+                .z;
+            cfg.placement.distance_m += d - z;
+        }
+        out.push((cfg, frames));
+    }
+    Some(out)
+}
+
 /// A rendered hand: what the segmentation got and the truth's own hand pixels.
 pub struct Shot {
     pub k: Intrinsics,
@@ -85,16 +161,29 @@ pub struct Shot {
 }
 
 pub fn shoot(subject: &Subject, s: Setting, params: &SegmentParams) -> Option<Shot> {
-    let mut cfg = subject.base[s.distance].clone();
-    let (roll, pitch) = TURNS[s.turn];
+    let (mut cfg, frame) = match s.scene {
+        Scene::Wave => {
+            let mut cfg = subject.base[s.distance].clone();
+            // The seed moves the sensor noise; the pose holds still.
+            cfg.seed = s.seed;
+            (cfg, 0)
+        }
+        Scene::Drawing => {
+            // The seed picks the frame; the scene's own seed stays, as the draw
+            // motion's timing follows it.
+            let (cfg, frames) = &subject.draw[s.distance];
+            let pick = ChaCha8Rng::seed_from_u64(s.seed).gen_range(0..frames.len());
+            (cfg.clone(), frames[pick])
+        }
+    };
+    let (roll, pitch) = s.scene.turns()[s.turn];
     cfg.hands.right.posture = Some(s.posture);
     cfg.hands.right.roll_deg += roll;
     cfg.hands.right.pitch_deg += pitch;
     cfg.sensor_noise = s.noise;
-    cfg.seed = s.seed;
     let mut synth = Synthesizer::new(cfg).ok()?;
     let k = synth.intrinsics();
-    let (img, truth) = synth.render(0);
+    let (img, truth) = synth.render(frame);
     let truth_hand: Vec<bool> = synth
         .labels()
         .iter()
@@ -177,6 +266,12 @@ pub fn collect(subject: &Subject, settings: &[Setting], params: &SegmentParams) 
 }
 
 pub fn settings(seed0: u64, turns: &[usize]) -> Vec<Setting> {
+    scene_settings(Scene::Wave, seed0, turns)
+}
+
+/// Every posture at every distance and the given turns, with and without the sensor
+/// model, one seed each from `seed0 + 1` on.
+pub fn scene_settings(scene: Scene, seed0: u64, turns: &[usize]) -> Vec<Setting> {
     let mut out = Vec::new();
     let mut seed = seed0;
     for posture in HandPosture::ALL {
@@ -185,6 +280,7 @@ pub fn settings(seed0: u64, turns: &[usize]) -> Vec<Setting> {
                 for noise in [false, true] {
                     seed += 1;
                     out.push(Setting {
+                        scene,
                         posture,
                         distance,
                         turn,
@@ -209,19 +305,22 @@ pub fn procedural(height_m: f32, build: f32) -> BodySpec {
 
 /// The bodies calibrated, numbered from `group0` on; those that do not load (MakeHuman
 /// assets missing) are skipped with a word on stderr.
-pub fn subjects(bodies: Vec<(String, BodySpec)>, group0: u32) -> Vec<Subject> {
+pub fn subjects(bodies: Vec<(String, BodySpec)>, group0: u32, symbols: &str) -> Vec<Subject> {
     bodies
         .into_iter()
         .enumerate()
-        .filter_map(|(i, (name, body))| match calibrate(&body) {
-            Some(base) => Some(Subject {
-                name,
-                group: group0 + i as u32,
-                base,
-            }),
-            None => {
-                eprintln!("skipping {name}: it does not load (MakeHuman assets missing?)");
-                None
+        .filter_map(|(i, (name, body))| {
+            match (calibrate(&body), calibrate_drawing(&body, symbols)) {
+                (Some(base), Some(draw)) => Some(Subject {
+                    name,
+                    group: group0 + i as u32,
+                    base,
+                    draw,
+                }),
+                _ => {
+                    eprintln!("skipping {name}: it does not load (MakeHuman assets missing?)");
+                    None
+                }
             }
         })
         .collect()
