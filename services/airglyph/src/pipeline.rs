@@ -40,10 +40,11 @@ pub struct PipelineArgs {
     #[arg(long, value_name = "builtin|off|FILE")]
     pub postures: Option<String>,
     /// What puts the gesture stage's pen down: motion (the default: gestures found in
-    /// the hand's motion alone) or posture[:LABEL] (while the drawing hand holds LABEL,
-    /// default point, as the pose stage reads it; not with --postures off or --truth,
-    /// whose skeletons carry no posture).
-    #[arg(long, value_name = "motion|posture[:LABEL]", value_parser = stage::gesture::parse_pen)]
+    /// the hand's motion alone), posture[:LABEL] (while the drawing hand holds LABEL,
+    /// default point, as the pose stage reads it) or gated[:LABEL] (found by motion,
+    /// published only when the drawing hand held LABEL over at least half of it); the
+    /// last two not with --postures off or --truth, whose skeletons carry no posture.
+    #[arg(long, value_name = "motion|posture[:LABEL]|gated[:LABEL]", value_parser = stage::gesture::parse_pen)]
     pub pen: Option<airglyph_gesture::Pen>,
     /// Extra arguments for one stage, as STAGE=ARGS, split as a shell splits them
     /// (`--stage-args "gesture=--model 'my model.json'"`); repeat it for more stages.
@@ -143,12 +144,13 @@ impl PipelineArgs {
         if self.pen.is_some() && !names.contains(&Stage::Gesture) {
             bail!("--pen: the gesture stage does not run here (see --stages)");
         }
-        if let Some(airglyph_gesture::Pen::Posture(_)) = self.pen {
+        if let Some(airglyph_gesture::Pen::Posture(_) | airglyph_gesture::Pen::Gated(_)) = self.pen
+        {
             if self.truth
                 || self.postures.as_deref() == Some("off")
                 || !names.contains(&Stage::Pose)
             {
-                bail!("--pen posture: the skeletons would carry no posture (the pose stage's posture step reads them; not with --truth, --postures off or without the pose stage)");
+                bail!("--pen posture or gated: the skeletons would carry no posture (the pose stage's posture step reads them; not with --truth, --postures off or without the pose stage)");
             }
         }
         if self.postures.is_some() && !names.contains(&Stage::Pose) {
@@ -196,6 +198,7 @@ impl PipelineArgs {
         self.pen.map(|pen| match pen {
             airglyph_gesture::Pen::Motion => "motion".to_owned(),
             airglyph_gesture::Pen::Posture(p) => format!("posture:{}", p.label),
+            airglyph_gesture::Pen::Gated(p) => format!("gated:{}", p.label),
         })
     }
 
@@ -334,6 +337,11 @@ mod tests {
             args_of(&plan, Stage::Gesture),
             ["stage", "gesture", "--pen", "posture:v"]
         );
+        let plan = parse(&["--pen", "gated"]).plan().unwrap();
+        assert_eq!(
+            args_of(&plan, Stage::Gesture),
+            ["stage", "gesture", "--pen", "gated:point"]
+        );
         let plan = parse(&["--pen", "motion", "--truth"]).plan().unwrap();
         assert_eq!(
             args_of(&plan, Stage::Gesture),
@@ -344,6 +352,7 @@ mod tests {
             &["--pen", "posture", "--truth"][..],
             &["--pen", "posture", "--postures", "off"],
             &["--pen", "posture", "--stages", "gesture"],
+            &["--pen", "gated", "--truth"],
         ] {
             assert!(err(line).contains("no posture"), "{line:?}");
         }

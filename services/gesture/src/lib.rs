@@ -49,9 +49,9 @@ pub use bezier::bezier_points;
 pub use body_frame::{skeleton_with_hand, FrameSmoothing};
 pub use model::{Classification, Model, ModelError, ModelSource, MAX_LABEL_BYTES, MODEL_ENV};
 pub use spot::{
-    Candidate, HandPosture, Judgement, Pen, PenParseError, PostureLabel, PostureLabelError,
-    PosturePen, Postures, RankBy, SettingsError, SpotError, SpottedGesture, Spotter, SpotterConfig,
-    MAX_POSTURE_LABEL_BYTES,
+    Candidate, GatedPen, HandPosture, Judgement, Pen, PenParseError, PostureLabel,
+    PostureLabelError, PosturePen, Postures, RankBy, SettingsError, SpotError, SpottedGesture,
+    Spotter, SpotterConfig, MAX_POSTURE_LABEL_BYTES,
 };
 pub use tracker::{Hand, HandPoint, HandTracker, TrackerConfig};
 pub use trajectory::{Point, Point3, Trajectory};

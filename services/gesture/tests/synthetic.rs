@@ -7,7 +7,7 @@ use airglyph_gesture::lab::{
 };
 use airglyph_gesture::model::Classifier;
 use airglyph_gesture::{
-    HandPosture, Model, Pen, PostureLabel, PosturePen, Postures, Spotter, SpotterConfig,
+    GatedPen, HandPosture, Model, Pen, PostureLabel, PosturePen, Postures, Spotter, SpotterConfig,
 };
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -595,4 +595,76 @@ fn the_pen_by_posture_spots_what_is_drawn_pointing_and_not_the_same_motion_open(
             "{g:?}"
         );
     }
+}
+
+#[test]
+fn the_gated_pen_publishes_what_motion_finds_drawn_pointing_and_not_the_same_motion_open() {
+    let model = train(
+        &samples(40, 4),
+        &small_config(ClassifierKind::Mlp),
+        &|_, _| {},
+    )
+    .unwrap();
+    let test = samples(4, 5);
+    let refs: Vec<&Sample> = test.iter().collect();
+    let scfg = StreamConfig::default();
+    let stream = build_stream(&refs, &scfg, &mut ChaCha8Rng::seed_from_u64(6));
+    let n = stream.points.len();
+    let drawn: Vec<(u64, u64)> = stream.truth.iter().map(|t| (t.start, t.end)).collect();
+    let gated = SpotterConfig {
+        pen: Pen::Gated(GatedPen::default()),
+        ..SpotterConfig::default()
+    };
+    let strip = |v: &[airglyph_gesture::SpottedGesture]| {
+        v.iter()
+            .map(|g| (g.label.clone(), g.start_seq, g.end_seq))
+            .collect::<Vec<_>>()
+    };
+    let mut spotter = Spotter::new(model.clone(), SpotterConfig::default()).unwrap();
+    let by_motion = stream.spot(&mut spotter, &scfg);
+    let motion = score(&stream.truth, &by_motion);
+
+    // Pointing while drawing, open otherwise: the symbols the motion finds, and what it
+    // publishes in between (open-handed) is not.
+    let pointing = hand_postures(n, &drawn, "open");
+    let mut spotter = Spotter::new(model.clone(), gated).unwrap();
+    let found = stream.spot_posed(&mut spotter, &scfg, &pointing);
+    let sc = score(&stream.truth, &found);
+    assert!(
+        sc.correct >= motion.correct && sc.correct >= 10 && sc.insertions <= motion.insertions,
+        "{sc:?} against {motion:?}"
+    );
+    assert!(found
+        .iter()
+        .all(|g| g.posture.map(|p| p.to_string()).as_deref() == Some("point")));
+
+    // The same motion with an open hand throughout: nothing.
+    let open = hand_postures(n, &[], "open");
+    let mut spotter = Spotter::new(model.clone(), gated).unwrap();
+    assert!(stream.spot_posed(&mut spotter, &scfg, &open).is_empty());
+
+    // A misread run of 4 frames inside each symbol cuts none: the same gestures.
+    let mut misread = pointing.clone();
+    for &(a, b) in &drawn {
+        let mid = ((a + b) / 2) as usize;
+        for p in &mut misread[mid - 2..mid + 2] {
+            p.right = Some(HandPosture {
+                label: PostureLabel::new("fist").unwrap(),
+                confidence: 0.9,
+            });
+        }
+    }
+    let mut spotter = Spotter::new(model.clone(), gated).unwrap();
+    assert_eq!(
+        strip(&stream.spot_posed(&mut spotter, &scfg, &misread)),
+        strip(&found)
+    );
+
+    // No posture read at all is no evidence either way: the pen by motion's gestures.
+    let unread = vec![Postures::NONE; n];
+    let mut spotter = Spotter::new(model, gated).unwrap();
+    assert_eq!(
+        strip(&stream.spot_posed(&mut spotter, &scfg, &unread)),
+        strip(&by_motion)
+    );
 }

@@ -120,16 +120,19 @@ pub struct Args {
     /// What puts the pen down: motion (the spotter finds gestures in the motion alone)
     /// or posture[:LABEL] (while the drawing hand holds LABEL, default point: one of
     /// open, fist, point, thumb_up, v, pinch, which the simulated person draws with;
-    /// the postures simulated as above). Overrides a "pen" in --spotter but for its
-    /// min_confidence, down_frames, up_frames and verify.
-    #[arg(long, default_value = "motion", value_name = "motion|posture[:LABEL]", value_parser = parse_pen)]
+    /// the postures simulated as above) or gated[:LABEL] (the pen by motion, a stretch
+    /// published only when the hand held LABEL over at least min_share of the frames
+    /// its posture was read in; the person draws with LABEL). Overrides a "pen" in
+    /// --spotter but for its min_confidence, down_frames, up_frames, verify and
+    /// min_share.
+    #[arg(long, default_value = "motion", value_name = "motion|posture[:LABEL]|gated[:LABEL]", value_parser = parse_pen)]
     pub pen: Pen,
-    /// With --pen posture: the fraction of frames the posture classifier misreads, on
+    /// With --pen posture or gated: the fraction of frames the posture classifier misreads, on
     /// average over the postures (0: the true posture; 0.053: the posture crate's k-NN
     /// on held-out bodies, all settings; 0.089: with the sensor model).
     #[arg(long, default_value_t = 0.053, value_parser = options::within(0.0f64, 0.9), allow_negative_numbers = true)]
     pub posture_error: f64,
-    /// With --pen posture: the mean length of a run of misread frames.
+    /// With --pen posture or gated: the mean length of a run of misread frames.
     #[arg(long, default_value_t = 4.0, value_parser = options::within(1.0f64, 300.0), allow_negative_numbers = true)]
     pub posture_runs: f64,
 }
@@ -148,6 +151,11 @@ fn pen_of(args: &Args, from_json: Pen) -> Pen {
             p.up_frames = json.up_frames;
             p.verify = json.verify;
             Pen::Posture(p)
+        }
+        (Pen::Gated(mut p), Pen::Gated(json)) => {
+            p.min_confidence = json.min_confidence;
+            p.min_share = json.min_share;
+            Pen::Gated(p)
         }
         (pen, _) => pen,
     }
@@ -171,14 +179,15 @@ fn postures_for(
 /// The simulated posture the person draws with: the pen's (None with the pen by
 /// motion), which must be one the simulated hands take.
 fn drawing_posture(pen: Pen) -> anyhow::Result<Option<usize>> {
-    let Pen::Posture(p) = pen else {
-        return Ok(None);
+    let (mode, label) = match pen {
+        Pen::Motion => return Ok(None),
+        Pen::Posture(p) => ("posture", p.label),
+        Pen::Gated(p) => ("gated", p.label),
     };
-    match POSTURES.iter().position(|&name| name == p.label.as_str()) {
+    match POSTURES.iter().position(|&name| name == label.as_str()) {
         Some(i) => Ok(Some(i)),
         None => bail!(
-            "--pen posture:{}: the simulated hands take only {}",
-            p.label,
+            "--pen {mode}:{label}: the simulated hands take only {}",
             POSTURES.join(", ")
         ),
     }
@@ -318,6 +327,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 Pen::Posture(p) => format!(
                     "pen by posture \"{}\" ({:.1} % of postures misread): ",
                     p.label,
+                    100.0 * args.posture_error
+                ),
+                Pen::Gated(p) => format!(
+                    "pen by motion gated by posture \"{}\" ({:.0} % of the read frames; {:.1} % of postures misread): ",
+                    p.label,
+                    100.0 * p.min_share,
                     100.0 * args.posture_error
                 ),
             },
@@ -515,15 +530,21 @@ fn evaluate(args: &Args) -> anyhow::Result<Evaluation> {
     })
 }
 
-/// What the JSON line of the streams says of the pen, with the pen by posture (nothing
+/// What the JSON line of the streams says of the pen, with the pen by posture or gated (nothing
 /// with the pen by motion: its lines are those of before).
 fn pen_fields(args: &Args, e: &Evaluation) -> serde_json::Map<String, serde_json::Value> {
     let mut m = serde_json::Map::new();
+    if let Pen::Gated(p) = e.scfg.pen {
+        m.insert("pen".into(), json!(format!("gated:{}", p.label)));
+        m.insert("min_share".into(), json!(p.min_share));
+    }
     if let Pen::Posture(p) = e.scfg.pen {
         m.insert("pen".into(), json!(format!("posture:{}", p.label)));
         m.insert("down_frames".into(), json!(p.down_frames));
         m.insert("up_frames".into(), json!(p.up_frames));
         m.insert("verify".into(), json!(p.verify));
+    }
+    if matches!(e.scfg.pen, Pen::Posture(_) | Pen::Gated(_)) {
         m.insert("posture_error".into(), json!(args.posture_error));
         m.insert("posture_runs".into(), json!(args.posture_runs));
         m.insert(

@@ -33,9 +33,11 @@ pub struct Args {
     /// What puts the pen down: motion (gestures found in the hand's motion alone) or
     /// posture (while the drawing hand points, as the pose stage's posture step reads
     /// it: its skeletons must carry postures) or posture:LABEL (while it holds LABEL,
-    /// a posture of the pose stage's model). Every gesture event carries the posture its
-    /// hand held over most of it, whichever the pen.
-    #[arg(long, default_value = "motion", value_name = "motion|posture[:LABEL]", value_parser = parse_pen)]
+    /// a posture of the pose stage's model) or gated[:LABEL] (found by motion, but
+    /// published only when the drawing hand held the posture, default point, over at
+    /// least half the frames it was read in). Every gesture event carries the posture
+    /// its hand held over most of it, whichever the pen.
+    #[arg(long, default_value = "motion", value_name = "motion|posture[:LABEL]|gated[:LABEL]", value_parser = parse_pen)]
     pen: Pen,
     /// Fault-injection for tests: sleep this long on every skeleton (a slow stage).
     #[arg(long, hide = true, default_value_t = 0, value_parser = airglyph_ipc::options::within(0u64, 10_000))]
@@ -407,6 +409,7 @@ mod tests {
             matches!(parse_pen("posture:fist"), Ok(Pen::Posture(p)) if p.label.as_str() == "fist")
         );
         assert!(parse_pen("posture:").unwrap_err().contains("empty"));
+        assert!(matches!(parse_pen("gated:v"), Ok(Pen::Gated(p)) if p.label.as_str() == "v"));
     }
 
     #[test]

@@ -22,8 +22,10 @@
 //! With the pen by posture ([`Pen::Posture`]) the posture of the drawing hand, read by
 //! a posture classifier each frame, marks the gestures instead: the stretch between the
 //! pen put down (the hand takes the posture, "point") and lifted is classified and
-//! published at once, if it is long, large and sure enough. In either mode a gesture
-//! carries the posture its hand held over most of it.
+//! published at once, if it is long, large and sure enough. The gated pen
+//! ([`Pen::Gated`]) spots by motion and accepts a stretch only when the drawing hand held
+//! the pen's posture over enough of it. In every mode a gesture carries the posture its
+//! hand held over most of it.
 
 mod config;
 mod pen;
@@ -32,8 +34,8 @@ mod threshold;
 
 pub use config::{RankBy, SettingsError, SpotterConfig};
 pub use pen::{
-    HandPosture, Pen, PenParseError, PostureLabel, PostureLabelError, PosturePen, Postures,
-    MAX_POSTURE_LABEL_BYTES,
+    GatedPen, HandPosture, Pen, PenParseError, PostureLabel, PostureLabelError, PosturePen,
+    Postures, MAX_POSTURE_LABEL_BYTES,
 };
 use pen::{PenState, PostureTrack};
 pub(crate) use segmenter::Segmenter;
@@ -343,10 +345,10 @@ impl Spotter {
             (true, false) => 0.0,
             (false, false) => f32::NAN,
         };
-        self.postures.push(now, posture.map(|p| p.label));
+        self.postures.push(now, posture);
         let cut = self.seg.push([p.x * inv, p.y * inv], z, seq, time_ns);
         let out = match self.cfg.pen {
-            Pen::Motion => {
+            Pen::Motion | Pen::Gated(_) => {
                 self.waiting.extend(cut);
                 self.by_motion(now)
             }
@@ -464,9 +466,16 @@ impl Spotter {
             None
         };
         let j = self.judge(input, depth);
+        // The gate is part of acceptance, so a stretch it stops does not outrank one it
+        // lets through.
+        let gated = match self.cfg.pen {
+            Pen::Gated(pen) => self.postures.lets_through(s, e, &pen),
+            _ => true,
+        };
         let accepted = self.cfg.margin.is_none_or(|m| j.ratio > m)
             && j.score >= self.cfg.min_score
-            && j.p_gesture >= self.bars.get(j.class).copied().unwrap_or(0.0);
+            && j.p_gesture >= self.bars.get(j.class).copied().unwrap_or(0.0)
+            && gated;
         Some(Candidate {
             start: s,
             end: e,
@@ -583,7 +592,7 @@ impl Spotter {
         let size = self.cfg.gesture_size.max(1e-3);
         let points = self.seg.points(c.start, c.end)?;
         let score = match self.cfg.pen {
-            Pen::Motion => c.score * c.p_gesture,
+            Pen::Motion | Pen::Gated(_) => c.score * c.p_gesture,
             Pen::Posture(_) => c.score,
         };
         Some(SpottedGesture {

@@ -143,6 +143,43 @@ pub enum Pen {
     Motion,
     /// While the drawing hand holds a posture.
     Posture(PosturePen),
+    /// From the motion, as [`Pen::Motion`], but a stretch is a gesture only when the
+    /// drawing hand held a posture over enough of it.
+    Gated(GatedPen),
+}
+
+/// The gated pen's settings: which stretches of the pen by motion the posture lets
+/// through.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct GatedPen {
+    /// The posture that lets a stretch through.
+    pub label: PostureLabel,
+    /// A posture read with less confidence counts as not held.
+    pub min_confidence: f32,
+    /// The least share of a stretch's frames with a posture read in which that posture
+    /// was the pen's. Frames with none read count neither way: a hand the classifier
+    /// did not see is no evidence, and a stream without postures is spotted as by
+    /// motion.
+    pub min_share: f32,
+}
+
+impl Default for GatedPen {
+    fn default() -> Self {
+        Self {
+            label: PostureLabel::POINT,
+            min_confidence: 0.5,
+            // Chosen on the training writers' streams (NOTES.md, "The gated pen").
+            min_share: 0.5,
+        }
+    }
+}
+
+impl GatedPen {
+    /// Whether a frame's posture of the drawing hand holds the pen's.
+    pub fn holds(&self, p: &HandPosture) -> bool {
+        p.label == self.label && p.confidence >= self.min_confidence
+    }
 }
 
 /// The pen by posture's settings.
@@ -181,8 +218,10 @@ impl Default for PosturePen {
 /// Why a `--pen` option was refused.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum PenParseError {
-    /// Neither "motion" nor "posture[:LABEL]".
-    #[error("{0:?} is neither \"motion\" nor \"posture\" nor \"posture:LABEL\"")]
+    /// None of "motion", "posture[:LABEL]", "gated[:LABEL]".
+    #[error(
+        "{0:?} is none of \"motion\", \"posture\", \"posture:LABEL\", \"gated\", \"gated:LABEL\""
+    )]
     Unknown(String),
     /// The label after "posture:" is not one.
     #[error(transparent)]
@@ -191,7 +230,8 @@ pub enum PenParseError {
 
 impl Pen {
     /// The pen a command line names: "motion", "posture" (the default posture pen,
-    /// "point") or "posture:LABEL".
+    /// "point"), "posture:LABEL", "gated" (the default gated pen, "point") or
+    /// "gated:LABEL".
     pub fn parse(s: &str) -> Result<Pen, PenParseError> {
         match s.split_once(':') {
             None if s == "motion" => Ok(Pen::Motion),
@@ -199,6 +239,11 @@ impl Pen {
             Some(("posture", label)) => Ok(Pen::Posture(PosturePen {
                 label: PostureLabel::new(label)?,
                 ..PosturePen::default()
+            })),
+            None if s == "gated" => Ok(Pen::Gated(GatedPen::default())),
+            Some(("gated", label)) => Ok(Pen::Gated(GatedPen {
+                label: PostureLabel::new(label)?,
+                ..GatedPen::default()
             })),
             _ => Err(PenParseError::Unknown(s.to_owned())),
         }
@@ -299,13 +344,13 @@ impl PenState {
 pub struct PostureTrack {
     /// Point index of the first element of `labels`.
     base: usize,
-    labels: Vec<Option<PostureLabel>>,
+    labels: Vec<Option<HandPosture>>,
 }
 
 impl PostureTrack {
     /// Adds point `i`'s posture; a gap since the last (points the spotter was not
     /// given a posture for) counts as unknown.
-    pub fn push(&mut self, i: usize, label: Option<PostureLabel>) {
+    pub fn push(&mut self, i: usize, label: Option<HandPosture>) {
         if self.labels.is_empty() {
             self.base = i;
         }
@@ -325,13 +370,26 @@ impl PostureTrack {
         let span = e.checked_sub(s)? + 1;
         let mut counts: Vec<(PostureLabel, usize)> = Vec::new();
         for l in self.labels.get(from..to)?.iter().flatten() {
-            match counts.iter_mut().find(|(k, _)| k == l) {
+            match counts.iter_mut().find(|(k, _)| *k == l.label) {
                 Some((_, n)) => *n += 1,
-                None => counts.push((*l, 1)),
+                None => counts.push((l.label, 1)),
             }
         }
         let (label, n) = counts.into_iter().max_by_key(|&(_, n)| n)?;
         (2 * n > span).then_some(label)
+    }
+
+    /// Whether the gated pen lets points s..=e through: the pen's posture held over at
+    /// least its share of the points with a posture read (true when none was read).
+    pub fn lets_through(&self, s: usize, e: usize, pen: &GatedPen) -> bool {
+        let from = s.saturating_sub(self.base).min(self.labels.len());
+        let to = (e + 1)
+            .saturating_sub(self.base)
+            .min(self.labels.len())
+            .max(from);
+        let read: Vec<&HandPosture> = self.labels[from..to].iter().flatten().collect();
+        let held = read.iter().filter(|p| pen.holds(p)).count();
+        read.is_empty() || held as f32 >= pen.min_share * read.len() as f32
     }
 
     /// Forgets the points before `keep_from`.
@@ -433,13 +491,19 @@ mod tests {
             PostureLabel::new("point").ok(),
             PostureLabel::new("open").ok(),
         );
+        let sure = |l: Option<PostureLabel>| {
+            l.map(|label| HandPosture {
+                label,
+                confidence: 1.0,
+            })
+        };
         let mut t = PostureTrack::default();
         for i in 10..20 {
-            t.push(i, if i < 17 { point } else { open });
+            t.push(i, sure(if i < 17 { point } else { open }));
         }
         assert_eq!(t.most_of(10, 19), point);
         // Unknown for most of it: none.
-        t.push(25, point);
+        t.push(25, sure(point));
         assert_eq!(t.most_of(15, 25), None);
         t.forget_before(18);
         assert_eq!(t.most_of(18, 19), open);
