@@ -93,7 +93,7 @@ impl PostureModel {
     }
 
     /// The built-in model of the six postures of the synthetic hands (open, fist,
-    /// point, thumb_up, v, pinch).
+    /// point, thumb-up, v, pinch).
     pub fn builtin() -> PostureModel {
         // The file is part of the source and a test loads it: it cannot be invalid in
         // a build whose tests passed.

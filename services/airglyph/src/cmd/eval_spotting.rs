@@ -119,7 +119,7 @@ pub struct Args {
     pub generator: String,
     /// What puts the pen down: motion (the spotter finds gestures in the motion alone)
     /// or posture[:LABEL] (while the drawing hand holds LABEL, default point: one of
-    /// open, fist, point, thumb_up, v, pinch, which the simulated person draws with;
+    /// open, fist, point, thumb-up, v, pinch, which the simulated person draws with;
     /// the postures simulated as above) or gated[:LABEL] (the pen by motion, a stretch
     /// published only when the hand held LABEL over at least min_share of the frames
     /// its posture was read in; the person draws with LABEL). Overrides a "pen" in

@@ -22,7 +22,7 @@ use rand::Rng;
 
 /// The six postures of the synthetic hands and the posture classifier, in
 /// [`CONFUSION`]'s order.
-pub const POSTURES: [&str; 6] = ["open", "fist", "point", "thumb_up", "v", "pinch"];
+pub const POSTURES: [&str; 6] = ["open", "fist", "point", "thumb-up", "v", "pinch"];
 
 const OPEN: usize = 0;
 const FIST: usize = 1;
