@@ -4,6 +4,7 @@ use airglyph_core::recording::Recording;
 use airglyph_core::Joint;
 use airglyph_system_tests::{signal, succeed, top, Isolated};
 use std::io::{BufRead, BufReader};
+use std::path::Path;
 use std::process::{Child, Stdio};
 use std::thread::JoinHandle;
 use std::time::Duration;
@@ -20,6 +21,32 @@ fn read_lines(probe: &mut Child) -> JoinHandle<Vec<serde_json::Value>> {
             .map(|l| serde_json::from_str(&l).unwrap())
             .collect()
     })
+}
+
+/// The skeletons a probe receives while the capture stage plays the recording `rec`
+/// through a pose stage started with `pose_args`.
+fn played_through_pose(p: &Isolated, rec: &Path, pose_args: &[&str]) -> Vec<serde_json::Value> {
+    let mut probe = p
+        .command("airglyph-probe")
+        .args(["--stream", "skeleton", "--idle", "5"])
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let reader = read_lines(&mut probe);
+    let mut pose = p.stage("pose").args(pose_args).spawn().unwrap();
+    std::thread::sleep(Duration::from_millis(300));
+    let source = format!("recording:{}", rec.display());
+    let capture = p
+        .stage("capture")
+        .args(["--source", &source])
+        .status()
+        .unwrap();
+    assert!(capture.success());
+    let got = reader.join().unwrap();
+    signal(&pose, libc::SIGTERM);
+    assert!(pose.wait().unwrap().success());
+    let _ = probe.wait();
+    got
 }
 
 #[test]
@@ -116,26 +143,7 @@ fn seen_from_the_waist_up_the_legs_are_reported_out_of_view() {
             .arg(&rec),
     );
     let k = Recording::open(&rec).unwrap().intrinsics();
-    let mut probe = p
-        .command("airglyph-probe")
-        .args(["--stream", "skeleton", "--idle", "5"])
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let reader = read_lines(&mut probe);
-    let mut pose = p.stage("pose").spawn().unwrap();
-    std::thread::sleep(Duration::from_millis(300));
-    let source = format!("recording:{}", rec.display());
-    let capture = p
-        .stage("capture")
-        .args(["--source", &source])
-        .status()
-        .unwrap();
-    assert!(capture.success());
-    let got = reader.join().unwrap();
-    signal(&pose, libc::SIGTERM);
-    assert!(pose.wait().unwrap().success());
-    let _ = probe.wait();
+    let got = played_through_pose(&p, &rec, &[]);
 
     assert!(got.len() >= 5, "{} skeletons", got.len());
     for s in &got {
@@ -189,31 +197,8 @@ fn skeletons_carry_the_right_hands_posture_unless_postures_are_off() {
             .arg("--out")
             .arg(&rec),
     );
-    let source = format!("recording:{}", rec.display());
     let run = |postures: &str| {
-        let mut probe = p
-            .command("airglyph-probe")
-            .args(["--stream", "skeleton", "--idle", "5"])
-            .stdout(Stdio::piped())
-            .spawn()
-            .unwrap();
-        let reader = read_lines(&mut probe);
-        let mut pose = p
-            .stage("pose")
-            .args(["--postures", postures])
-            .spawn()
-            .unwrap();
-        std::thread::sleep(Duration::from_millis(300));
-        let capture = p
-            .stage("capture")
-            .args(["--source", &source])
-            .status()
-            .unwrap();
-        assert!(capture.success());
-        let got = reader.join().unwrap();
-        signal(&pose, libc::SIGTERM);
-        assert!(pose.wait().unwrap().success());
-        let _ = probe.wait();
+        let got = played_through_pose(&p, &rec, &["--postures", postures]);
         assert!(got.len() >= frames / 2, "{} skeletons", got.len());
         got
     };

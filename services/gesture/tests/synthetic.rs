@@ -499,8 +499,9 @@ fn posture_pen(debounce: u32) -> SpotterConfig {
     }
 }
 
-#[test]
-fn the_pen_by_posture_spots_what_is_drawn_pointing_and_not_the_same_motion_open() {
+/// The pens' tests' model and stream: four symbols a label of other writers in a
+/// stream of ordinary movement.
+fn pen_fixture() -> (Model, SyntheticStream) {
     let model = train(
         &samples(40, 4),
         &small_config(ClassifierKind::Mlp),
@@ -509,8 +510,18 @@ fn the_pen_by_posture_spots_what_is_drawn_pointing_and_not_the_same_motion_open(
     .unwrap();
     let test = samples(4, 5);
     let refs: Vec<&Sample> = test.iter().collect();
+    let stream = build_stream(
+        &refs,
+        &StreamConfig::default(),
+        &mut ChaCha8Rng::seed_from_u64(6),
+    );
+    (model, stream)
+}
+
+#[test]
+fn the_pen_by_posture_spots_what_is_drawn_pointing_and_not_the_same_motion_open() {
+    let (model, stream) = pen_fixture();
     let scfg = StreamConfig::default();
-    let stream = build_stream(&refs, &scfg, &mut ChaCha8Rng::seed_from_u64(6));
     let n = stream.points.len();
     let drawn: Vec<(u64, u64)> = stream.truth.iter().map(|t| (t.start, t.end)).collect();
 
@@ -599,16 +610,8 @@ fn the_pen_by_posture_spots_what_is_drawn_pointing_and_not_the_same_motion_open(
 
 #[test]
 fn the_gated_pen_publishes_what_motion_finds_drawn_pointing_and_not_the_same_motion_open() {
-    let model = train(
-        &samples(40, 4),
-        &small_config(ClassifierKind::Mlp),
-        &|_, _| {},
-    )
-    .unwrap();
-    let test = samples(4, 5);
-    let refs: Vec<&Sample> = test.iter().collect();
+    let (model, stream) = pen_fixture();
     let scfg = StreamConfig::default();
-    let stream = build_stream(&refs, &scfg, &mut ChaCha8Rng::seed_from_u64(6));
     let n = stream.points.len();
     let drawn: Vec<(u64, u64)> = stream.truth.iter().map(|t| (t.start, t.end)).collect();
     let gated = SpotterConfig {

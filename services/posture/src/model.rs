@@ -199,22 +199,10 @@ struct File {
     version: u32,
     feature_version: u32,
     labels: Vec<String>,
-    segment: Segment,
+    segment: SegmentParams,
     classifier: Stored,
     #[serde(default)]
     training: serde_json::Value,
-}
-
-/// [`SegmentParams`] as stored.
-#[derive(Serialize, Deserialize)]
-struct Segment {
-    window_m: f32,
-    reach_m: f32,
-    band_m: f32,
-    seed_radius_m: f32,
-    wrist_back: f32,
-    min_area_m2: f32,
-    palm_back: f32,
 }
 
 /// The classifier as stored: the standardization and the model, on standardized
@@ -272,15 +260,7 @@ impl File {
             version: POSTURE_MODEL_VERSION,
             feature_version: FEATURE_VERSION,
             labels: p.labels,
-            segment: Segment {
-                window_m: s.window_m,
-                reach_m: s.reach_m,
-                band_m: s.band_m,
-                seed_radius_m: s.seed_radius_m,
-                wrist_back: s.wrist_back,
-                min_area_m2: s.min_area_m2,
-                palm_back: s.palm_back,
-            },
+            segment: *s,
             classifier,
             training: m.training.clone(),
         }
@@ -304,15 +284,7 @@ impl File {
                 return Err(format!("segment.{name} is {v}, not a positive number"));
             }
         }
-        let params = SegmentParams {
-            window_m: s.window_m,
-            reach_m: s.reach_m,
-            band_m: s.band_m,
-            seed_radius_m: s.seed_radius_m,
-            wrist_back: s.wrist_back,
-            min_area_m2: s.min_area_m2,
-            palm_back: s.palm_back,
-        };
+        let params = self.segment;
         let (method, mean, scale, model) = match self.classifier {
             Stored::Knn {
                 k,

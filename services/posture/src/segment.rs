@@ -82,7 +82,7 @@ impl fmt::Display for NoHand {
 impl std::error::Error for NoHand {}
 
 /// How the hand is cut out. Lengths in metres.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SegmentParams {
     /// The side of the square window searched around the hand joint, at its depth.
     pub window_m: f32,

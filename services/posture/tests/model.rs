@@ -6,9 +6,9 @@ use airglyph_core::{DepthView, Intrinsics, Skeleton};
 use airglyph_posture::{
     describe, ArmJoints, Classifier, Method, PostureModel, SegmentParams, Side, TrainingSet,
 };
-use airglyph_synth::{
-    BodySpec, HandPosture, MotionSpec, ProceduralBody, SceneConfig, ScriptedPose, Synthesizer,
-};
+use airglyph_synth::{BodySpec, HandPosture, ProceduralBody, Synthesizer};
+
+mod common;
 
 /// One rendered frame of `body` waving its right hand in `posture`, the palm turned to
 /// the camera (then by `roll`), `hand_m` from the camera.
@@ -19,21 +19,7 @@ struct Shot {
 }
 
 fn shoot(body: BodySpec, posture: HandPosture, hand_m: f32, roll: f32) -> Shot {
-    let mut cfg = SceneConfig {
-        body,
-        motion: MotionSpec::Pose(ScriptedPose::Wave),
-        ..SceneConfig::default()
-    };
-    cfg.placement.distance_m = hand_m;
-    cfg = cfg.framing_upper_body().unwrap();
-    cfg.hands.right.posture = Some(posture);
-    let truth = |cfg: &SceneConfig| Synthesizer::new(cfg.clone()).unwrap().render(0).1;
-    let h = truth(&cfg).hands.right;
-    cfg.hands.right.roll_deg = (-h.thumb_side.z).atan2(-h.palm_normal.z).to_degrees() + roll;
-    for _ in 0..2 {
-        let z = truth(&cfg).hands.right.palm_centre.z;
-        cfg.placement.distance_m += hand_m - z;
-    }
+    let mut cfg = common::wave_scene(body, posture, hand_m, roll);
     cfg.sensor_noise = true;
     let mut s = Synthesizer::new(cfg).unwrap();
     let (img, truth) = s.render(0);
