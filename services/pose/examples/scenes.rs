@@ -416,7 +416,7 @@ fn worst(s: &Summary) -> (String, f64) {
 fn print_row(r: &Row) {
     let (wj, we) = worst(&r.summary);
     eprintln!(
-        "{}{}: e_m {:.2} cm, worst {wj} {we:.1} cm, {:.1} % within 10 cm, 2-D {:.1} px, out of view reported {}, visible outside {}",
+        "{}{}: e_m {:.2} cm, worst {wj} {we:.1} cm, {:.1} % within 10 cm, 2-D {:.1} px, out of view reported {}, lower hidden frames {}, visible outside {}",
         r.name,
         if r.noise { " + sensor" } else { "" },
         r.summary.mean_error_cm,
@@ -425,18 +425,21 @@ fn print_row(r: &Row) {
         r.summary
             .out_of_view_reported
             .map_or("-".into(), |v| format!("{:.1} %", v * 100.0)),
+        r.summary
+            .lower_hidden_frames
+            .map_or("-".into(), |v| format!("{:.1} %", v * 100.0)),
         r.summary.visible_outside_image
     );
 }
 
 fn print_table(rows: &[Row]) {
-    println!("| scene | sensor | frames | e_m (cm) | whole-body e_m | worst joint (e_j) | within 10 cm | 2-D, 8 joints | at rest e_m | out of view reported hidden | visible outside image |");
-    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("| scene | sensor | frames | e_m (cm) | whole-body e_m | worst joint (e_j) | within 10 cm | 2-D, 8 joints | at rest e_m | out of view reported hidden | frames with lower joints all reported hidden | visible outside image |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     for r in rows {
         let s = &r.summary;
         let (wj, we) = worst(s);
         println!(
-            "| {}{} | {} | {} | {:.2} | {} | {wj} {we:.1} | {:.1} % | {:.1} px | {} | {} | {} |",
+            "| {}{} | {} | {} | {:.2} | {} | {wj} {we:.1} | {:.1} % | {:.1} px | {} | {} | {} | {} |",
             r.name,
             if r.held_out { " (held out)" } else { "" },
             if r.noise { "yes" } else { "no" },
@@ -448,6 +451,8 @@ fn print_table(rows: &[Row]) {
             r.px_upper,
             r.at_rest_cm.map_or("-".into(), |e| format!("{e:.2}")),
             s.out_of_view_reported
+                .map_or("-".into(), |v| format!("{:.1} %", v * 100.0)),
+            s.lower_hidden_frames
                 .map_or("-".into(), |v| format!("{:.1} %", v * 100.0)),
             s.visible_outside_image,
         );

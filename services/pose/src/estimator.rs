@@ -529,10 +529,12 @@ impl PoseEstimator {
             // foot and knee are where the fit put them (a thigh bent back into the
             // image to take an arm's points), not where anything was seen.
             let endless = assigned.limb[l.index()].is_none();
-            if cut_short || endless || !rooted[l.index()] {
+            // Nor does a leg whose fitted hip lies where the camera cannot look.
+            let unrooted = !rooted[l.index()] || !skeleton.visible[hip.index()];
+            if cut_short || endless || unrooted {
                 skeleton.visible[foot.index()] = false;
             }
-            if let Some(knee) = knee.filter(|_| endless || !rooted[l.index()]) {
+            if let Some(knee) = knee.filter(|_| endless || unrooted) {
                 skeleton.visible[knee.index()] = false;
             }
         }

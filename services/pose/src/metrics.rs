@@ -89,6 +89,10 @@ pub struct Summary {
     /// Of the joints the truth has out of view, the share reported not visible (`None`:
     /// the truth had every joint in view).
     pub out_of_view_reported: Option<f64>,
+    /// Of the frames whose truth has a lower joint (pelvis, hips, knees, feet) out of
+    /// view, the share in which every such joint is reported not visible (`None`: no
+    /// such frame). A body seen from the waist up must not have legs invented for it.
+    pub lower_hidden_frames: Option<f64>,
     /// Of the joints the truth has in view, the share reported visible.
     pub in_view_reported: f64,
     /// Joints reported visible that project outside the image (should be 0).
@@ -96,6 +100,17 @@ pub struct Summary {
     /// Frames a second of the estimator alone.
     pub fps: f64,
 }
+
+/// The joints below the waist: what a camera at a desk or behind a table does not see.
+const LOWER: [Joint; 7] = [
+    Joint::Pelvis,
+    Joint::LeftHip,
+    Joint::LeftKnee,
+    Joint::LeftFoot,
+    Joint::RightHip,
+    Joint::RightKnee,
+    Joint::RightFoot,
+];
 
 /// Whether every ground-truth joint projects into the image.
 pub fn in_view(truth: &Skeleton, k: &Intrinsics) -> bool {
@@ -183,6 +198,14 @@ impl PoseEval {
             ap.push(average_precision(&preds, positives));
         }
         let pairs = || self.frames.iter().flat_map(|f| f.visible.iter().copied());
+        let lower = |f: &FrameErrors| LOWER.map(|j| f.visible[j.index()]);
+        let lower_hidden: Vec<bool> = self
+            .frames
+            .iter()
+            .map(lower)
+            .filter(|v| v.iter().any(|v| !v.0))
+            .map(|v| v.iter().all(|v| v.0 || !v.1))
+            .collect();
         let out_of_view = pairs().filter(|v| !v.0).count();
         let in_view = pairs().filter(|v| v.0).count();
         let fps = if self.seconds > 0.0 {
@@ -201,6 +224,11 @@ impl PoseEval {
             map_10cm: round(mean_of(&ap).unwrap_or(0.0)),
             out_of_view_reported: (out_of_view > 0).then(|| {
                 round(pairs().filter(|v| !v.0 && !v.1).count() as f64 / out_of_view as f64)
+            }),
+            lower_hidden_frames: (!lower_hidden.is_empty()).then(|| {
+                round(
+                    lower_hidden.iter().filter(|&&h| h).count() as f64 / lower_hidden.len() as f64,
+                )
             }),
             in_view_reported: round(
                 pairs().filter(|v| v.0 && v.1).count() as f64 / in_view.max(1) as f64,
@@ -278,6 +306,7 @@ mod tests {
         assert!((s.map_10cm - 15.0 / 16.0).abs() < 1e-3);
         assert!((s.fps - 4.0).abs() < 1e-9);
         assert_eq!(s.out_of_view_reported, None);
+        assert_eq!(s.lower_hidden_frames, None);
     }
 
     #[test]
@@ -312,6 +341,43 @@ mod tests {
         assert!((s.out_of_view_reported.unwrap() - 4.0 / 6.0).abs() < 1e-3);
         assert_eq!(s.in_view_reported, 1.0);
         assert_eq!(s.visible_outside_image, 1);
+        // Legs out of view with two of them reported visible: the frame fails.
+        assert_eq!(s.lower_hidden_frames, Some(0.0));
+    }
+
+    #[test]
+    fn a_frame_counts_for_lower_joints_only_when_all_its_hidden_ones_are_said_so() {
+        let k = Intrinsics::default();
+        let mut truth = Skeleton::new([Point3::new(0.0, 0.0, 2.0); Joint::COUNT]);
+        for j in LOWER {
+            truth.visible[j.index()] = false;
+        }
+        let frame = |reported_visible: &[Joint]| {
+            let mut est = truth;
+            for j in LOWER {
+                est.visible[j.index()] = reported_visible.contains(&j);
+            }
+            PoseResult {
+                person_found: true,
+                skeleton: est,
+            }
+        };
+        let mut ev = PoseEval::default();
+        // Three frames with every lower joint said hidden, one with a knee said seen.
+        for _ in 0..3 {
+            ev.add(&frame(&[]), &truth, &k);
+        }
+        ev.add(&frame(&[Joint::LeftKnee]), &truth, &k);
+        // A hand hidden (under a table) and said visible does not count here.
+        let mut under = truth;
+        under.visible[Joint::LeftHand.index()] = false;
+        ev.add(&frame(&[]), &under, &k);
+        // A frame with the whole body in view does not count either way.
+        let whole = Skeleton::new(truth.joints);
+        ev.add(&frame(&LOWER), &whole, &k);
+        let s = ev.summary();
+        assert_eq!(s.lower_hidden_frames, Some(0.8));
+        assert!(s.out_of_view_reported.unwrap() < 1.0);
     }
 
     #[test]

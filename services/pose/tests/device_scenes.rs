@@ -362,3 +362,32 @@ fn a_chair_back_wider_than_the_person_leaning_on_it_is_no_part_of_them() {
         assert!(e < 0.1, "{j:?} off by {e:.2} m");
     }
 }
+
+#[test]
+fn a_leg_whose_hip_is_behind_the_table_shows_no_knee_or_foot() {
+    // A tall, broad person at a desk drawing, 1.6 m away, whose first frame the fit
+    // took with the legs folded back behind the chair: the hips, behind the table, were
+    // reported hidden, but the feet, 70 cm behind the body where the wall shows past it,
+    // were reported visible.
+    let mut cfg = seated(at(1.6, ScriptedPose::Neutral), true);
+    cfg.body = BodySpec::Procedural(airglyph_synth::ProceduralBody {
+        height_m: 1.92,
+        build: 1.25,
+    });
+    cfg.intrinsics = Intrinsics::default();
+    cfg.sensor_noise = false;
+    cfg.seed = 12;
+    cfg.motion = MotionSpec::parse("draw:UVWXYZ2468", None, false).expect("a drawing");
+    let cfg = upper_body(cfg);
+    let k = cfg.intrinsics;
+    let (r, truth) = single(cfg, 0);
+    assert!(r.person_found);
+    visibility_is_consistent(&r, &k);
+    for j in LEGS {
+        assert!(!truth.skeleton.visible[j.index()], "{j:?} is in view");
+        assert!(
+            !r.skeleton.visible[j.index()],
+            "{j:?} is hidden but reported visible"
+        );
+    }
+}

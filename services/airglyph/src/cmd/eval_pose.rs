@@ -23,7 +23,7 @@ pub struct Args {
     pub dir: PathBuf,
     /// Print one JSON object: {"frames":N,"mean_error_cm":…,"max_error_cm":…,
     /// "mean_error_whole_cm":…,"frames_whole":N,"per_joint_cm":{…},"within_10cm":…,
-    /// "map_10cm":…,"out_of_view_reported":…,"in_view_reported":…,
+    /// "map_10cm":…,"out_of_view_reported":…,"lower_hidden_frames":…,"in_view_reported":…,
     /// "visible_outside_image":N,"fps":…} (errors over the joints the truth has in view;
     /// `mean_error_whole_cm` over the frames that hold all 16, the seed's setting).
     #[arg(long)]
@@ -139,6 +139,12 @@ fn print_human(s: &Summary) {
             .unwrap_or_default(),
         s.visible_outside_image
     );
+    if let Some(r) = s.lower_hidden_frames {
+        println!(
+            "  {:.1} % of the frames with lower joints out of view report all of those not visible",
+            r * 100.0
+        );
+    }
     for j in Joint::ALL {
         match s.per_joint_cm[j.name()] {
             Some(e) => println!("  {:15} {e:6.2} cm", j.name()),
