@@ -529,9 +529,21 @@ impl PoseEstimator {
             // foot and knee are where the fit put them (a thigh bent back into the
             // image to take an arm's points), not where anything was seen.
             let endless = assigned.limb[l.index()].is_none();
+            // A leg whose end in view lies near its hip's height and within a thigh's
+            // reach of it shows no foot: it is a seated person's knee or a hand
+            // hanging beside the hip taken for the leg. A foot the fit put behind the
+            // person there was not seen. (A foot raised as high, in a kick, lies a
+            // whole leg's reach away, on its own pixels.)
+            let short_reach = assigned.limb[l.index()].is_some_and(|mi| {
+                let at = s.graph.pos[maxima[mi] as usize];
+                !cut[mi]
+                    && assigned.lengths[mi][l.index()] < SHORT_REACH * leg
+                    && (joint(hip) - at).dot(&up) < 0.5 * leg
+                    && frame.behind_the_person(&joint(foot))
+            });
             // Nor does a leg whose fitted hip lies where the camera cannot look.
             let unrooted = !rooted[l.index()] || !skeleton.visible[hip.index()];
-            if cut_short || endless || unrooted {
+            if cut_short || endless || unrooted || short_reach {
                 skeleton.visible[foot.index()] = false;
             }
             if let Some(knee) = knee.filter(|_| endless || unrooted) {
@@ -555,6 +567,11 @@ impl PoseEstimator {
         Some(skeleton)
     }
 }
+
+/// The share of the fitted leg's length within which a leg's end in view, near the
+/// hip's height, is no foot: a seated thigh is about half the leg, a foot a whole
+/// leg's geodesic reach (more, over the surface).
+const SHORT_REACH: f32 = 0.75;
 
 /// How near the fitted foot must lie to the point where the image's edge (or a table)
 /// cuts its leg, metres, for the cut to take only its toes: a foot's length.

@@ -119,6 +119,21 @@ impl Frame<'_> {
         points.into_iter().any(|p| self.sees(&p))
     }
 
+    /// Whether `p` (camera frame) projects onto the person's own pixels with their
+    /// surface nearer than it by [`OCCLUDER_GAP`]: a joint the body itself hides.
+    pub(crate) fn behind_the_person(&self, p: &Point3<f32>) -> bool {
+        let Some((u, v)) = self.k.project(p) else {
+            return false;
+        };
+        let (u, v) = (u.round(), v.round());
+        if u < 0.0 || v < 0.0 || u >= self.width as f32 || v >= self.height as f32 {
+            return false;
+        }
+        let idx = v as usize * self.width + u as usize;
+        let q = self.points[idx];
+        self.mask[idx] && q.z > 0.0 && q.z < p.z - OCCLUDER_GAP
+    }
+
     /// Whether a joint at `p` (camera frame) is in the camera's view: it projects inside
     /// the image and nothing that is not the person stands before it there. A joint
     /// hidden only by the person's own body is in view.
@@ -176,6 +191,38 @@ mod tests {
         // A camera under the plane (a ceiling, not a floor) is not looking at its top.
         let ceiling = Plane { n: top.n, d: -0.3 };
         assert!(frame(Some(ceiling)).sees(&Point3::new(0.0, -0.4, 1.6)));
+    }
+
+    #[test]
+    fn a_joint_behind_the_persons_own_surface_is_told_from_one_on_it() {
+        let k = Intrinsics::default().scaled_to(320, 240);
+        let (w, h) = (k.width as usize, k.height as usize);
+        // The person's surface 1 m away over the image's middle; the wall 3 m behind.
+        let mut points = vec![Point3::origin(); w * h];
+        let mut mask = vec![false; w * h];
+        for v in 0..h {
+            for u in 0..w {
+                let person = (100..220).contains(&u);
+                let z = if person { 1.0 } else { 3.0 };
+                points[v * w + u] = k.back_project(u as f32, v as f32, z);
+                mask[v * w + u] = person;
+            }
+        }
+        let f = Frame {
+            points: &points,
+            mask: &mask,
+            width: w,
+            height: h,
+            k: &k,
+            floor: None,
+        };
+        let at = |u: f32, z: f32| k.back_project(u, 120.0, z);
+        assert!(f.behind_the_person(&at(160.0, 1.4)));
+        // On the surface, or nearer than the gap behind it: the joint's own pixels.
+        assert!(!f.behind_the_person(&at(160.0, 1.05)));
+        // Behind the wall's pixels, not the person's; outside the image.
+        assert!(!f.behind_the_person(&at(40.0, 3.5)));
+        assert!(!f.behind_the_person(&Point3::new(5.0, 0.0, 1.4)));
     }
 
     #[test]
