@@ -95,6 +95,8 @@ fn read_poses(path: &Path) -> anyhow::Result<Vec<PosedFrame>> {
         }
         let mut joints = [nalgebra::Point3::origin(); Joint::COUNT];
         let mut confidence = [0.0f32; Joint::COUNT];
+        // A line from before joints had a visibility has every joint in view.
+        let mut visible = [true; Joint::COUNT];
         for j in Joint::ALL {
             let p = v["joints"][j.name()]
                 .as_array()
@@ -103,9 +105,11 @@ fn read_poses(path: &Path) -> anyhow::Result<Vec<PosedFrame>> {
             let c = |k: usize| p[k].as_f64().unwrap_or(f64::NAN) as f32;
             joints[j.index()] = nalgebra::Point3::new(c(0), c(1), c(2));
             confidence[j.index()] = v["confidence"][j.name()].as_f64().unwrap_or(0.0) as f32;
+            visible[j.index()] = v["visible"][j.name()].as_bool().unwrap_or(true);
         }
         let mut s = Skeleton::new(joints);
         s.confidence = confidence;
+        s.visible = visible;
         out.push((Some(s), postures));
     }
     Ok(out)
