@@ -21,7 +21,10 @@ fn events(p: &Isolated, pen: &str, rec: &Path) -> Vec<serde_json::Value> {
     let events = airglyph_system_tests::json_lines(run.stdout.take().unwrap());
     let deadline = Instant::now() + Duration::from_secs(60);
     while run.try_wait().unwrap().is_none() {
-        assert!(Instant::now() < deadline, "run did not end with its recording");
+        assert!(
+            Instant::now() < deadline,
+            "run did not end with its recording"
+        );
         std::thread::sleep(Duration::from_millis(100));
     }
     assert!(run.wait().unwrap().success());
@@ -36,8 +39,21 @@ fn drawn_pointing(p: &Isolated, dir: &Path) -> std::path::PathBuf {
     let rec = dir.join("pointing");
     succeed(
         p.command("airglyph")
-            .args(["synth", "--motion", "draw:3714", "--pen-posture", "point,open"])
-            .args(["--framing", "upper-body", "--distance", "1.2", "--seed", "1"])
+            .args([
+                "synth",
+                "--motion",
+                "draw:3714",
+                "--pen-posture",
+                "point,open",
+            ])
+            .args([
+                "--framing",
+                "upper-body",
+                "--distance",
+                "1.2",
+                "--seed",
+                "1",
+            ])
             .arg("--out")
             .arg(&rec),
     );

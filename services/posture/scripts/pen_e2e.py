@@ -9,15 +9,21 @@ Prints, per scene and symbol set: how often the drawing hand's posture was read 
 while drawing (truth: point) and between symbols (truth: open), from hands.csv; then per
 pen the symbols found (spotted with the right label), substituted (spotted, every label
 wrong), missed (nothing spotted over them) and the false alarms (gestures over no
-symbol). A JSON line a row goes to OUT (default pen-e2e.jsonl).
+symbol). The posture and gated pens also run on the exact postures (hands.csv in place
+of the posture step's, rows "posture exact", "gated exact"), to tell the posture step's
+misreads from what the pen itself does. With LIVE=1 in the environment each pen also
+runs through the real processes (`airglyph run --pen PEN --json --source
+recording:DIR`, in real time), rows "PEN live". A JSON line a row goes to OUT (default
+pen-e2e.jsonl).
 
-usage: pen_e2e.py AIRGLYPH [OUT [SYNTH_ARGS...]]
+usage: [LIVE=1] pen_e2e.py AIRGLYPH [OUT [SYNTH_ARGS...]]
 SYNTH_ARGS go to every `airglyph synth`, e.g. `--body makehuman --body-shape
 gender=0,height=0.45` for a body the built-in posture model was not trained on.
 """
 import csv
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -57,24 +63,58 @@ def postures_read(rec, poses):
     return counts, read_as
 
 
-def spot(rec, poses_file, pen):
-    out = subprocess.run(
-        [AIRGLYPH, "spot", rec, "--poses", poses_file, "--pen", pen, "--json"],
-        check=True, capture_output=True, text=True).stdout
+def exact_poses(rec, poses, path):
+    """`poses` with the right hand's posture replaced by the truth of hands.csv."""
+    with open(os.path.join(rec, "hands.csv")) as f:
+        truth = {int(r["frame"]): r["posture"] for r in csv.DictReader(f)
+                 if r["hand"] == "right"}
+    with open(path, "w") as out:
+        for line in poses.splitlines():
+            fr = json.loads(line)
+            fr["postures"] = {"left": None,
+                              "right": {"label": truth[fr["frame"]], "confidence": 1.0}}
+            out.write(json.dumps(fr) + "\n")
+
+
+def overlapped(spans, start, end):
+    """The symbol whose frames the gesture's overlap most (as `spot` decides), or None."""
+    best, most = None, 0
+    for i, (s, e) in enumerate(spans):
+        o = min(e, end) - max(s, start)
+        if o > most:
+            best, most = i, o
+    return best
+
+
+def spot(rec, poses_file, pen, live=False):
+    if live:
+        # The isolated pipeline of this run: its own folder and prefix.
+        ipc = tempfile.mkdtemp()
+        env = dict(os.environ, AIRGLYPH_IPC_ROOT=ipc + "/",
+                   AIRGLYPH_IPC_PREFIX=f"pen_e2e_{os.getpid()}")
+        out = subprocess.run(
+            [AIRGLYPH, "run", "--pen", pen, "--json", "--source", f"recording:{rec}"],
+            check=True, capture_output=True, text=True, env=env).stdout
+        shutil.rmtree(ipc, ignore_errors=True)
+    else:
+        out = subprocess.run(
+            [AIRGLYPH, "spot", rec, "--poses", poses_file, "--pen", pen, "--json"],
+            check=True, capture_output=True, text=True).stdout
     with open(os.path.join(rec, "gestures.csv")) as f:
-        drawn = [g["label"] for g in csv.DictReader(f)]
+        rows = list(csv.DictReader(f))
+    drawn = [g["label"] for g in rows]
+    spans = [(int(g["start_frame"]), int(g["end_frame"])) for g in rows]
     found, spotted_over, false_alarms, in_point = set(), set(), 0, 0
-    gestures = [json.loads(l) for l in out.splitlines()]
+    gestures = [json.loads(l) for l in out.splitlines() if l.startswith("{")]
     gestures = [g for g in gestures if g["event"] == "gesture"]
     for g in gestures:
         in_point += g.get("posture") == "point"
-        if g["drawn"] is None:
+        best = overlapped(spans, g["start_frame"], g["end_frame"])
+        if best is None:
             false_alarms += 1
             continue
-        # Each symbol is drawn once in a recording: its label names it.
-        best = drawn.index(g["drawn"])
         spotted_over.add(best)
-        if g["label"] == g["drawn"]:
+        if g["label"] == drawn[best]:
             found.add(best)
     n = len(drawn)
     return {
@@ -111,13 +151,19 @@ with tempfile.TemporaryDirectory() as tmp, open(OUT, "w") as log:
                 seen = ", ".join(f"{k} {v}" for k, v in
                                  sorted(read_as[part].items(), key=lambda kv: -kv[1]))
                 print(f"    read while {part}: {seen}")
-            for pen in PENS:
-                r = spot(rec, poses_file, pen)
-                print(f"    pen {pen:<8} found {r['found']:>2}/{r['drawn']:<2} substituted "
+            exact_file = os.path.join(tmp, "exact.jsonl")
+            exact_poses(rec, poses, exact_file)
+            runs = [(pen, pen, poses_file, False) for pen in PENS]
+            runs += [(f"{pen} exact", pen, exact_file, False) for pen in PENS[1:]]
+            if os.environ.get("LIVE") == "1":
+                runs += [(f"{pen} live", pen, None, True) for pen in PENS]
+            for name, pen, file, live in runs:
+                r = spot(rec, file, pen, live)
+                print(f"    pen {name:<14} found {r['found']:>2}/{r['drawn']:<2} substituted "
                       f"{r['substituted']:>2} missed {r['missed']:>2} false alarms "
                       f"{r['false_alarms']:>2} ({r['gestures_in_point']}/{r['gestures']} "
                       f"gestures drawn in point)")
-                row = {"scene": scene, "set": set_name, "seed": seed, "pen": pen,
+                row = {"scene": scene, "set": set_name, "seed": seed, "pen": name,
                        "posture_drawing": d, "posture_between": b, **r}
                 log.write(json.dumps(row) + "\n")
                 log.flush()

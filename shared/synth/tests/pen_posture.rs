@@ -47,7 +47,12 @@ fn the_hand_points_while_drawing_and_opens_between() {
     // Every third frame, and each symbol's first and last frames and their neighbours.
     let mut frames: Vec<usize> = (0..n).step_by(3).collect();
     for g in &gestures {
-        frames.extend([g.start_frame - 1, g.start_frame, g.end_frame, g.end_frame + 1]);
+        frames.extend([
+            g.start_frame - 1,
+            g.start_frame,
+            g.end_frame,
+            g.end_frame + 1,
+        ]);
     }
     for f in frames {
         let (depth, truth) = pen.render(f);
@@ -64,7 +69,10 @@ fn the_hand_points_while_drawing_and_opens_between() {
         assert_eq!(truth.hands.left.posture, None, "frame {f}");
         let same = if in_symbol { &mut point } else { &mut open };
         let (expected, expected_truth) = same.render(f);
-        assert!(depth.pixels() == expected.pixels(), "frame {f}: depth differs");
+        assert!(
+            depth.pixels() == expected.pixels(),
+            "frame {f}: depth differs"
+        );
         assert_eq!(truth.hands, expected_truth.hands, "frame {f}");
         seen[in_symbol as usize] += 1;
     }
@@ -73,7 +81,10 @@ fn the_hand_points_while_drawing_and_opens_between() {
     let (_, t) = pen.render(gestures[0].start_frame);
     let k = pen.intrinsics();
     let (u, v) = k.project(&t.hands.right.palm_centre).unwrap();
-    assert!(u > 0.0 && v > 0.0 && u < k.width as f32 && v < k.height as f32, "{u} {v}");
+    assert!(
+        u > 0.0 && v > 0.0 && u < k.width as f32 && v < k.height as f32,
+        "{u} {v}"
+    );
 }
 
 /// The pen's change shows in the depth: at each edge of a symbol, the frame differs from

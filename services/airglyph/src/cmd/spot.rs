@@ -10,8 +10,8 @@ use airglyph_gesture::{
     HandPosture, Model, ModelSource, Pen, PostureLabel, Postures, Spotter, SpotterConfig,
 };
 use airglyph_ipc::json::GestureLine;
-use airglyph_ipc::PostureMsg;
 use airglyph_ipc::shutdown;
+use airglyph_ipc::PostureMsg;
 use airglyph_pose::{PoseConfig, PoseEstimator};
 use anyhow::Context;
 use std::path::{Path, PathBuf};
@@ -167,8 +167,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         anyhow::bail!("{}: --truth needs a joints.csv", args.dir.display());
     }
     let model = ModelSource::choose(args.model.as_deref()).load()?;
-    let mut scfg =
-        SpotterConfig::with_overrides(args.spotter.as_deref()).context("--spotter")?;
+    let mut scfg = SpotterConfig::with_overrides(args.spotter.as_deref()).context("--spotter")?;
     if let Some(pen) = args.pen {
         scfg.pen = pen;
     }
@@ -191,7 +190,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut found = Vec::new();
     let poses = args.poses.as_deref().map(read_poses).transpose()?;
     // Where the hands' postures come from, if anywhere.
-    let posture_model = args.postures.model().filter(|_| poses.is_none() && !args.truth);
+    let posture_model = args
+        .postures
+        .model()
+        .filter(|_| poses.is_none() && !args.truth);
     let have_postures = match &poses {
         Some(p) => p.iter().any(|(_, postures)| postures.is_some()),
         None => posture_model.is_some(),
