@@ -84,3 +84,49 @@ fn the_gated_pen_publishes_what_is_drawn_pointing() {
     let fist = events(&p, "gated:fist", &rec);
     assert!(fist.is_empty(), "gated on a fist, yet published: {fist:?}");
 }
+
+/// What cannot be is refused, saying why: a pen posture where nothing is drawn or where
+/// --hand-posture already gives the right hand one, and a posture pen without postures.
+#[test]
+fn a_pen_without_what_it_needs_is_refused() {
+    let p = Isolated::new();
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("x");
+    let synth = |args: &[&str]| {
+        airglyph_system_tests::fail(
+            p.command("airglyph")
+                .args(["synth", "--pen-posture", "point,open", "--out"])
+                .arg(&out)
+                .args(args),
+        )
+    };
+    let e = synth(&["--motion", "pose:wave"]);
+    assert!(
+        e.contains("--pen-posture is for --motion draw:SYMBOLS"),
+        "{e}"
+    );
+    let e = synth(&["--motion", "draw:7", "--hand-posture", "both=fist"]);
+    assert!(
+        e.contains("leave the right hand out of --hand-posture"),
+        "{e}"
+    );
+    let rec = tmp.path().join("rec");
+    succeed(
+        p.command("airglyph")
+            .args(["synth", "--motion", "draw:7", "--frames", "20"])
+            .args([
+                "--pen-posture",
+                "point,open",
+                "--resolution",
+                "320x240",
+                "--out",
+            ])
+            .arg(&rec),
+    );
+    let e = airglyph_system_tests::fail(
+        p.command("airglyph")
+            .args(["spot", "--truth", "--pen", "gated"])
+            .arg(&rec),
+    );
+    assert!(e.contains("needs the hands' postures"), "{e}");
+}

@@ -357,3 +357,57 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn poses_file(lines: &[&str]) -> (tempfile::TempDir, PathBuf) {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("poses.jsonl");
+        std::fs::write(&path, lines.join("\n")).unwrap();
+        (dir, path)
+    }
+
+    /// A line of `pose --json` with the right hand's posture `right` (JSON).
+    fn line(frame: usize, right: &str) -> String {
+        let joints: Vec<String> = Joint::ALL
+            .iter()
+            .map(|j| format!("\"{}\":[0.1,0.2,2.0]", j.name()))
+            .collect();
+        format!(
+            "{{\"frame\":{frame},\"person_found\":true,\"joints\":{{{}}},\"postures\":{{\"left\":null,\"right\":{right}}}}}",
+            joints.join(",")
+        )
+    }
+
+    #[test]
+    fn the_postures_of_pose_json_reach_the_spotter() {
+        let a = line(0, r#"{"label":"point","confidence":0.75}"#);
+        let b = line(1, "null");
+        let (_dir, path) = poses_file(&[&a, &b, r#"{"frame":2,"person_found":false}"#]);
+        let frames = read_poses(&path).unwrap();
+        let right = frames[0].1.unwrap().right.unwrap();
+        assert_eq!((right.label.as_str(), right.confidence), ("point", 0.75));
+        assert_eq!(frames[1].1, Some(Postures::NONE));
+        assert!(frames[1].0.is_some());
+        // A line without "postures" (--postures off) says nothing of them.
+        assert_eq!(frames[2], (None, None));
+    }
+
+    #[test]
+    fn a_bad_posture_is_refused_with_its_line() {
+        for (right, says) in [
+            (r#"{"label":"point","confidence":1.5}"#, "confidence"),
+            (r#"{"confidence":0.5}"#, "label"),
+            (r#"{"label":"","confidence":0.5}"#, "postures.right"),
+        ] {
+            let (_dir, path) = poses_file(&[&line(0, "null"), &line(1, right)]);
+            let e = read_poses(&path).unwrap_err().to_string();
+            assert!(
+                e.contains("poses.jsonl:2") && e.contains(says),
+                "{right}: {e}"
+            );
+        }
+    }
+}
