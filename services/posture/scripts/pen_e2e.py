@@ -21,6 +21,7 @@ SYNTH_ARGS go to every `airglyph synth`, e.g. `--body makehuman --body-shape
 gender=0,height=0.45` for a body the built-in posture model was not trained on.
 """
 import csv
+import glob
 import json
 import os
 import shutil
@@ -96,6 +97,9 @@ def spot(rec, poses_file, pen, live=False):
             [AIRGLYPH, "run", "--pen", pen, "--json", "--source", f"recording:{rec}"],
             check=True, capture_output=True, text=True, env=env).stdout
         shutil.rmtree(ipc, ignore_errors=True)
+        # iceoryx2 leaves its management file behind when the pipeline has ended.
+        for leftover in glob.glob(f"/dev/shm/{env['AIRGLYPH_IPC_PREFIX']}*"):
+            os.remove(leftover)
     else:
         out = subprocess.run(
             [AIRGLYPH, "spot", rec, "--poses", poses_file, "--pen", pen, "--json"],
