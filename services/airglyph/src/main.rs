@@ -337,6 +337,8 @@ mod tests {
         for (arg, value, says) in [
             ("--hand-posture", "right=peace", "\"peace\" is not a hand posture: expected one of open, fist, point, thumb-up, v, pinch"),
             ("--hand-posture", "middle=open", "left, right or both"),
+            ("--pen-posture", "point", "expected DRAWING,BETWEEN"),
+            ("--pen-posture", "point,palm", "\"palm\" is not a hand posture"),
             ("--hand-roll", "right=sideways", "\"sideways\" is not an angle"),
             ("--hand-pitch", "left=-400", "within ±360"),
         ] {

@@ -48,8 +48,8 @@ pub struct GestureLine<'a> {
     /// Live only: from the capture of the frame that closed it to the event.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub latency_ms: Option<f64>,
-    /// Live only: the posture the drawing hand held over most of it (None inside:
-    /// unknown).
+    /// Live, and offline when the hands' postures are known: the posture the drawing
+    /// hand held over most of it (None inside: unknown).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub posture: Option<Option<&'a str>>,
     /// The symbol drawn over its frames (None inside: none was), when that is known.
@@ -94,6 +94,14 @@ impl<'a> GestureLine<'a> {
                 hand,
                 [e.start_ns, e.end_ns],
             )
+        }
+    }
+
+    /// With the posture the drawing hand held over most of it (None: unknown).
+    pub fn posture(self, posture: Option<&'a str>) -> Self {
+        Self {
+            posture: Some(posture),
+            ..self
         }
     }
 

@@ -43,6 +43,7 @@ fn scene(body: &BodySpec, posture: HandPosture, hand_m: f32) -> SceneConfig {
             posture: Some(posture),
             roll_deg: roll as f32,
             pitch_deg: 0.0,
+            drawing: None,
         };
         let facing = truth(&cfg).palm_normal.z;
         if facing < best.0 {

@@ -40,8 +40,10 @@
 //! - [`hand`]: hands in static postures ([`HandPosture`]: open, fist, point, thumb-up,
 //!   V, pinch), a procedural hand of articulated fingers sized from the body's forearm
 //!   that replaces the body's own where [`SceneConfig::hands`] asks, turned at the wrist
-//!   as it says; [`FrameTruth::hands`] gives each hand's posture, palm, orientation and
-//!   fingertips.
+//!   as it says, and for the drawing hand optionally one posture while a symbol is drawn
+//!   and another between ([`HandSpec::drawing`]: the pen lifted by the hand);
+//!   [`FrameTruth::hands`] gives each hand's posture in the frame, palm, orientation
+//!   and fingertips.
 //! - [`raster::Raster`]: the z-buffer rasterizer; [`sensor`]: the Kinect-like noise.
 //! - [`write_recording`]: a whole recording on disk (airglyph-core's format, plus
 //!   `joints.csv`, for air-drawing `gestures.csv`, and with hand postures `hands.csv`).
@@ -350,6 +352,23 @@ impl Synthesizer {
                     h.roll_deg, h.pitch_deg
                 )));
             }
+            if let Some(d) = h.drawing {
+                let why = if side != Side::Right {
+                    Some("only the right hand draws")
+                } else if h.posture.is_none() {
+                    Some("it needs a posture between symbols too")
+                } else if !matches!(cfg.motion, MotionSpec::Draw(_)) {
+                    Some("the motion draws no symbol (draw:SYMBOLS)")
+                } else {
+                    None
+                };
+                if let Some(why) = why {
+                    return Err(SynthError::Config(format!(
+                        "{side:?} hand: a posture while drawing ({}): {why}",
+                        d.name()
+                    )));
+                }
+            }
         }
         let body = cfg.body.load()?;
         let hands = hand::HandRenderer::new(&body, &cfg.hands);
@@ -464,6 +483,7 @@ impl Synthesizer {
             None => depth.fill(0),
         }
         self.labels.fill(raster::NO_LABEL);
+        let gesture = self.motion.gesture(index);
         let (tris, tri_label) = self.hands.body_triangles(&self.body);
         self.raster.rasterize(
             &k,
@@ -483,6 +503,7 @@ impl Synthesizer {
             &self.camera,
             depth,
             &mut self.labels,
+            gesture.is_some(),
         );
         let joints = self.body.joints_from(&self.xf);
         let mut visible = [false; Joint::COUNT];
@@ -502,7 +523,7 @@ impl Synthesizer {
                 ..Skeleton::new(joints)
             },
             visible,
-            gesture: self.motion.gesture(index),
+            gesture,
             hands,
         })
     }
@@ -657,8 +678,12 @@ fn describe(cfg: &SceneConfig) -> String {
     };
     let mut out = format!("{body}/{motion}");
     for side in hand::SIDES {
-        if let Some(p) = cfg.hands.get(side).posture {
+        let h = cfg.hands.get(side);
+        if let Some(p) = h.posture {
             out.push_str(&format!("/{}-hand:{}", side.name(), p.name()));
+        }
+        if let Some(p) = h.drawing {
+            out.push_str(&format!("/{}-pen:{}", side.name(), p.name()));
         }
     }
     if let Posture::Seated { .. } = cfg.posture {

@@ -346,6 +346,7 @@ fn extreme_wrist_angles_do_not_panic() {
                 posture: Some(p),
                 roll_deg: roll,
                 pitch_deg: pitch,
+                drawing: None,
             };
             cfg.hands.left = cfg.hands.right;
             let s = shoot(cfg);

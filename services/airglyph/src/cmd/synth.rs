@@ -114,6 +114,13 @@ pub struct Args {
     /// the body's own hand. joints.csv is unchanged; the posture is the scene's.
     #[arg(long, value_name = "HAND=POSTURE,…", value_parser = parse_postures)]
     pub hand_posture: Option<Hands<Option<HandPosture>>>,
+    /// With draw:SYMBOLS, the drawing (right) hand's shape lifts the pen:
+    /// DRAWING,BETWEEN, two postures (open, fist, point, thumb-up, v, pinch), the first
+    /// held exactly over each symbol's frames (gestures.csv), the second everywhere
+    /// else; e.g. `point,open`. hands.csv gives the posture of every frame. Instead of
+    /// --hand-posture for the right hand.
+    #[arg(long, value_name = "DRAWING,BETWEEN", value_parser = parse_pen_postures)]
+    pub pen_posture: Option<(HandPosture, HandPosture)>,
     /// The hands' turn about the fingers' axis, degrees, on top of the motion's:
     /// HAND=DEGREES,… (positive turns the palm towards the thumb), e.g. `right=45`.
     #[arg(long, value_name = "HAND=DEGREES,…", value_parser = parse_angles, allow_hyphen_values = true)]
@@ -142,24 +149,40 @@ fn parse_postures(text: &str) -> Result<Hands<Option<HandPosture>>, String> {
     airglyph_synth::hand::parse_postures(text)
 }
 
+fn parse_pen_postures(text: &str) -> Result<(HandPosture, HandPosture), String> {
+    airglyph_synth::hand::parse_pen_postures(text)
+}
+
 fn parse_angles(text: &str) -> Result<Hands<f32>, String> {
     airglyph_synth::hand::parse_angles(text)
 }
 
-/// Each hand's posture and turn from the three hand options.
-fn hands(args: &Args) -> Hands<HandSpec> {
-    let postures = args.hand_posture.unwrap_or_default();
+/// Each hand's posture and turn from the four hand options.
+fn hands(args: &Args) -> anyhow::Result<Hands<HandSpec>> {
+    let mut postures = args.hand_posture.unwrap_or_default();
     let rolls = args.hand_roll.unwrap_or_default();
     let pitches = args.hand_pitch.unwrap_or_default();
-    let spec = |posture, roll_deg, pitch_deg| HandSpec {
+    let mut drawing = None;
+    if let Some((pen, between)) = args.pen_posture {
+        if postures.right.is_some() {
+            bail!("--pen-posture sets the right hand's postures: leave the right hand out of --hand-posture");
+        }
+        if !args.motion.starts_with("draw:") {
+            bail!("--pen-posture is for --motion draw:SYMBOLS");
+        }
+        postures.right = Some(between);
+        drawing = Some(pen);
+    }
+    let spec = |posture, roll_deg, pitch_deg, drawing| HandSpec {
         posture,
         roll_deg,
         pitch_deg,
+        drawing,
     };
-    Hands {
-        left: spec(postures.left, rolls.left, pitches.left),
-        right: spec(postures.right, rolls.right, pitches.right),
-    }
+    Ok(Hands {
+        left: spec(postures.left, rolls.left, pitches.left, None),
+        right: spec(postures.right, rolls.right, pitches.right, drawing),
+    })
 }
 
 fn intrinsics(camera: &str, resolution: &str) -> anyhow::Result<Intrinsics> {
@@ -252,7 +275,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             follow: args.follow,
             ..Placement::default()
         },
-        hands: hands(&args),
+        hands: hands(&args)?,
         seed: args.seed,
     };
     let missing_assets = |e: SynthError| {
@@ -354,7 +377,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             } else {
                 format!(", gestures.csv: {} symbols", summary.gestures.len())
             },
-            if hands(&args) == Hands::default() {
+            if hands(&args)? == Hands::default() {
                 ""
             } else {
                 ", hands.csv"

@@ -73,8 +73,13 @@ pub const SIDES: [Side; 2] = [Side::Left, Side::Right];
 /// How a scene shows one hand.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct HandSpec {
-    /// The posture of the procedural hand; `None` keeps the body's own hand.
+    /// The posture of the procedural hand; `None` keeps the body's own hand. With
+    /// `drawing`, the posture between symbols.
     pub posture: Option<HandPosture>,
+    /// The posture while the hand draws a symbol (air-drawing, the right hand), so that
+    /// the hand's shape lifts and lowers the pen: e.g. pointing while drawing and
+    /// `posture` open between symbols. Needs `posture`; `None` holds `posture` all along.
+    pub drawing: Option<HandPosture>,
     /// The hand's turn about the axis along its fingers, degrees, on top of the pose's:
     /// positive turns the palm towards the thumb's side (the same for either hand).
     pub roll_deg: f32,
@@ -165,6 +170,26 @@ pub fn parse_postures(text: &str) -> Result<Hands<Option<HandPosture>>, String> 
     })
 }
 
+/// Reads the pen's two postures of the drawing hand, `DRAWING,BETWEEN` (e.g.
+/// `point,open`): the posture while a symbol is drawn, then the one between symbols.
+pub fn parse_pen_postures(text: &str) -> Result<(HandPosture, HandPosture), String> {
+    let one = |v: &str| {
+        HandPosture::from_name(v.trim()).ok_or_else(|| {
+            let names: Vec<_> = HandPosture::ALL.iter().map(|p| p.name()).collect();
+            format!(
+                "{v:?} is not a hand posture: expected one of {}",
+                names.join(", ")
+            )
+        })
+    };
+    match text.split(',').collect::<Vec<_>>()[..] {
+        [drawing, between] => Ok((one(drawing)?, one(between)?)),
+        _ => Err(format!(
+            "{text:?}: expected DRAWING,BETWEEN, two postures, e.g. point,open"
+        )),
+    }
+}
+
 /// Reads angles of the hands in degrees, e.g. `right=30,left=-15` or `both=45`; a hand
 /// not named gets 0. Angles must be finite, within ±360.
 pub fn parse_angles(text: &str) -> Result<Hands<f32>, String> {
@@ -210,6 +235,22 @@ mod tests {
         assert!(e.contains("HAND=POSTURE"), "{e}");
         let e = parse_postures("right=open,both=fist").unwrap_err();
         assert!(e.contains("already"), "{e}");
+    }
+
+    #[test]
+    fn the_pens_postures_are_read_drawing_first() {
+        assert_eq!(
+            parse_pen_postures("point, open"),
+            Ok((HandPosture::Point, HandPosture::Open))
+        );
+        for (bad, says) in [
+            ("point", "DRAWING,BETWEEN"),
+            ("point,open,fist", "DRAWING,BETWEEN"),
+            ("point,flat", "\"flat\" is not a hand posture"),
+        ] {
+            let e = parse_pen_postures(bad).unwrap_err();
+            assert!(e.contains(says), "{bad}: {e}");
+        }
     }
 
     #[test]

@@ -22,16 +22,51 @@ const HAND_PER_FOREARM: f32 = 0.72;
 struct Model {
     posture: HandPosture,
     verts: Vec<Vector3<f32>>,
+    /// Over `verts`, wound for this side.
+    tris: Vec<[u32; 3]>,
     fingertips: [Vector3<f32>; 5],
 }
 
-/// One side of the person: its hand bone in the rig, its size, its procedural hand.
+impl Model {
+    fn new(side: Side, posture: HandPosture, length_m: f32) -> Self {
+        let shape = shape::build(posture, length_m);
+        let mesh = HandMesh::of(&shape);
+        // The right hand is the left's mirror image: mirroring turns the winding over,
+        // and the front of a triangle must stay outside.
+        let mirrored = super::attach::tpose_axes(side).determinant() < 0.0;
+        let tris = mesh
+            .tris
+            .iter()
+            .map(|t| if mirrored { [t[0], t[2], t[1]] } else { *t })
+            .collect();
+        Self {
+            posture,
+            verts: mesh.verts,
+            tris,
+            fingertips: shape.fingertips,
+        }
+    }
+}
+
+/// One side of the person: its hand bone in the rig, its size, its procedural hands
+/// (the one held, and the one taken while drawing, if the pen changes it).
 #[derive(Debug, Clone)]
 struct SideHand {
     side: Side,
     rig_bone: usize,
     length_m: f32,
-    model: Option<Model>,
+    held: Option<Model>,
+    drawing: Option<Model>,
+}
+
+impl SideHand {
+    /// The procedural hand drawn in a frame, if any.
+    fn model(&self, drawing: bool) -> Option<&Model> {
+        match (drawing, &self.drawing) {
+            (true, Some(m)) => Some(m),
+            _ => self.held.as_ref(),
+        }
+    }
 }
 
 /// The hands of a scene, ready to draw frame after frame.
@@ -41,19 +76,16 @@ pub(crate) struct HandRenderer {
     /// The body's triangles and labels without the hands that are replaced; `None`
     /// when no hand is, so that the body draws from its own arrays, untouched.
     body: Option<(Vec<[u32; 3]>, Vec<u8>)>,
-    /// The procedural hands' triangles over `verts`, and their labels.
+    /// Per frame: the procedural hands' vertices in the camera frame, their triangles
+    /// and labels.
+    verts: Vec<Point3<f32>>,
     tris: Vec<[u32; 3]>,
     labels: Vec<u8>,
-    /// Per frame: the procedural hands' vertices in the camera frame.
-    verts: Vec<Point3<f32>>,
 }
 
 impl HandRenderer {
     pub fn new(body: &Body, hands: &Hands<HandSpec>) -> Self {
         let sk = body.tpose();
-        let mut tris = Vec::new();
-        let mut labels = Vec::new();
-        let mut first = 0u32;
         let sides = SIDES.map(|side| {
             let (_, forearm, hand) = side.bones();
             let length_m = HAND_PER_FOREARM * (sk.tail(forearm) - sk.head(forearm)).norm();
@@ -62,38 +94,19 @@ impl HandRenderer {
                 .iter()
                 .position(|b| b.canon == Some(hand))
                 .expect("a body's rig drives every canonical bone");
-            let model = hands.get(side).posture.map(|posture| {
-                let shape = shape::build(posture, length_m);
-                let mesh = HandMesh::of(&shape);
-                // The right hand is the left's mirror image: mirroring turns the
-                // winding over, and the front of a triangle must stay outside.
-                let mirrored = super::attach::tpose_axes(side).determinant() < 0.0;
-                tris.extend(mesh.tris.iter().map(|t| {
-                    let t = t.map(|i| i + first);
-                    if mirrored {
-                        [t[0], t[2], t[1]]
-                    } else {
-                        t
-                    }
-                }));
-                labels.extend(std::iter::repeat_n(hand as u8, mesh.tris.len()));
-                first += mesh.verts.len() as u32;
-                Model {
-                    posture,
-                    verts: mesh.verts,
-                    fingertips: shape.fingertips,
-                }
-            });
+            let spec = hands.get(side);
+            let model = |p: Option<HandPosture>| p.map(|p| Model::new(side, p, length_m));
             SideHand {
                 side,
                 rig_bone,
                 length_m,
-                model,
+                held: model(spec.posture),
+                drawing: model(spec.drawing.filter(|d| Some(*d) != spec.posture)),
             }
         });
         let replaced: Vec<u8> = sides
             .iter()
-            .filter(|s| s.model.is_some())
+            .filter(|s| s.held.is_some() || s.drawing.is_some())
             .map(|s| s.side.bones().2 as u8)
             .collect();
         let body = (!replaced.is_empty()).then(|| {
@@ -107,9 +120,9 @@ impl HandRenderer {
         Self {
             sides,
             body,
-            tris,
-            labels,
             verts: Vec::new(),
+            tris: Vec::new(),
+            labels: Vec::new(),
         }
     }
 
@@ -124,7 +137,8 @@ impl HandRenderer {
 
     /// Draws the procedural hands of frame `pose` into `depth` and `labels` (nearest
     /// surface wins, as for the body) and returns both hands' truth. `xf` are the
-    /// body's bone transforms from rest to the camera frame.
+    /// body's bone transforms from rest to the camera frame; `drawing`, whether a
+    /// symbol is being drawn in the frame.
     #[allow(clippy::too_many_arguments)]
     pub fn draw(
         &mut self,
@@ -136,19 +150,28 @@ impl HandRenderer {
         camera: &Affine,
         depth: &mut [u16],
         labels: &mut [u8],
+        drawing: bool,
     ) -> Hands<HandTruth> {
         self.verts.clear();
+        self.tris.clear();
+        self.labels.clear();
         let mut truth = [None, None];
         for (t, s) in truth.iter_mut().zip(&self.sides) {
             let wrist = xf[s.rig_bone].apply(&body.bones[s.rig_bone].head);
             let placed = Placed::new(s.side, pose, camera, wrist);
-            if let Some(m) = &s.model {
+            let model = s.model(drawing);
+            if let Some(m) = model {
+                let first = self.verts.len() as u32;
                 self.verts.extend(m.verts.iter().map(|v| placed.point(v)));
+                self.tris
+                    .extend(m.tris.iter().map(|t| t.map(|i| i + first)));
+                self.labels
+                    .extend(std::iter::repeat_n(s.side.bones().2 as u8, m.tris.len()));
             }
             *t = Some(placed.truth(
-                s.model.as_ref().map(|m| m.posture),
+                model.map(|m| m.posture),
                 s.length_m,
-                s.model.as_ref().map(|m| &m.fingertips),
+                model.map(|m| &m.fingertips),
             ));
         }
         if !self.tris.is_empty() {
