@@ -310,6 +310,34 @@ pub fn json_lines(stdout: ChildStdout) -> mpsc::Receiver<serde_json::Value> {
     rx
 }
 
+/// The gesture events `airglyph run ARGS --json --source recording:REC` prints while it
+/// plays `rec` through all three stages to its end (within 90 s).
+pub fn played_gestures(p: &Isolated, args: &[&str], rec: &Path) -> Vec<serde_json::Value> {
+    let mut run = p
+        .command("airglyph")
+        .arg("run")
+        .args(args)
+        .args(["--json", "--source"])
+        .arg(format!("recording:{}", rec.display()))
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let events = json_lines(run.stdout.take().unwrap());
+    let deadline = Instant::now() + Duration::from_secs(90);
+    while run.try_wait().unwrap().is_none() {
+        assert!(
+            Instant::now() < deadline,
+            "run did not end with its recording"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    assert!(run.wait().unwrap().success());
+    events
+        .try_iter()
+        .filter(|e| e["event"] == "gesture")
+        .collect()
+}
+
 /// `airglyph profile --json` of a running pipeline for `seconds` (`env` gives the
 /// command the pipeline's environment): its report, and how long the profile took.
 pub fn profile_report(

@@ -5,33 +5,10 @@
 
 use airglyph_system_tests::{one_at_a_time, succeed, Isolated};
 use std::path::Path;
-use std::process::Stdio;
-use std::time::{Duration, Instant};
 
-/// The gesture events `airglyph run --pen PEN --json` prints while it plays `rec`
-/// through all three stages to its end.
+/// The gesture events of `rec` played through the pipeline with `pen`.
 fn events(p: &Isolated, pen: &str, rec: &Path) -> Vec<serde_json::Value> {
-    let mut run = p
-        .command("airglyph")
-        .args(["run", "--pen", pen, "--json", "--source"])
-        .arg(format!("recording:{}", rec.display()))
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let events = airglyph_system_tests::json_lines(run.stdout.take().unwrap());
-    let deadline = Instant::now() + Duration::from_secs(60);
-    while run.try_wait().unwrap().is_none() {
-        assert!(
-            Instant::now() < deadline,
-            "run did not end with its recording"
-        );
-        std::thread::sleep(Duration::from_millis(100));
-    }
-    assert!(run.wait().unwrap().success());
-    events
-        .try_iter()
-        .filter(|e| e["event"] == "gesture")
-        .collect()
+    airglyph_system_tests::played_gestures(p, &["--pen", pen], rec)
 }
 
 /// Renders `draw:3714` drawn pointing, the hand open between, at 1.2 m from the waist up.

@@ -141,12 +141,10 @@ impl HandTracker {
     /// The body-frame hand point of one skeleton at `time_ns`, or None when the
     /// skeleton is unusable (non-finite, low confidence, degenerate shoulders).
     pub fn update(&mut self, s: &Skeleton, time_ns: u64) -> Option<HandPoint> {
-        let needed = [
-            Joint::LeftShoulder,
-            Joint::RightShoulder,
-            Joint::Neck,
-            Joint::Pelvis,
-        ];
+        // The pelvis is not among them: behind a table or below the image's edge the
+        // pose stage reports it unseen, but its place is the fitted torso's, which is
+        // all the body frame's down axis asks of it.
+        let needed = [Joint::LeftShoulder, Joint::RightShoulder, Joint::Neck];
         if !s.is_finite()
             || needed
                 .iter()
@@ -295,6 +293,31 @@ mod tests {
         assert!(t.update(&s, 0).is_some());
         s.confidence[Joint::RightHand.index()] = 0.05;
         assert!(t.update(&s, 33_000_000).is_none());
+    }
+
+    #[test]
+    fn a_person_whose_pelvis_a_table_hides_is_followed() {
+        // Seated at a desk, the pose stage reports the pelvis and legs not visible
+        // (confidence 0) with their places the fit's.
+        let mut t = HandTracker::new(TrackerConfig::default());
+        let mut s = skeleton_with_hand(0.4, -0.2, 1.4);
+        for j in [
+            Joint::Pelvis,
+            Joint::LeftHip,
+            Joint::RightHip,
+            Joint::LeftKnee,
+            Joint::RightKnee,
+            Joint::LeftFoot,
+            Joint::RightFoot,
+        ] {
+            s.confidence[j.index()] = 0.0;
+            s.visible[j.index()] = false;
+        }
+        let p = t.update(&s, 0).expect("followed");
+        assert!(
+            (p.x - 0.4).abs() < 1e-4 && (p.y + 0.2).abs() < 1e-4,
+            "{p:?}"
+        );
     }
 
     #[test]
