@@ -609,6 +609,48 @@ fn the_pen_by_posture_spots_what_is_drawn_pointing_and_not_the_same_motion_open(
 }
 
 #[test]
+fn a_hand_lost_after_a_symbol_lifts_the_pen_by_posture() {
+    // After each symbol the hand drops out of view (no usable hand for 20 frames) and
+    // comes back open: the symbol is published while the hand is away, not when it
+    // returns.
+    let (model, stream) = pen_fixture();
+    let scfg = StreamConfig::default();
+    let n = stream.points.len();
+    let drawn: Vec<(u64, u64)> = stream.truth.iter().map(|t| (t.start, t.end)).collect();
+    let pointing = hand_postures(n, &drawn, "open");
+    let lost = |i: u64| drawn.iter().any(|&(_, e)| (e + 1..=e + 20).contains(&i));
+    let dt = (1e9 / scfg.fps as f64) as u64;
+    let mut spotter = Spotter::new(model, posture_pen(3)).unwrap();
+    let mut published = Vec::new();
+    for i in 0..n as u64 {
+        let g = if lost(i) {
+            spotter.no_hand()
+        } else {
+            let skeleton = stream.skeleton(i as usize, scfg.distance);
+            spotter
+                .push_posed(&skeleton, &pointing[i as usize], i, i * dt)
+                .1
+        };
+        published.extend(g.map(|g| (i, g)));
+    }
+    assert!(published.len() >= 10, "{} published", published.len());
+    for (i, g) in &published {
+        // Published within the 20 frames the hand was away after its symbol.
+        let end = drawn
+            .iter()
+            .map(|&(_, e)| e)
+            .find(|&e| e >= g.end_seq)
+            .expect("a drawn symbol");
+        assert!(
+            (end + 1..=end + 20).contains(i),
+            "{} ending at {} published at frame {i}",
+            g.label,
+            g.end_seq
+        );
+    }
+}
+
+#[test]
 fn the_gated_pen_publishes_what_motion_finds_drawn_pointing_and_not_the_same_motion_open() {
     let (model, stream) = pen_fixture();
     let scfg = StreamConfig::default();

@@ -242,6 +242,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         };
         let Some(s) = skeleton else {
             hand.push(None);
+            found.extend(spotter.no_hand());
             continue;
         };
         hand.push(

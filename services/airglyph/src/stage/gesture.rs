@@ -356,7 +356,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 let postures = postures_of(&msg);
                 spotter.push_posed(&s, &postures, msg.sequence, msg.chain.capture_ns)
             }
-            None => (None, None),
+            None => (None, spotter.no_hand()),
         };
         if let Some(g) = &spotted {
             publish(&events, &mut reported, g, bezier, msg.session, chain)?;

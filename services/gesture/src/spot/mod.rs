@@ -186,6 +186,8 @@ pub struct Spotter {
     postures: PostureTrack,
     /// Where the pen by posture is (always up with the pen by motion).
     pen: PenState,
+    /// Frames in a row without the drawing hand ([`Spotter::no_hand`]).
+    unseen: u32,
 }
 
 impl Spotter {
@@ -225,6 +227,7 @@ impl Spotter {
             trace: None,
             postures: PostureTrack::default(),
             pen: PenState::Up,
+            unseen: 0,
         })
     }
 
@@ -257,6 +260,25 @@ impl Spotter {
         self.barrier = self.seg.next_index();
         self.postures.clear();
         self.pen = PenState::Up;
+        self.unseen = 0;
+    }
+
+    /// A frame without the drawing hand: no person, or the skeleton unusable. With the
+    /// pen by posture, a pen down that many frames in a row (`up_frames`) is lifted at
+    /// the hand's last point and what was drawn is judged: a hand dropped out of view
+    /// to rest has let go of the pen, and its symbol must not wait for it to return.
+    pub fn no_hand(&mut self) -> Option<SpottedGesture> {
+        let Pen::Posture(pen) = self.cfg.pen else {
+            return None;
+        };
+        self.unseen = self.unseen.saturating_add(1);
+        if self.unseen < pen.up_frames.max(1) {
+            return None;
+        }
+        let last = self.seg.next_index().checked_sub(1)?;
+        let span = self.pen.open_span(last);
+        self.pen = PenState::Up;
+        span.and_then(|(s, e)| self.pen_span(s, e, pen))
     }
 
     /// The stream has ended: judges what waits for more context and publishes what is
@@ -294,7 +316,7 @@ impl Spotter {
         time_ns: u64,
     ) -> (Option<HandPoint>, Option<SpottedGesture>) {
         let Some(p) = self.tracker.update(skeleton, time_ns) else {
-            return (None, None);
+            return (None, self.no_hand());
         };
         (
             Some(p),
@@ -328,8 +350,9 @@ impl Spotter {
         time_ns: u64,
     ) -> Option<SpottedGesture> {
         if !(p.x.is_finite() && p.y.is_finite()) {
-            return None;
+            return self.no_hand();
         }
+        self.unseen = 0;
         if p.hand != self.hand {
             // The other hand's path does not continue this one.
             let hand = p.hand;
