@@ -301,15 +301,7 @@ mod tests {
         // (confidence 0) with their places the fit's.
         let mut t = HandTracker::new(TrackerConfig::default());
         let mut s = skeleton_with_hand(0.4, -0.2, 1.4);
-        for j in [
-            Joint::Pelvis,
-            Joint::LeftHip,
-            Joint::RightHip,
-            Joint::LeftKnee,
-            Joint::RightKnee,
-            Joint::LeftFoot,
-            Joint::RightFoot,
-        ] {
+        for j in Joint::LOWER {
             s.confidence[j.index()] = 0.0;
             s.visible[j.index()] = false;
         }

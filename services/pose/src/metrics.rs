@@ -101,17 +101,6 @@ pub struct Summary {
     pub fps: f64,
 }
 
-/// The joints below the waist: what a camera at a desk or behind a table does not see.
-const LOWER: [Joint; 7] = [
-    Joint::Pelvis,
-    Joint::LeftHip,
-    Joint::LeftKnee,
-    Joint::LeftFoot,
-    Joint::RightHip,
-    Joint::RightKnee,
-    Joint::RightFoot,
-];
-
 /// Whether every ground-truth joint projects into the image.
 pub fn in_view(truth: &Skeleton, k: &Intrinsics) -> bool {
     truth.joints.iter().all(|p| inside(p, k))
@@ -198,7 +187,7 @@ impl PoseEval {
             ap.push(average_precision(&preds, positives));
         }
         let pairs = || self.frames.iter().flat_map(|f| f.visible.iter().copied());
-        let lower = |f: &FrameErrors| LOWER.map(|j| f.visible[j.index()]);
+        let lower = |f: &FrameErrors| Joint::LOWER.map(|j| f.visible[j.index()]);
         let lower_hidden: Vec<bool> = self
             .frames
             .iter()
@@ -349,12 +338,12 @@ mod tests {
     fn a_frame_counts_for_lower_joints_only_when_all_its_hidden_ones_are_said_so() {
         let k = Intrinsics::default();
         let mut truth = Skeleton::new([Point3::new(0.0, 0.0, 2.0); Joint::COUNT]);
-        for j in LOWER {
+        for j in Joint::LOWER {
             truth.visible[j.index()] = false;
         }
         let frame = |reported_visible: &[Joint]| {
             let mut est = truth;
-            for j in LOWER {
+            for j in Joint::LOWER {
                 est.visible[j.index()] = reported_visible.contains(&j);
             }
             PoseResult {
@@ -374,7 +363,7 @@ mod tests {
         ev.add(&frame(&[]), &under, &k);
         // A frame with the whole body in view does not count either way.
         let whole = Skeleton::new(truth.joints);
-        ev.add(&frame(&LOWER), &whole, &k);
+        ev.add(&frame(&Joint::LOWER), &whole, &k);
         let s = ev.summary();
         assert_eq!(s.lower_hidden_frames, Some(0.8));
         assert!(s.out_of_view_reported.unwrap() < 1.0);

@@ -119,33 +119,28 @@ impl Frame<'_> {
         points.into_iter().any(|p| self.sees(&p))
     }
 
+    /// The pixel `p` (camera frame) projects onto, if inside the image.
+    fn pixel_of(&self, p: &Point3<f32>) -> Option<usize> {
+        let (u, v) = self.k.project(p)?;
+        let (u, v) = (u.round(), v.round());
+        let inside = u >= 0.0 && v >= 0.0 && u < self.width as f32 && v < self.height as f32;
+        inside.then(|| v as usize * self.width + u as usize)
+    }
+
     /// Whether `p` (camera frame) projects onto the person's own pixels with their
     /// surface nearer than it by [`OCCLUDER_GAP`]: a joint the body itself hides.
     pub(crate) fn behind_the_person(&self, p: &Point3<f32>) -> bool {
-        let Some((u, v)) = self.k.project(p) else {
-            return false;
-        };
-        let (u, v) = (u.round(), v.round());
-        if u < 0.0 || v < 0.0 || u >= self.width as f32 || v >= self.height as f32 {
-            return false;
-        }
-        let idx = v as usize * self.width + u as usize;
-        let q = self.points[idx];
-        self.mask[idx] && q.z > 0.0 && q.z < p.z - OCCLUDER_GAP
+        self.pixel_of(p).is_some_and(|idx| {
+            let q = self.points[idx];
+            self.mask[idx] && q.z > 0.0 && q.z < p.z - OCCLUDER_GAP
+        })
     }
 
     /// Whether a joint at `p` (camera frame) is in the camera's view: it projects inside
     /// the image and nothing that is not the person stands before it there. A joint
     /// hidden only by the person's own body is in view.
     pub(crate) fn sees(&self, p: &Point3<f32>) -> bool {
-        let Some((u, v)) = self.k.project(p) else {
-            return false;
-        };
-        let (u, v) = (u.round(), v.round());
-        if u < 0.0 || v < 0.0 || u >= self.width as f32 || v >= self.height as f32 {
-            return false;
-        }
-        !self.occluded(v as usize * self.width + u as usize, p.z)
+        self.pixel_of(p).is_some_and(|idx| !self.occluded(idx, p.z))
     }
 }
 

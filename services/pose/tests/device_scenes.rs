@@ -49,6 +49,25 @@ fn upper_body(cfg: SceneConfig) -> SceneConfig {
     cfg.framing_upper_body().expect("the body loads")
 }
 
+/// The MakeHuman body of `shape` (MakeHuman's sliders, "" the default), or None, saying
+/// the test is skipped, when the body is not fetched.
+fn makehuman(shape: &str) -> Option<BodySpec> {
+    let shape = if shape.is_empty() {
+        Default::default()
+    } else {
+        airglyph_synth::MakeHumanShape::parse(shape).expect("a shape")
+    };
+    let body = BodySpec::MakeHuman {
+        assets: None,
+        shape,
+    };
+    if body.load().is_err() {
+        eprintln!("skipped: the MakeHuman body is not fetched (scripts/fetch-assets)");
+        return None;
+    }
+    Some(body)
+}
+
 /// Frame `frame` of the scene, estimated with no history.
 fn single(cfg: SceneConfig, frame: usize) -> (PoseResult, airglyph_synth::FrameTruth) {
     let k = cfg.intrinsics;
@@ -261,14 +280,9 @@ fn seated_hanging_arms_are_not_pulled_into_the_chairs_back() {
     // which a single frame of hanging arms cannot learn (above). (Not yet: without the
     // sensor model at 1.2 and 1.4 m the fit's starts do not reach the hanging arms,
     // hands 22–31 cm off; pose NOTES, 2026-12-05, morning.)
-    let body = BodySpec::MakeHuman {
-        assets: None,
-        shape: Default::default(),
-    };
-    if body.load().is_err() {
-        eprintln!("skipped: the MakeHuman body is not fetched (scripts/fetch-assets)");
+    let Some(body) = makehuman("") else {
         return;
-    }
+    };
     for (distance_m, noise) in [(1.0, false), (1.0, true), (1.2, true), (1.4, true)] {
         let mut cfg = seated(at(distance_m, ScriptedPose::ArmsAtSides), false);
         cfg.body = body.clone();
@@ -289,14 +303,7 @@ fn seated_hanging_arms_are_not_pulled_into_the_chairs_back() {
 /// The MakeHuman body seated at a desk drawing A–J, from the waist up, without the
 /// sensor model; None when the body is not fetched.
 fn drawing_at_a_desk(distance_m: f32) -> Option<SceneConfig> {
-    let body = BodySpec::MakeHuman {
-        assets: None,
-        shape: Default::default(),
-    };
-    if body.load().is_err() {
-        eprintln!("skipped: the MakeHuman body is not fetched (scripts/fetch-assets)");
-        return None;
-    }
+    let body = makehuman("")?;
     let mut cfg = seated(at(distance_m, ScriptedPose::Neutral), true);
     cfg.body = body;
     cfg.motion = MotionSpec::parse("draw:ABCDEFGHIJ", None, false).expect("a drawing");
@@ -343,15 +350,9 @@ fn a_chair_back_wider_than_the_person_leaning_on_it_is_no_part_of_them() {
     // A short woman leaning on a chair's back wider than her: back and chair meet with
     // no depth jump, the chair is one part with her, and the fit took it for arms (an
     // elbow and a hand 39 cm off, up the chair's back, at 1.0 m with the sensor).
-    let body = BodySpec::MakeHuman {
-        assets: None,
-        shape: airglyph_synth::MakeHumanShape::parse("gender=0,age=0.85,height=0.3,weight=0.7")
-            .expect("a shape"),
-    };
-    if body.load().is_err() {
-        eprintln!("skipped: the MakeHuman body is not fetched (scripts/fetch-assets)");
+    let Some(body) = makehuman("gender=0,age=0.85,height=0.3,weight=0.7") else {
         return;
-    }
+    };
     let mut cfg = seated(at(1.0, ScriptedPose::ArmsAtSides), false);
     cfg.body = body;
     let (r, truth) = single(upper_body(cfg), 0);
@@ -398,15 +399,9 @@ fn seated_at_rest_the_feet_fitted_behind_the_body_are_not_reported() {
     // hip (a hand hanging beside it, or a seated knee), and the foot fitted beside it,
     // behind her body, reported visible though the image shows nothing below her
     // thighs.
-    let body = BodySpec::MakeHuman {
-        assets: None,
-        shape: airglyph_synth::MakeHumanShape::parse("gender=0,age=0.85,height=0.3,weight=0.7")
-            .expect("a shape"),
-    };
-    if body.load().is_err() {
-        eprintln!("skipped: the MakeHuman body is not fetched (scripts/fetch-assets)");
+    let Some(body) = makehuman("gender=0,age=0.85,height=0.3,weight=0.7") else {
         return;
-    }
+    };
     let mut cfg = seated(at(1.1, ScriptedPose::Neutral), false);
     cfg.body = body;
     cfg.motion = MotionSpec::Rest;

@@ -70,6 +70,18 @@ impl Joint {
         Joint::RightFoot,
     ];
 
+    /// The joints below the waist: what a camera at a desk or behind a table does not
+    /// see.
+    pub const LOWER: [Joint; 7] = [
+        Joint::Pelvis,
+        Joint::LeftHip,
+        Joint::LeftKnee,
+        Joint::LeftFoot,
+        Joint::RightHip,
+        Joint::RightKnee,
+        Joint::RightFoot,
+    ];
+
     /// The bones drawn in overlays: pairs of joints.
     pub const BONES: [(Joint, Joint); 15] = [
         (Joint::Head, Joint::Neck),
