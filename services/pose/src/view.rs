@@ -94,12 +94,11 @@ impl Frame<'_> {
         (-r..=r).any(|dv| {
             (-r..=r).any(|du| {
                 let (x, y) = (u as isize + du, v as isize + dv);
-                let j = y as usize * self.width + x as usize;
                 x >= 0
                     && y >= 0
                     && (x as usize) < self.width
                     && (y as usize) < self.height
-                    && self.occluded(j, z)
+                    && self.occluded(y as usize * self.width + x as usize, z)
             })
         })
     }
@@ -218,6 +217,40 @@ mod tests {
         // Behind the wall's pixels, not the person's; outside the image.
         assert!(!f.behind_the_person(&at(40.0, 3.5)));
         assert!(!f.behind_the_person(&Point3::new(5.0, 0.0, 1.4)));
+    }
+
+    #[test]
+    fn a_cut_is_looked_for_up_to_the_images_edge() {
+        // The person 1 m away over the whole image but its first columns, where
+        // something nearer stands: pixels just inside the border are beside it, and
+        // the neighbourhood searched around them reaches past the image's first column.
+        let k = Intrinsics::default().scaled_to(320, 240);
+        let (w, h) = (k.width as usize, k.height as usize);
+        let mut points = vec![Point3::origin(); w * h];
+        let mut mask = vec![false; w * h];
+        for v in 0..h {
+            for u in 0..w {
+                let person = u >= 2;
+                let z = if person { 1.0 } else { 0.6 };
+                points[v * w + u] = k.back_project(u as f32, v as f32, z);
+                mask[v * w + u] = person;
+            }
+        }
+        let f = Frame {
+            points: &points,
+            mask: &mask,
+            width: w,
+            height: h,
+            k: &k,
+            floor: None,
+        };
+        for v in [BORDER_PX, h / 2, h - BORDER_PX - 1] {
+            assert!(
+                f.at_a_cut(v * w + BORDER_PX),
+                "row {v}, by the nearer thing"
+            );
+        }
+        assert!(!f.at_a_cut(h / 2 * w + w / 2), "the middle of the person");
     }
 
     #[test]
