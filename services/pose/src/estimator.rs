@@ -703,10 +703,12 @@ fn torso(
         0.2
     };
     // The torso model slides along its axis; when it is found afresh, the top of the
-    // head holds it. (Tracking too, it moved CMU 01_01 by +0.2 cm: the tracked body
-    // holds it better.)
+    // head holds it. Not while tracking (the tracked body holds it better), nor at a
+    // re-detection of a body whose feet were seen lately: the feet hold its height,
+    // and at a walker's re-detections the head's top moved the torso, and a hand was
+    // fitted off its arm for the frames that followed.
     let mut pose = fit.pose;
-    if detecting && cfg.torso.head_top_height > 0.0 {
+    if detecting && cfg.torso.head_top_height > 0.0 && !t.seen_whole() {
         if let Some(top) = head_top_of_mask(&s.points, &s.mask, w, &pose) {
             let dy = top - cfg.torso.head_top_height;
             if dy.abs() < 0.3 {
