@@ -186,7 +186,10 @@ impl Recording {
             if e.kind() == std::io::ErrorKind::NotFound {
                 RecordingError::Manifest {
                     path: manifest.clone(),
-                    reason: "missing: every recording starts with a recording.toml".into(),
+                    reason: "missing: every recording starts with a recording.toml (for depth \
+                             PNGs made elsewhere, write it and frames.csv beside depth/ as \
+                             docs/architecture.md, \"Recordings\", shows)"
+                        .into(),
                 }
             } else {
                 RecordingError::io(&manifest, e)
@@ -691,6 +694,8 @@ mod tests {
             err.contains("recording.toml") && err.contains("missing"),
             "{err}"
         );
+        // Where to read how to make one from frames of another program.
+        assert!(err.contains("docs/architecture.md"), "{err}");
     }
 
     #[test]
