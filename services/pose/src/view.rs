@@ -187,21 +187,32 @@ mod tests {
         assert!(frame(Some(ceiling)).sees(&Point3::new(0.0, -0.4, 1.6)));
     }
 
-    #[test]
-    fn a_joint_behind_the_persons_own_surface_is_told_from_one_on_it() {
+    /// A frame of 320×240 whose columns are the person's where `person` says so, at
+    /// `person_z` metres, and elsewhere something at `other_z`: its points and mask.
+    fn columns(
+        person: impl Fn(usize) -> bool,
+        person_z: f32,
+        other_z: f32,
+    ) -> (Vec<Point3<f32>>, Vec<bool>, Intrinsics) {
         let k = Intrinsics::default().scaled_to(320, 240);
         let (w, h) = (k.width as usize, k.height as usize);
-        // The person's surface 1 m away over the image's middle; the wall 3 m behind.
         let mut points = vec![Point3::origin(); w * h];
         let mut mask = vec![false; w * h];
         for v in 0..h {
             for u in 0..w {
-                let person = (100..220).contains(&u);
-                let z = if person { 1.0 } else { 3.0 };
+                let z = if person(u) { person_z } else { other_z };
                 points[v * w + u] = k.back_project(u as f32, v as f32, z);
-                mask[v * w + u] = person;
+                mask[v * w + u] = person(u);
             }
         }
+        (points, mask, k)
+    }
+
+    #[test]
+    fn a_joint_behind_the_persons_own_surface_is_told_from_one_on_it() {
+        // The person's surface 1 m away over the image's middle; the wall 3 m behind.
+        let (points, mask, k) = columns(|u| (100..220).contains(&u), 1.0, 3.0);
+        let (w, h) = (k.width as usize, k.height as usize);
         let f = Frame {
             points: &points,
             mask: &mask,
@@ -224,18 +235,8 @@ mod tests {
         // The person 1 m away over the whole image but its first columns, where
         // something nearer stands: pixels just inside the border are beside it, and
         // the neighbourhood searched around them reaches past the image's first column.
-        let k = Intrinsics::default().scaled_to(320, 240);
+        let (points, mask, k) = columns(|u| u >= 2, 1.0, 0.6);
         let (w, h) = (k.width as usize, k.height as usize);
-        let mut points = vec![Point3::origin(); w * h];
-        let mut mask = vec![false; w * h];
-        for v in 0..h {
-            for u in 0..w {
-                let person = u >= 2;
-                let z = if person { 1.0 } else { 0.6 };
-                points[v * w + u] = k.back_project(u as f32, v as f32, z);
-                mask[v * w + u] = person;
-            }
-        }
         let f = Frame {
             points: &points,
             mask: &mask,
