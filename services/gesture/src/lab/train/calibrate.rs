@@ -105,7 +105,38 @@ impl Streams {
 /// own bars are ignored); `progress` counts spotter runs over the streams. A label's
 /// bar is raised through [`BAR_STEPS`] and kept where the streams' reliability is
 /// highest, if higher than without it; labels are taken from the most inserted down.
+///
+/// For [`Generator::Mixed`] each generator's streams are calibrated alone and a label
+/// keeps the lower of its two bars (none where either raises none). Calibrated on both
+/// together, the movement of one kind of mover that passes for a label (the everyday
+/// generator's straight reaches from a stop, for a "1") raised a bar that then rejected
+/// the label's symbols as the other kind draws them: a bar has to hold for both.
 pub fn calibrate_label_bars(
+    model: &Model,
+    samples: &[Sample],
+    seed: u64,
+    generator: Generator,
+    progress: Progress,
+) -> BTreeMap<String, f64> {
+    if generator != Generator::Mixed {
+        return calibrate_on(model, samples, seed, generator, progress);
+    }
+    let (lab, everyday) = rayon::join(
+        || calibrate_on(model, samples, seed, Generator::Lab, &|_, _| {}),
+        || calibrate_on(model, samples, seed, Generator::Everyday, progress),
+    );
+    lower_of_both(&lab, &everyday)
+}
+
+/// Each label both sets of bars raise, at the lower of its two bars.
+fn lower_of_both(a: &BTreeMap<String, f64>, b: &BTreeMap<String, f64>) -> BTreeMap<String, f64> {
+    a.iter()
+        .filter_map(|(label, &x)| b.get(label).map(|&y| (label.clone(), x.min(y))))
+        .collect()
+}
+
+/// [`calibrate_label_bars`] on one kind of stream.
+fn calibrate_on(
     model: &Model,
     samples: &[Sample],
     seed: u64,
@@ -150,4 +181,23 @@ pub fn calibrate_label_bars(
         }
     }
     bars
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mixed_bars_keep_only_what_both_generators_raise_at_the_lower() {
+        let bars = |v: &[(&str, f64)]| -> BTreeMap<String, f64> {
+            v.iter().map(|(l, b)| (l.to_string(), *b)).collect()
+        };
+        let lab = bars(&[("1", 0.5), ("U", 0.7), ("V", 0.4)]);
+        let everyday = bars(&[("1", 0.7), ("I", 0.7), ("V", 0.6)]);
+        assert_eq!(
+            lower_of_both(&lab, &everyday),
+            bars(&[("1", 0.5), ("V", 0.4)])
+        );
+        assert!(lower_of_both(&lab, &BTreeMap::new()).is_empty());
+    }
 }
