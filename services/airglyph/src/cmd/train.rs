@@ -92,7 +92,9 @@ pub struct Args {
     /// and rests), everyday (one person a stream: constant speed or another power law,
     /// pauses at corners, slow and fast drawers, rest poses, everyday actions such as
     /// waving, pointing, scratching, touching the face), or mixed (a stream of each in
-    /// turn). `airglyph eval-spotting --generator` measures on any of them.
+    /// turn; each label's bar calibrated on each generator's streams alone, the lower
+    /// kept; the built-in model's spotting part is trained so). `airglyph eval-spotting
+    /// --generator` measures on any of them.
     #[arg(long, default_value = "lab", value_parser = ["lab", "everyday", "mixed"])]
     pub generator: String,
     /// After training, warn about labels the vocabulary cannot separate: a quick
