@@ -121,9 +121,19 @@ pub fn calibrate_label_bars(
     if generator != Generator::Mixed {
         return calibrate_on(model, samples, seed, generator, progress);
     }
+    // Both halves' runs counted together, so that progress ends with the later one.
+    let counts = std::sync::Mutex::new([(0, 0); 2]);
+    let half = |i: usize| {
+        let counts = &counts;
+        move |done, total| {
+            let mut c = counts.lock().unwrap_or_else(|e| e.into_inner());
+            c[i] = (done, total);
+            progress(c[0].0 + c[1].0, c[0].1 + c[1].1);
+        }
+    };
     let (lab, everyday) = rayon::join(
-        || calibrate_on(model, samples, seed, Generator::Lab, &|_, _| {}),
-        || calibrate_on(model, samples, seed, Generator::Everyday, progress),
+        || calibrate_on(model, samples, seed, Generator::Lab, &half(0)),
+        || calibrate_on(model, samples, seed, Generator::Everyday, &half(1)),
     );
     lower_of_both(&lab, &everyday)
 }
