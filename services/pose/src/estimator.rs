@@ -498,7 +498,7 @@ impl PoseEstimator {
             floor: seg.floor,
         };
         for j in 0..Joint::COUNT {
-            skeleton.visible[j] = frame.sees(&skeleton.joints[j]);
+            skeleton.visible[j] = frame.shows(&skeleton.joints[j]);
         }
         // A leg whose farthest point lies where the body is cut from view (the image's
         // edge, a table before it) goes on beyond the cut: its foot was not seen,
@@ -509,6 +509,12 @@ impl PoseEstimator {
         // its knee and foot are the template's guess. (Not so for an arm: the geodesic
         // length of an arm hanging beside the torso says too little of where along it
         // the image's edge cuts it.)
+        let chair_behind = (facing(&torso.pose) > FACING_COS && !foot_seen && !t.seen_whole())
+            .then(|| {
+                let inv = torso.pose.inverse();
+                let back = cfg.torso.half_depth + CHAIR_BEHIND_BACK;
+                move |p: &Point3<f32>| inv.apply(p).z < -back
+            });
         for l in [Limb::LeftLeg, Limb::RightLeg] {
             let (hip, knee, foot) = l.joints();
             let joint = |j: Joint| skeleton.joints[j.index()];
@@ -529,21 +535,33 @@ impl PoseEstimator {
             // foot and knee are where the fit put them (a thigh bent back into the
             // image to take an arm's points), not where anything was seen.
             let endless = assigned.limb[l.index()].is_none();
-            // A leg whose end in view lies near its hip's height and within a thigh's
-            // reach of it shows no foot: it is a seated person's knee or a hand
-            // hanging beside the hip taken for the leg. A foot the fit put behind the
-            // person there was not seen. (A foot raised as high, in a kick, lies a
-            // whole leg's reach away, on its own pixels.)
+            // A leg whose end in view lies near its hip's height shows no foot when
+            // that end is within a thigh's reach of the hip and the fitted foot behind
+            // the person (a seated person's knee, or a hand hanging beside the hip
+            // taken for the leg), or when the camera sees through the fitted foot
+            // (past it to something farther, or nothing at all). (A foot raised as
+            // high, in a kick, lies a whole leg's reach away, on its own pixels.)
             let short_reach = assigned.limb[l.index()].is_some_and(|mi| {
                 let at = s.graph.pos[maxima[mi] as usize];
+                let foot = joint(foot);
                 !cut[mi]
-                    && assigned.lengths[mi][l.index()] < SHORT_REACH * leg
                     && (joint(hip) - at).dot(&up) < 0.5 * leg
-                    && frame.behind_the_person(&joint(foot))
+                    && (assigned.lengths[mi][l.index()] < SHORT_REACH * leg
+                        && frame.behind_the_person(&foot)
+                        || frame.sees_through(&foot))
+            });
+            // Nor does a leg whose end lies near its hip's height and behind the
+            // torso's back, of a body facing the camera and cut short of its feet: the
+            // chair's, as the registration took it (step 7). (A foot stepping back lies
+            // there too, but a leg's length down.)
+            let on_the_chair = assigned.limb[l.index()].is_some_and(|mi| {
+                let at = s.graph.pos[maxima[mi] as usize];
+                (joint(hip) - at).dot(&up) < 0.5 * leg
+                    && chair_behind.as_ref().is_some_and(|behind| behind(&at))
             });
             // Nor does a leg whose fitted hip lies where the camera cannot look.
             let unrooted = !rooted[l.index()] || !skeleton.visible[hip.index()];
-            if cut_short || endless || unrooted || short_reach {
+            if cut_short || endless || unrooted || short_reach || on_the_chair {
                 skeleton.visible[foot.index()] = false;
             }
             if let Some(knee) = knee.filter(|_| endless || unrooted) {

@@ -126,12 +126,36 @@ impl Frame<'_> {
         inside.then(|| v as usize * self.width + u as usize)
     }
 
+    /// Whether a joint at `p` (camera frame) is shown to the camera: it sees it, and
+    /// not in the image's last pixels, which the graph leaves out of a noisy edge (a
+    /// joint fitted there is where the body runs out of the image, not where it was
+    /// seen).
+    pub(crate) fn shows(&self, p: &Point3<f32>) -> bool {
+        let margin = BORDER_PX as f32;
+        let clear = self.k.project(p).is_some_and(|(u, v)| {
+            u >= margin
+                && v >= margin
+                && u + margin < self.width as f32 - 1.0
+                && v + margin < self.height as f32 - 1.0
+        });
+        clear && self.sees(p)
+    }
+
     /// Whether `p` (camera frame) projects onto the person's own pixels with their
     /// surface nearer than it by [`OCCLUDER_GAP`]: a joint the body itself hides.
     pub(crate) fn behind_the_person(&self, p: &Point3<f32>) -> bool {
         self.pixel_of(p).is_some_and(|idx| {
             let q = self.points[idx];
             self.mask[idx] && q.z > 0.0 && q.z < p.z - OCCLUDER_GAP
+        })
+    }
+
+    /// Whether the camera sees through `p` (camera frame): where it projects, nothing
+    /// of the person, or no depth at all. A body part at `p` would have shown there.
+    pub(crate) fn sees_through(&self, p: &Point3<f32>) -> bool {
+        self.pixel_of(p).is_some_and(|idx| {
+            let q = self.points[idx];
+            q.z <= 0.0 || !self.mask[idx] && q.z > p.z
         })
     }
 
@@ -228,6 +252,58 @@ mod tests {
         // Behind the wall's pixels, not the person's; outside the image.
         assert!(!f.behind_the_person(&at(40.0, 3.5)));
         assert!(!f.behind_the_person(&Point3::new(5.0, 0.0, 1.4)));
+    }
+
+    #[test]
+    fn a_joint_the_camera_sees_through_is_told_from_one_on_or_behind_the_person() {
+        // The person's surface 1 m away over the image's middle, but a hole without
+        // depth in it; the wall 3 m behind.
+        let (mut points, mask, k) = columns(|u| (100..220).contains(&u), 1.0, 3.0);
+        let (w, h) = (k.width as usize, k.height as usize);
+        points[120 * w + 200] = Point3::origin();
+        let f = Frame {
+            points: &points,
+            mask: &mask,
+            width: w,
+            height: h,
+            k: &k,
+            floor: None,
+        };
+        let at = |u: f32, z: f32| k.back_project(u, 120.0, z);
+        // Beside the person, before the wall: the wall shows where it would be.
+        assert!(f.sees_through(&at(40.0, 1.2)));
+        // Where the person shows no depth.
+        assert!(f.sees_through(&at(200.0, 1.2)));
+        // On the person's surface, or hidden behind it.
+        assert!(!f.sees_through(&at(160.0, 1.05)));
+        assert!(!f.sees_through(&at(160.0, 1.4)));
+        // Behind the wall: hidden by it, not seen through; outside the image.
+        assert!(!f.sees_through(&at(40.0, 3.5)));
+        assert!(!f.sees_through(&Point3::new(5.0, 0.0, 1.4)));
+    }
+
+    #[test]
+    fn a_joint_in_the_images_last_pixels_is_not_shown() {
+        // The person 1 m away over the whole image.
+        let (points, mask, k) = columns(|_| true, 1.0, 3.0);
+        let (w, h) = (k.width as usize, k.height as usize);
+        let f = Frame {
+            points: &points,
+            mask: &mask,
+            width: w,
+            height: h,
+            k: &k,
+            floor: None,
+        };
+        let at = |u: f32, v: f32| k.back_project(u, v, 1.05);
+        let last = (h - 1) as f32;
+        assert!(f.shows(&at(160.0, 120.0)));
+        assert!(f.shows(&at(160.0, last - BORDER_PX as f32 - 1.0)));
+        // Seen, but where the body runs out of the image.
+        assert!(f.sees(&at(160.0, last - 1.0)));
+        assert!(!f.shows(&at(160.0, last - 1.0)));
+        assert!(!f.shows(&at(1.0, 120.0)));
+        assert!(!f.shows(&at(160.0, last + 3.0)));
     }
 
     #[test]

@@ -394,11 +394,11 @@ fn a_leg_whose_hip_is_behind_the_table_shows_no_knee_or_foot() {
 }
 
 #[test]
-fn seated_at_rest_the_feet_fitted_behind_the_body_are_not_reported() {
+fn seated_at_rest_the_legs_out_of_view_are_not_reported() {
     // An older short woman seated at rest, 1.1 m, tracked: a leg's end found near the
-    // hip (a hand hanging beside it, or a seated knee), and the foot fitted beside it,
-    // behind her body, reported visible though the image shows nothing below her
-    // thighs.
+    // hip (a hand hanging beside it, a seated knee, the chair's side behind her back),
+    // and the foot fitted beside it reported visible though the image shows nothing
+    // below her thighs.
     let Some(body) = makehuman("gender=0,age=0.85,height=0.3,weight=0.7") else {
         return;
     };
@@ -427,10 +427,12 @@ fn seated_at_rest_the_feet_fitted_behind_the_body_are_not_reported() {
         }
     }
     assert!(frames > 100, "{frames} frames with the legs out of view");
-    // (32 of 130 before; 16 now, in stretches where the fit folds a thigh up into
-    // the image: not yet.)
+    // The bar: hidden lower joints reported so in 99 % of such frames. (32
+    // of 130 frames failed before the rules for a leg's end near the hip; 16 before
+    // the feet the camera sees through, the chair's maxima and the image's last
+    // pixels.)
     assert!(
-        shown * 5 <= frames,
+        shown * 100 <= frames,
         "{shown} of {frames} frames show a hidden knee or foot"
     );
 }
