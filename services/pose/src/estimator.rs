@@ -536,9 +536,10 @@ impl PoseEstimator {
             // image to take an arm's points), not where anything was seen.
             let endless = assigned.limb[l.index()].is_none();
             // A leg whose end in view lies near its hip's height shows no foot when
-            // that end is within a thigh's reach of the hip and the fitted foot behind
-            // the person (a seated person's knee, or a hand hanging beside the hip
-            // taken for the leg), or when the camera sees through the fitted foot
+            // that end is within a thigh's reach of the hip (a seated person's knee,
+            // or a hand hanging beside the hip or lying in the lap taken for the leg)
+            // and the fitted foot lies behind the person or near the hip's height
+            // itself (on the thighs), or when the camera sees through the fitted foot
             // (past it to something farther, or nothing at all). (A foot raised as
             // high, in a kick, lies a whole leg's reach away, on its own pixels.)
             let short_reach = assigned.limb[l.index()].is_some_and(|mi| {
@@ -547,7 +548,8 @@ impl PoseEstimator {
                 !cut[mi]
                     && (joint(hip) - at).dot(&up) < 0.5 * leg
                     && (assigned.lengths[mi][l.index()] < SHORT_REACH * leg
-                        && frame.behind_the_person(&foot)
+                        && (frame.behind_the_person(&foot)
+                            || (joint(hip) - foot).dot(&up) < 0.5 * leg)
                         || frame.sees_through(&foot))
             });
             // Nor does a leg whose end lies near its hip's height and behind the
