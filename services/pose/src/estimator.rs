@@ -12,6 +12,7 @@ use crate::dijkstra::Graph;
 use crate::geodesic::Geodesic;
 use crate::graph::{GeoGraph, NONE};
 use crate::hands::{hands_at_fingertips, hands_at_their_points};
+use crate::legs_seen::{leg_seen, ChairBehind, LegEnd};
 use crate::neck::{neck_base, NeckBase};
 use crate::register::{
     drop_borrowed_tips, hidden_limbs, starts, tips_strayed, Fit, Frame, OfferedStart, Registration,
@@ -500,75 +501,22 @@ impl PoseEstimator {
         for j in 0..Joint::COUNT {
             skeleton.visible[j] = frame.shows(&skeleton.joints[j]);
         }
-        // A leg whose farthest point lies where the body is cut from view (the image's
-        // edge, a table before it) goes on beyond the cut: its foot was not seen,
-        // wherever the fit put it; unless the cut lies farther along the body than the
-        // fitted leg is long, below the hip, and the fitted foot beside it, when only
-        // the toes are cut.
-        // A leg whose hip the camera could not see either shows nothing of its own:
-        // its knee and foot are the template's guess. (Not so for an arm: the geodesic
-        // length of an arm hanging beside the torso says too little of where along it
-        // the image's edge cuts it.)
-        let chair_behind = (facing(&torso.pose) > FACING_COS && !foot_seen && !t.seen_whole())
-            .then(|| {
-                let inv = torso.pose.inverse();
-                let back = cfg.torso.half_depth + CHAIR_BEHIND_BACK;
-                move |p: &Point3<f32>| inv.apply(p).z < -back
-            });
+        // A leg's knee and foot: only what its end in view shows (`legs_seen.rs`).
+        let chair = (facing(&torso.pose) > FACING_COS && !foot_seen && !t.seen_whole())
+            .then(|| ChairBehind::of(&torso.pose, cfg.torso.half_depth + CHAIR_BEHIND_BACK));
         for l in [Limb::LeftLeg, Limb::RightLeg] {
             let (hip, knee, foot) = l.joints();
-            let joint = |j: Joint| skeleton.joints[j.index()];
-            let leg = knee.map_or(0.0, |knee| {
-                (joint(knee) - joint(hip)).norm() + (joint(foot) - joint(knee)).norm()
+            let end = assigned.limb[l.index()].map(|mi| LegEnd {
+                at: s.graph.pos[maxima[mi] as usize],
+                cut: cut[mi],
+                reach: assigned.lengths[mi][l.index()],
             });
-            // (Toes cut lie below the hip, most of a leg down, along the torso's `up`:
-            // a cut beside the hip reached the long way round, through the torso, is
-            // another limb's.)
-            let cut_short = assigned.limb[l.index()].is_some_and(|mi| {
-                let at = s.graph.pos[maxima[mi] as usize];
-                cut[mi]
-                    && (assigned.lengths[mi][l.index()] < leg
-                        || (joint(foot) - at).norm() > FOOT_BY_ITS_CUT
-                        || (joint(hip) - at).dot(&up) < 0.5 * leg)
-            });
-            // A leg with no maximum of its own showed the camera no end at all: its
-            // foot and knee are where the fit put them (a thigh bent back into the
-            // image to take an arm's points), not where anything was seen.
-            let endless = assigned.limb[l.index()].is_none();
-            // A leg whose end in view lies near its hip's height shows no foot when
-            // that end is within a thigh's reach of the hip (a seated person's knee,
-            // or a hand hanging beside the hip or lying in the lap taken for the leg)
-            // and the fitted foot lies behind the person or near the hip's height
-            // itself (on the thighs), or when the camera sees through the fitted foot
-            // (past it to something farther, or nothing at all). (A foot raised as
-            // high, in a kick, lies a whole leg's reach away, on its own pixels.)
-            let short_reach = assigned.limb[l.index()].is_some_and(|mi| {
-                let at = s.graph.pos[maxima[mi] as usize];
-                let foot = joint(foot);
-                !cut[mi]
-                    && (joint(hip) - at).dot(&up) < 0.5 * leg
-                    && (assigned.lengths[mi][l.index()] < SHORT_REACH * leg
-                        && (frame.behind_the_person(&foot)
-                            || (joint(hip) - foot).dot(&up) < 0.5 * leg)
-                        || frame.sees_through(&foot))
-            });
-            // Nor does a leg whose end lies near its hip's height and behind the
-            // torso's back, of a body facing the camera and cut short of its feet: the
-            // chair's, as the registration took it (step 7). (A foot stepping back lies
-            // there too, but a leg's length down.)
-            let on_the_chair = assigned.limb[l.index()].is_some_and(|mi| {
-                let at = s.graph.pos[maxima[mi] as usize];
-                (joint(hip) - at).dot(&up) < 0.5 * leg
-                    && chair_behind.as_ref().is_some_and(|behind| behind(&at))
-            });
-            // Nor does a leg whose fitted hip lies where the camera cannot look.
-            let unrooted = !rooted[l.index()] || !skeleton.visible[hip.index()];
-            if cut_short || endless || unrooted || short_reach || on_the_chair {
-                skeleton.visible[foot.index()] = false;
+            let rooted = rooted[l.index()] && skeleton.visible[hip.index()];
+            let seen = leg_seen(l, &skeleton, end, rooted, &up, &frame, chair.as_ref());
+            if let Some(knee) = knee {
+                skeleton.visible[knee.index()] = seen.knee;
             }
-            if let Some(knee) = knee.filter(|_| endless || unrooted) {
-                skeleton.visible[knee.index()] = false;
-            }
+            skeleton.visible[foot.index()] = seen.foot;
         }
         for j in 0..Joint::COUNT {
             if !skeleton.visible[j] {
@@ -587,15 +535,6 @@ impl PoseEstimator {
         Some(skeleton)
     }
 }
-
-/// The share of the fitted leg's length within which a leg's end in view, near the
-/// hip's height, is no foot: a seated thigh is about half the leg, a foot a whole
-/// leg's geodesic reach (more, over the surface).
-const SHORT_REACH: f32 = 0.75;
-
-/// How near the fitted foot must lie to the point where the image's edge (or a table)
-/// cuts its leg, metres, for the cut to take only its toes: a foot's length.
-const FOOT_BY_ITS_CUT: f32 = 0.2;
 
 /// How far below the neck a leg's tip must lie to be a foot, metres: a seated child's
 /// feet lie farther.
