@@ -12,7 +12,7 @@ use crate::dijkstra::Graph;
 use crate::geodesic::Geodesic;
 use crate::graph::{GeoGraph, NONE};
 use crate::hands::{hands_at_fingertips, hands_at_their_points};
-use crate::legs_seen::{leg_seen, ChairBehind, LegEnd};
+use crate::legs_seen::{leg_seen, LegEnd};
 use crate::neck::{neck_base, NeckBase};
 use crate::register::{
     drop_borrowed_tips, hidden_limbs, starts, tips_strayed, Fit, Frame, OfferedStart, Registration,
@@ -23,6 +23,7 @@ use crate::torso::{
     anchored_at_head_top, facing, facing_from_feet, head_top_of_mask, keypoints, TorsoEstimator,
     TorsoFit, TorsoPoints, TorsoPose, TorsoStart, FACING_COS,
 };
+use crate::view::ChairBehind;
 use crate::Limb;
 use airglyph_core::{DepthView, Intrinsics, Joint, Skeleton};
 use nalgebra::{Point3, Vector3};
@@ -434,6 +435,12 @@ impl PoseEstimator {
         self.times.limbs = lap.lap();
         // 7. The whole body registered to the frame, from the last frame's body and
         // from the seed's estimate when it races, whichever explains the frame better.
+        // What lies behind the torso's back of a body facing the camera, cut short of
+        // its feet and not seen whole lately, by more than the sensor's noise: the
+        // chair's, for the registration's points and for which legs show a foot.
+        let facing_cut = facing(&torso.pose) > FACING_COS && !foot_seen;
+        let chair = (facing_cut && !t.seen_whole())
+            .then(|| ChairBehind::of(&torso.pose, cfg.torso.half_depth + CHAIR_BEHIND_BACK));
         let mut skeleton = if cfg.register.enabled {
             // A seated person's chair back shows between the arms and the torso and
             // around the body; taken into the mask across its depth jumps, it pulled
@@ -442,19 +449,19 @@ impl PoseEstimator {
             // the camera (side-on, its back lies along the rays and a far limb behind
             // it) and cut short of its feet (a far leg seen through a gap of a whole
             // body was taken for one).
-            let mask = if facing(&torso.pose) > FACING_COS && !foot_seen {
+            let mask = if facing_cut {
                 let inv = torso.pose.inverse();
                 let back = cfg.torso.half_depth;
                 s.segmenter
                     .body_points(&s.mask, &mut s.body_mask, |p| inv.apply(&p).z < -back);
                 // Where the person leans on the chair's back, back and chair meet
                 // with no depth jump and the chair is one part with the body: its
-                // points are then left out one by one, those behind the torso's back
-                // by more than the sensor's noise. Not for a body seen whole lately:
-                // a boxer's elbow drawn back, a leg stepping back, lie there too.
-                if !t.seen_whole() {
+                // points are then left out one by one (`chair`). Not for a body seen
+                // whole lately: a boxer's elbow drawn back, a leg stepping back, lie
+                // there too.
+                if let Some(chair) = &chair {
                     for (m, p) in s.body_mask.iter_mut().zip(&s.points) {
-                        *m &= p.z <= 0.0 || inv.apply(p).z >= -back - CHAIR_BEHIND_BACK;
+                        *m &= p.z <= 0.0 || !chair.holds(p);
                     }
                 }
                 &s.body_mask
@@ -502,8 +509,6 @@ impl PoseEstimator {
             skeleton.visible[j] = frame.shows(&skeleton.joints[j]);
         }
         // A leg's knee and foot: only what its end in view shows (`legs_seen.rs`).
-        let chair = (facing(&torso.pose) > FACING_COS && !foot_seen && !t.seen_whole())
-            .then(|| ChairBehind::of(&torso.pose, cfg.torso.half_depth + CHAIR_BEHIND_BACK));
         for l in [Limb::LeftLeg, Limb::RightLeg] {
             let (hip, knee, foot) = l.joints();
             let end = assigned.limb[l.index()].map(|mi| LegEnd {

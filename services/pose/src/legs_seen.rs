@@ -4,8 +4,7 @@
 //! person's thighs pointing at the camera). A leg shows its foot only when its end in
 //! view could be a foot, and its knee only when the leg has an end and a hip in view.
 
-use crate::geom::Rigid;
-use crate::view::Frame;
+use crate::view::{ChairBehind, Frame};
 use crate::Limb;
 use airglyph_core::{Joint, Skeleton};
 use nalgebra::{Point3, Vector3};
@@ -28,31 +27,6 @@ pub(crate) struct LegEnd {
     pub cut: bool,
     /// Its geodesic distance from the leg's root, metres.
     pub reach: f32,
-}
-
-/// What lies behind the torso's back of a body facing the camera and cut short of its
-/// feet: the chair's, not the person's.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct ChairBehind {
-    /// Camera frame to torso frame (z forward).
-    into_torso: Rigid,
-    /// How far behind the torso's origin the chair begins, metres.
-    back: f32,
-}
-
-impl ChairBehind {
-    /// Behind the back of the torso at `torso` (torso frame to camera frame), `back`
-    /// metres behind its origin.
-    pub(crate) fn of(torso: &Rigid, back: f32) -> Self {
-        Self {
-            into_torso: torso.inverse(),
-            back,
-        }
-    }
-
-    fn holds(&self, p: &Point3<f32>) -> bool {
-        self.into_torso.apply(p).z < -self.back
-    }
 }
 
 /// Which of its own joints a leg showed the camera.
@@ -145,36 +119,15 @@ fn foot_seen(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geom::Rigid;
+    use crate::view::testing::{columns, frame_of};
     use airglyph_core::Intrinsics;
     use nalgebra::{Rotation3, Vector3};
 
     /// A 320×240 frame whose columns 100–219 are the person's surface 1 m away, the
     /// rest a wall 3 m away: its points and mask.
     fn person_before_a_wall() -> (Vec<Point3<f32>>, Vec<bool>, Intrinsics) {
-        let k = Intrinsics::default().scaled_to(320, 240);
-        let (w, h) = (k.width as usize, k.height as usize);
-        let mut points = Vec::with_capacity(w * h);
-        let mut mask = Vec::with_capacity(w * h);
-        for v in 0..h {
-            for u in 0..w {
-                let person = (100..220).contains(&u);
-                let z = if person { 1.0 } else { 3.0 };
-                points.push(k.back_project(u as f32, v as f32, z));
-                mask.push(person);
-            }
-        }
-        (points, mask, k)
-    }
-
-    fn frame<'a>(points: &'a [Point3<f32>], mask: &'a [bool], k: &'a Intrinsics) -> Frame<'a> {
-        Frame {
-            points,
-            mask,
-            width: k.width as usize,
-            height: k.height as usize,
-            k,
-            floor: None,
-        }
+        columns(|u| (100..220).contains(&u), 1.0, 3.0)
     }
 
     /// A left leg standing down from its hip at (0.1, 0, 1) m (camera frame, y down),
@@ -200,7 +153,7 @@ mod tests {
     #[test]
     fn a_foot_at_the_legs_end_below_the_hip_is_seen_and_a_leg_without_end_or_hip_is_not() {
         let (points, mask, k) = person_before_a_wall();
-        let frame = frame(&points, &mask, &k);
+        let frame = frame_of(&points, &mask, &k);
         let s = left_leg(Point3::new(0.1, 0.8, 1.0));
         let seen = |end, rooted| leg_seen(Limb::LeftLeg, &s, end, rooted, &UP, &frame, None);
         let both = LegSeen {
@@ -219,7 +172,7 @@ mod tests {
     #[test]
     fn a_leg_cut_from_view_shows_its_foot_only_when_the_cut_takes_the_toes() {
         let (points, mask, k) = person_before_a_wall();
-        let frame = frame(&points, &mask, &k);
+        let frame = frame_of(&points, &mask, &k);
         let s = left_leg(Point3::new(0.1, 0.8, 1.0));
         let foot = |end| leg_seen(Limb::LeftLeg, &s, end, true, &UP, &frame, None).foot;
         // Cut at the toes, beside the fitted foot, a whole leg along the body.
@@ -233,7 +186,7 @@ mod tests {
     #[test]
     fn an_end_at_the_hips_height_is_no_foot_where_nothing_shows_one() {
         let (points, mask, k) = person_before_a_wall();
-        let frame = frame(&points, &mask, &k);
+        let frame = frame_of(&points, &mask, &k);
         let foot = |foot: [f32; 3], reach| {
             let s = left_leg(Point3::new(foot[0], foot[1], foot[2]));
             // The leg's end beside the hip, at its height: a hand hanging there.
@@ -254,7 +207,7 @@ mod tests {
     #[test]
     fn an_end_at_the_hips_height_behind_the_torsos_back_is_the_chairs() {
         let (points, mask, k) = person_before_a_wall();
-        let frame = frame(&points, &mask, &k);
+        let frame = frame_of(&points, &mask, &k);
         let s = left_leg(Point3::new(0.1, 0.45, 1.0));
         // A torso 1 m away facing the camera (its z towards it), its back 0.15 m
         // behind its origin.

@@ -3,6 +3,7 @@
 //! cannot look; nothing there is evidence of where it is, and the estimate must neither
 //! take the cut for a limb's end nor report what it could not see.
 
+use crate::geom::Rigid;
 use crate::segment::Plane;
 use airglyph_core::Intrinsics;
 use nalgebra::{Point3, Vector3};
@@ -35,6 +36,32 @@ impl TableTop {
     /// The top's upward normal, camera frame.
     pub(crate) fn up(&self) -> Vector3<f32> {
         self.0.n
+    }
+}
+
+/// What lies behind the torso's back of a body facing the camera and cut short of its
+/// feet: the chair's, not the person's.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ChairBehind {
+    /// Camera frame to torso frame (z forward).
+    into_torso: Rigid,
+    /// How far behind the torso's origin the chair begins, metres.
+    back: f32,
+}
+
+impl ChairBehind {
+    /// Behind the back of the torso at `torso` (torso frame to camera frame), `back`
+    /// metres behind its origin.
+    pub(crate) fn of(torso: &Rigid, back: f32) -> Self {
+        Self {
+            into_torso: torso.inverse(),
+            back,
+        }
+    }
+
+    /// Whether `p` (camera frame) lies there.
+    pub(crate) fn holds(&self, p: &Point3<f32>) -> bool {
+        self.into_torso.apply(p).z < -self.back
     }
 }
 
@@ -81,14 +108,10 @@ impl Frame<'_> {
     /// image's edge, or beside something nearer that hides what continues (a geodesic
     /// maximum there is the end of what the camera sees, not of a limb).
     pub(crate) fn at_a_cut(&self, idx: usize) -> bool {
-        let (u, v) = (idx % self.width, idx / self.width);
-        if u < BORDER_PX
-            || v < BORDER_PX
-            || u + BORDER_PX >= self.width
-            || v + BORDER_PX >= self.height
-        {
+        if self.at_the_edge(idx) {
             return true;
         }
+        let (u, v) = (idx % self.width, idx / self.width);
         let z = self.points[idx].z;
         let r = BORDER_PX as isize + 1;
         (-r..=r).any(|dv| {
@@ -101,6 +124,15 @@ impl Frame<'_> {
                     && self.occluded(y as usize * self.width + x as usize, z)
             })
         })
+    }
+
+    /// Whether pixel `idx` lies in the image's last [`BORDER_PX`] pixels.
+    fn at_the_edge(&self, idx: usize) -> bool {
+        let (u, v) = (idx % self.width, idx / self.width);
+        u < BORDER_PX
+            || v < BORDER_PX
+            || u + BORDER_PX >= self.width
+            || v + BORDER_PX >= self.height
     }
 
     /// The table top the segmentation took for the floor, if the hip at `hip` lies
@@ -131,14 +163,8 @@ impl Frame<'_> {
     /// joint fitted there is where the body runs out of the image, not where it was
     /// seen).
     pub(crate) fn shows(&self, p: &Point3<f32>) -> bool {
-        let margin = BORDER_PX as f32;
-        let clear = self.k.project(p).is_some_and(|(u, v)| {
-            u >= margin
-                && v >= margin
-                && u + margin < self.width as f32 - 1.0
-                && v + margin < self.height as f32 - 1.0
-        });
-        clear && self.sees(p)
+        self.pixel_of(p)
+            .is_some_and(|idx| !self.at_the_edge(idx) && !self.occluded(idx, p.z))
     }
 
     /// Whether `p` (camera frame) projects onto the person's own pixels with their
@@ -168,7 +194,53 @@ impl Frame<'_> {
 }
 
 #[cfg(test)]
+pub(crate) mod testing {
+    //! Frames for the steps' unit tests.
+    use super::Frame;
+    use airglyph_core::Intrinsics;
+    use nalgebra::Point3;
+
+    /// A frame of 320×240 whose columns are the person's where `person` says so, at
+    /// `person_z` metres, and elsewhere something at `other_z`: its points and mask.
+    pub(crate) fn columns(
+        person: impl Fn(usize) -> bool,
+        person_z: f32,
+        other_z: f32,
+    ) -> (Vec<Point3<f32>>, Vec<bool>, Intrinsics) {
+        let k = Intrinsics::default().scaled_to(320, 240);
+        let (w, h) = (k.width as usize, k.height as usize);
+        let mut points = vec![Point3::origin(); w * h];
+        let mut mask = vec![false; w * h];
+        for v in 0..h {
+            for u in 0..w {
+                let z = if person(u) { person_z } else { other_z };
+                points[v * w + u] = k.back_project(u as f32, v as f32, z);
+                mask[v * w + u] = person(u);
+            }
+        }
+        (points, mask, k)
+    }
+
+    /// The frame of `points` and `mask` seen by `k`, no floor taken out.
+    pub(crate) fn frame_of<'a>(
+        points: &'a [Point3<f32>],
+        mask: &'a [bool],
+        k: &'a Intrinsics,
+    ) -> Frame<'a> {
+        Frame {
+            points,
+            mask,
+            width: k.width as usize,
+            height: k.height as usize,
+            k,
+            floor: None,
+        }
+    }
+}
+
+#[cfg(test)]
 mod tests {
+    use super::testing::{columns, frame_of};
     use super::*;
     use nalgebra::Vector3;
 
@@ -189,12 +261,8 @@ mod tests {
     fn what_lies_under_the_floor_taken_out_is_hidden_and_what_rests_on_it_is_not() {
         let (points, mask, k, top) = under_a_table_top();
         let frame = |floor| Frame {
-            points: &points,
-            mask: &mask,
-            width: k.width as usize,
-            height: k.height as usize,
-            k: &k,
             floor,
+            ..frame_of(&points, &mask, &k)
         };
         // A knee 0.15 m under the top, 1.6 m away; a hand on it; a head above it.
         let knee = Point3::new(0.1, 0.45, 1.6);
@@ -211,40 +279,11 @@ mod tests {
         assert!(frame(Some(ceiling)).sees(&Point3::new(0.0, -0.4, 1.6)));
     }
 
-    /// A frame of 320×240 whose columns are the person's where `person` says so, at
-    /// `person_z` metres, and elsewhere something at `other_z`: its points and mask.
-    fn columns(
-        person: impl Fn(usize) -> bool,
-        person_z: f32,
-        other_z: f32,
-    ) -> (Vec<Point3<f32>>, Vec<bool>, Intrinsics) {
-        let k = Intrinsics::default().scaled_to(320, 240);
-        let (w, h) = (k.width as usize, k.height as usize);
-        let mut points = vec![Point3::origin(); w * h];
-        let mut mask = vec![false; w * h];
-        for v in 0..h {
-            for u in 0..w {
-                let z = if person(u) { person_z } else { other_z };
-                points[v * w + u] = k.back_project(u as f32, v as f32, z);
-                mask[v * w + u] = person(u);
-            }
-        }
-        (points, mask, k)
-    }
-
     #[test]
     fn a_joint_behind_the_persons_own_surface_is_told_from_one_on_it() {
         // The person's surface 1 m away over the image's middle; the wall 3 m behind.
         let (points, mask, k) = columns(|u| (100..220).contains(&u), 1.0, 3.0);
-        let (w, h) = (k.width as usize, k.height as usize);
-        let f = Frame {
-            points: &points,
-            mask: &mask,
-            width: w,
-            height: h,
-            k: &k,
-            floor: None,
-        };
+        let f = frame_of(&points, &mask, &k);
         let at = |u: f32, z: f32| k.back_project(u, 120.0, z);
         assert!(f.behind_the_person(&at(160.0, 1.4)));
         // On the surface, or nearer than the gap behind it: the joint's own pixels.
@@ -259,16 +298,8 @@ mod tests {
         // The person's surface 1 m away over the image's middle, but a hole without
         // depth in it; the wall 3 m behind.
         let (mut points, mask, k) = columns(|u| (100..220).contains(&u), 1.0, 3.0);
-        let (w, h) = (k.width as usize, k.height as usize);
-        points[120 * w + 200] = Point3::origin();
-        let f = Frame {
-            points: &points,
-            mask: &mask,
-            width: w,
-            height: h,
-            k: &k,
-            floor: None,
-        };
+        points[120 * k.width as usize + 200] = Point3::origin();
+        let f = frame_of(&points, &mask, &k);
         let at = |u: f32, z: f32| k.back_project(u, 120.0, z);
         // Beside the person, before the wall: the wall shows where it would be.
         assert!(f.sees_through(&at(40.0, 1.2)));
@@ -286,17 +317,9 @@ mod tests {
     fn a_joint_in_the_images_last_pixels_is_not_shown() {
         // The person 1 m away over the whole image.
         let (points, mask, k) = columns(|_| true, 1.0, 3.0);
-        let (w, h) = (k.width as usize, k.height as usize);
-        let f = Frame {
-            points: &points,
-            mask: &mask,
-            width: w,
-            height: h,
-            k: &k,
-            floor: None,
-        };
+        let f = frame_of(&points, &mask, &k);
         let at = |u: f32, v: f32| k.back_project(u, v, 1.05);
-        let last = (h - 1) as f32;
+        let last = (f.height - 1) as f32;
         assert!(f.shows(&at(160.0, 120.0)));
         assert!(f.shows(&at(160.0, last - BORDER_PX as f32 - 1.0)));
         // Seen, but where the body runs out of the image.
@@ -312,15 +335,8 @@ mod tests {
         // something nearer stands: pixels just inside the border are beside it, and
         // the neighbourhood searched around them reaches past the image's first column.
         let (points, mask, k) = columns(|u| u >= 2, 1.0, 0.6);
-        let (w, h) = (k.width as usize, k.height as usize);
-        let f = Frame {
-            points: &points,
-            mask: &mask,
-            width: w,
-            height: h,
-            k: &k,
-            floor: None,
-        };
+        let f = frame_of(&points, &mask, &k);
+        let (w, h) = (f.width, f.height);
         for v in [BORDER_PX, h / 2, h - BORDER_PX - 1] {
             assert!(
                 f.at_a_cut(v * w + BORDER_PX),
@@ -334,12 +350,8 @@ mod tests {
     fn a_leg_whose_hip_is_under_the_table_top_stays_under_it() {
         let (points, mask, k, top) = under_a_table_top();
         let f = Frame {
-            points: &points,
-            mask: &mask,
-            width: k.width as usize,
-            height: k.height as usize,
-            k: &k,
             floor: Some(top),
+            ..frame_of(&points, &mask, &k)
         };
         let r = 0.06;
         // Seated: the hip 0.2 m under the top (y = 0.5).

@@ -393,6 +393,29 @@ fn a_leg_whose_hip_is_behind_the_table_shows_no_knee_or_foot() {
     }
 }
 
+/// `frames` tracked frames of `cfg`: of those with a leg's joint out of view, how many
+/// report one such joint visible, and how many there are.
+fn hidden_legs_shown(cfg: SceneConfig, frames: usize) -> (usize, usize) {
+    let k = cfg.intrinsics;
+    let mut synth = Synthesizer::new(cfg).expect("scene");
+    let mut est = PoseEstimator::new(k, PoseConfig::default());
+    let (mut shown, mut hidden_frames) = (0, 0);
+    for i in 0..frames {
+        let (img, truth) = synth.render(i);
+        let r = est.estimate(img.view());
+        visibility_is_consistent(&r, &k);
+        let hidden: Vec<Joint> = LEGS
+            .into_iter()
+            .filter(|j| !truth.skeleton.visible[j.index()])
+            .collect();
+        if !hidden.is_empty() {
+            hidden_frames += 1;
+            shown += usize::from(hidden.iter().any(|j| r.skeleton.visible[j.index()]));
+        }
+    }
+    (shown, hidden_frames)
+}
+
 #[test]
 fn seated_at_rest_the_legs_out_of_view_are_not_reported() {
     // An older short woman seated at rest, 1.1 m, tracked: a leg's end found near the
@@ -409,23 +432,7 @@ fn seated_at_rest_the_legs_out_of_view_are_not_reported() {
     cfg.sensor_noise = false;
     cfg.seed = 24;
     let cfg = upper_body(cfg);
-    let k = cfg.intrinsics;
-    let mut synth = Synthesizer::new(cfg).expect("scene");
-    let mut est = PoseEstimator::new(k, PoseConfig::default());
-    let (mut shown, mut frames) = (0, 0);
-    for i in 0..130 {
-        let (img, truth) = synth.render(i);
-        let r = est.estimate(img.view());
-        visibility_is_consistent(&r, &k);
-        let hidden: Vec<Joint> = LEGS
-            .into_iter()
-            .filter(|j| !truth.skeleton.visible[j.index()])
-            .collect();
-        if !hidden.is_empty() {
-            frames += 1;
-            shown += usize::from(hidden.iter().any(|j| r.skeleton.visible[j.index()]));
-        }
-    }
+    let (shown, frames) = hidden_legs_shown(cfg, 130);
     assert!(frames > 100, "{frames} frames with the legs out of view");
     // The bar: hidden lower joints reported so in 99 % of such frames. (32
     // of 130 frames failed before the rules for a leg's end near the hip; 16 before
@@ -452,23 +459,7 @@ fn seated_at_rest_a_hand_in_the_lap_is_no_leg_end() {
     cfg.sensor_noise = false;
     cfg.seed = SceneConfig::default().seed + 1;
     let cfg = upper_body(cfg);
-    let k = cfg.intrinsics;
-    let mut synth = Synthesizer::new(cfg).expect("scene");
-    let mut est = PoseEstimator::new(k, PoseConfig::default());
-    let (mut shown, mut frames) = (0, 0);
-    for i in 0..120 {
-        let (img, truth) = synth.render(i);
-        let r = est.estimate(img.view());
-        visibility_is_consistent(&r, &k);
-        let hidden: Vec<Joint> = LEGS
-            .into_iter()
-            .filter(|j| !truth.skeleton.visible[j.index()])
-            .collect();
-        if !hidden.is_empty() {
-            frames += 1;
-            shown += usize::from(hidden.iter().any(|j| r.skeleton.visible[j.index()]));
-        }
-    }
+    let (shown, frames) = hidden_legs_shown(cfg, 120);
     assert!(frames > 100, "{frames} frames with the legs out of view");
     // (6 of 120 frames failed before the rule for a foot fitted at the hip's height;
     // 1 with it.)

@@ -1,6 +1,7 @@
 use super::solver::bone_steps;
 use super::*;
 use crate::body::{BodyConfig, Posed, Shape};
+use crate::view::testing::frame_of;
 use airglyph_core::{Intrinsics, Joint, Skeleton};
 use nalgebra::{Rotation3, Unit, Vector3};
 
@@ -70,17 +71,6 @@ fn scene() -> (BodyTemplate, Intrinsics) {
     let bones = crate::body::Limbs::from_config(&BodyConfig::default());
     let t = BodyTemplate::from_shape(&Shape::makehuman(), &bones);
     (t, Intrinsics::default().scaled_to(320, 240))
-}
-
-fn frame_of<'a>(points: &'a [Point3<f32>], mask: &'a [bool], k: &'a Intrinsics) -> Frame<'a> {
-    Frame {
-        points,
-        mask,
-        width: k.width as usize,
-        height: k.height as usize,
-        k,
-        floor: None,
-    }
 }
 
 /// Nothing hidden last frame.
