@@ -234,6 +234,8 @@ struct Row {
     held_out: bool,
     summary: Summary,
     px_upper: f64,
+    /// The same by joint, as real frames are scored against Skeltrack's.
+    px_by_joint: [Option<f64>; UPPER.len()],
     at_rest_cm: Option<f64>,
 }
 
@@ -296,6 +298,12 @@ fn main() {
                 v["noise"] = row.noise.into();
                 v["held_out"] = row.held_out.into();
                 v["px_upper"] = row.px_upper.into();
+                v["px_by_joint"] = UPPER
+                    .iter()
+                    .zip(&row.px_by_joint)
+                    .map(|(j, px)| (j.name().to_string(), serde_json::json!(px)))
+                    .collect::<serde_json::Map<_, _>>()
+                    .into();
                 v["at_rest_cm"] = row.at_rest_cm.into();
                 writeln!(f, "{v}").expect("json written");
             }
@@ -325,7 +333,7 @@ fn run(
     let k = synth.intrinsics();
     let mut est = PoseEstimator::new(k, pcfg.clone());
     let mut ev = PoseEval::default();
-    let (mut px_sum, mut px_n) = (0.0f64, 0usize);
+    let mut px_by_joint = [(0.0f64, 0usize); UPPER.len()];
     let (mut rest_sum, mut rest_n) = (0.0f64, 0usize);
     let scale = 640.0 / k.width as f64;
     for i in (0..how.frames).step_by(if how.single { how.every } else { 1 }) {
@@ -341,10 +349,10 @@ fn run(
         ev.seconds += t.elapsed().as_secs_f64();
         let fe = ev.add(&r, &truth.skeleton, &k);
         if r.person_found {
-            for j in UPPER {
-                if let Some(d) = pixel_distance(&k, &truth.skeleton, &r.skeleton, j) {
-                    px_sum += d * scale;
-                    px_n += 1;
+            for (j, (sum, n)) in UPPER.iter().zip(&mut px_by_joint) {
+                if let Some(d) = pixel_distance(&k, &truth.skeleton, &r.skeleton, *j) {
+                    *sum += d * scale;
+                    *n += 1;
                 }
             }
             // At rest: neither drawing nor moving the hand about (the rest motion,
@@ -378,7 +386,13 @@ fn run(
         noise,
         held_out: kind.held_out,
         summary: ev.summary(),
-        px_upper: px_sum / px_n.max(1) as f64,
+        px_upper: {
+            let (sum, n) = px_by_joint
+                .iter()
+                .fold((0.0, 0), |(s, n), (js, jn)| (s + js, n + jn));
+            sum / n.max(1) as f64
+        },
+        px_by_joint: px_by_joint.map(|(sum, n)| (n > 0).then(|| sum / n as f64)),
         at_rest_cm: (rest_n > 0).then(|| rest_sum / rest_n as f64 * 100.0),
     }
 }
