@@ -68,20 +68,46 @@ fn around(d: &Vector3<f32>, angle: f32) -> Vec<Vector3<f32>> {
 }
 
 impl Registration {
-    /// `start` with each arm moved to the best pose of a search over directions (the
-    /// rest of the body as it is).
+    /// `start` with its arms moved to the best poses of a search over directions (the
+    /// rest of the body as it is): each arm searched on its own and, when that puts
+    /// the hands together or crossed, also the right arm searched with the left as
+    /// found and the other way round. An arm searched on its own can take the other's
+    /// hand, when it explains more points there than on itself (its own hanging
+    /// against the body): both then hold one hand. One searched with the other held
+    /// counts the other's points as explained; but two hands close together can then
+    /// end swapped, each forearm on the other's points, which the energy scores as
+    /// well, so the caller drops a fit of those whose hands cross ([`hands_crossed`]).
     pub fn search_arms(
         &self,
         f: &Frame,
         t: &BodyTemplate,
         start: &BodyPose,
         cfg: &RegisterConfig,
-    ) -> BodyPose {
-        let mut pose = *start;
-        for arm in ARMS {
-            pose = self.search_arm(f, t, &pose, arm, cfg);
+    ) -> Searched {
+        let [left, right] = ARMS;
+        let alone = |arm| self.search_arm(f, t, start, arm, Others::Unseen, cfg);
+        let (left_alone, right_alone) = (alone(left), alone(right));
+        let mut both_alone = left_alone;
+        for s in [right.upper, right.fore] {
+            both_alone.rotation[s.index()] = right_alone.rotation[s.index()];
         }
-        pose
+        // Hands found apart and uncrossed are each arm's own: the second search would
+        // double the cost of a detection for nothing.
+        let together = {
+            let s = Posed::new(t, &both_alone).skeleton(t);
+            (s[Joint::LeftHand] - s[Joint::RightHand]).norm() < TOGETHER
+                || hands_crossed(t, &both_alone)
+        };
+        let held = together.then(|| {
+            [
+                self.search_arm(f, t, &left_alone, right, Others::Held, cfg),
+                self.search_arm(f, t, &right_alone, left, Others::Held, cfg),
+            ]
+        });
+        Searched {
+            alone: both_alone,
+            held,
+        }
     }
 
     fn search_arm(
@@ -90,6 +116,7 @@ impl Registration {
         t: &BodyTemplate,
         start: &BodyPose,
         arm: Arm,
+        other: Others,
         cfg: &RegisterConfig,
     ) -> BodyPose {
         let posed = Posed::new(t, start);
@@ -100,7 +127,10 @@ impl Registration {
         // The points the arm could explain, and how well the rest of the body does.
         let rest: Vec<Placed> = place(t, &posed)
             .into_iter()
-            .filter(|c| !is_arm(c.segment))
+            .filter(|c| match other {
+                Others::Unseen => !is_arm(c.segment),
+                Others::Held => c.segment != arm.upper && c.segment != arm.fore,
+            })
             .collect();
         let near: Vec<(Point3<f32>, f32, f32)> = self
             .data
@@ -226,6 +256,42 @@ impl Registration {
         }
         e
     }
+}
+
+/// Hands nearer each other than this, metres, may be one hand taken by both arms.
+const TOGETHER: f32 = 0.2;
+
+/// How far the hands may lie past each other along the shoulders' line before they
+/// count as crossed, metres.
+const CROSSED: f32 = 0.05;
+
+/// The arms of [`Registration::search_arms`].
+#[derive(Debug, Clone, Copy)]
+pub struct Searched {
+    /// Each arm searched on its own.
+    pub alone: BodyPose,
+    /// The right arm searched with the left held, and the left with the right, when
+    /// the arms searched alone put the hands together or crossed.
+    pub held: Option<[BodyPose; 2]>,
+}
+
+/// The left hand on the right of the right one, along the shoulders' line.
+pub fn hands_crossed(t: &BodyTemplate, pose: &BodyPose) -> bool {
+    let s = Posed::new(t, pose).skeleton(t);
+    let Some(across) = (s[Joint::LeftShoulder] - s[Joint::RightShoulder]).try_normalize(1e-6)
+    else {
+        return false;
+    };
+    (s[Joint::LeftHand] - s[Joint::RightHand]).dot(&across) < -CROSSED
+}
+
+/// Whether an arm's search counts the other arm as part of the rest of the body.
+#[derive(Debug, Clone, Copy)]
+enum Others {
+    /// Not: its pose is the start's, which may be wrong.
+    Unseen,
+    /// As it is: it was searched already.
+    Held,
 }
 
 fn is_arm(s: Segment) -> bool {

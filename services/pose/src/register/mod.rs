@@ -125,7 +125,9 @@ impl Registration {
     /// it, camera frame, if any). Its `free` starts race with only the tips near their own limbs' ends, and the
     /// starts are judged without the tips' term: a tip is a guide, not evidence. With
     /// `search`, the arms are also searched for on the winner of the starts
-    /// ([`Registration::search_arms`]), which then races once more (as a free start).
+    /// ([`Registration::search_arms`]: each arm alone and, when that puts the hands
+    /// together, each with the other held), each result then racing once more (as a
+    /// free start).
     /// `None` without a start.
     pub fn fit(
         &self,
@@ -200,19 +202,25 @@ impl Registration {
         // local method keeps an arm where its start put it.
         if search {
             let searched = self.search_arms(f, t, &b.pose, cfg);
-            let own = agreeing(&searched);
-            let fit = self.run(
-                &Problem {
-                    tips: &own,
-                    ..problem
-                },
-                searched,
-                race,
-                true,
-            );
-            passes += fit.passes;
-            if evidence(&fit) < evidence(&b) {
-                b = fit;
+            // A held search's fit whose hands end crossed has each forearm on the
+            // other's points: not a pose the search was for.
+            let held = searched.held.into_iter().flatten().map(|p| (p, true));
+            for (pose, held) in std::iter::once((searched.alone, false)).chain(held) {
+                let own = agreeing(&pose);
+                let fit = self.run(
+                    &Problem {
+                        tips: &own,
+                        ..problem
+                    },
+                    pose,
+                    race,
+                    true,
+                );
+                passes += fit.passes;
+                let crossed = held && arm_search::hands_crossed(t, &fit.pose);
+                if !crossed && evidence(&fit) < evidence(&b) {
+                    b = fit;
+                }
             }
         }
         let kept = agreeing(&b.pose);

@@ -374,6 +374,47 @@ fn a_run_that_stops_early_is_measured_where_it_stopped() {
     );
 }
 
+#[test]
+fn an_arm_searched_for_does_not_take_the_other_arms_hand() {
+    let (t, k) = scene();
+    // The truth, 1.2 m away: the left arm hanging at the side, against the body, with
+    // no geodesic maximum; the right forearm held forward before the chest. Searched on
+    // its own, the left arm explains more points on the right forearm than on itself.
+    let mut truth = facing(Point3::new(0.0, 0.1, 1.2));
+    let mut w = [Vector3::zeros(); Segment::COUNT];
+    w[Segment::RightUpperArm.index()] = Vector3::x() * -0.6;
+    w[Segment::RightForearm.index()] = Vector3::x() * -1.0;
+    truth.step(&Vector3::zeros(), &w);
+    let (points, mask) = render(&t, &truth, &k);
+    let frame = frame_of(&points, &mask, &k);
+    // The start: the left arm across the chest, its hand on the right one.
+    let mut crossed = Posed::new(&t, &truth).skeleton(&t);
+    let (shoulder, hand) = (crossed[Joint::LeftShoulder], crossed[Joint::RightHand]);
+    crossed.set(
+        Joint::LeftElbow,
+        nalgebra::center(&shoulder, &hand) + Vector3::new(0.0, 0.05, -0.1),
+    );
+    crossed.set(Joint::LeftHand, hand + Vector3::new(0.03, 0.0, 0.0));
+    let start = BodyPose::from_skeleton(&t, &crossed).expect("a body");
+    let mut cfg = RegisterConfig::default();
+    cfg.sampling.interior_stride = 1;
+    let posed = Posed::new(&t, &truth);
+    let mut tips = t.tips.map(|(s, local)| Some(posed.point(s, &local)));
+    tips[crate::Limb::LeftArm.index()] = None;
+    let mut reg = Registration::default();
+    reg.prepare(&frame, &cfg.sampling);
+    let left_hand_off = |pose: &BodyPose| {
+        (Posed::new(&t, pose).skeleton(&t)[Joint::LeftHand] - posed.skeleton(&t)[Joint::LeftHand])
+            .norm()
+    };
+    assert!(left_hand_off(&start) > 0.3);
+    let fit = reg
+        .fit(&frame, &t, &racing(vec![start], tips, &cfg), &SEEN, true)
+        .expect("a start");
+    let off = left_hand_off(&fit.pose);
+    assert!(off < 0.05, "the left hand {off} m off");
+}
+
 /// Starts that follow the tips, with the settings `cfg`.
 fn racing(
     poses: Vec<BodyPose>,
