@@ -204,8 +204,8 @@ impl Registration {
             let searched = self.search_arms(f, t, &b.pose, cfg);
             // A held search's fit whose hands end crossed has each forearm on the
             // other's points: not a pose the search was for.
-            let held = searched.held.into_iter().flatten().map(|p| (p, true));
-            for (pose, held) in std::iter::once((searched.alone, false)).chain(held) {
+            let held_poses = searched.held.into_iter().flatten().map(|p| (p, true));
+            for (pose, held) in std::iter::once((searched.alone, false)).chain(held_poses) {
                 let own = agreeing(&pose);
                 let fit = self.run(
                     &Problem {
