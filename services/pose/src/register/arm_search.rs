@@ -13,7 +13,7 @@ use super::capsules::{place, Placed};
 use super::energy::{cauchy_cost, front_surface, huber};
 use super::{Frame, RegisterConfig, Registration};
 use crate::body::{shortest_turn, BodyPose, BodyTemplate, Posed, Segment};
-use airglyph_core::Joint;
+use airglyph_core::{Joint, Skeleton};
 use nalgebra::{Point3, Rotation3, Vector3};
 
 /// One arm's segments and its hand joint.
@@ -95,8 +95,7 @@ impl Registration {
         // double the cost of a detection for nothing.
         let together = {
             let s = Posed::new(t, &both_alone).skeleton(t);
-            (s[Joint::LeftHand] - s[Joint::RightHand]).norm() < TOGETHER
-                || hands_crossed(t, &both_alone)
+            (s[Joint::LeftHand] - s[Joint::RightHand]).norm() < TOGETHER || hands_crossed(&s)
         };
         let held = together.then(|| {
             [
@@ -276,8 +275,7 @@ pub struct Searched {
 }
 
 /// The left hand on the right of the right one, along the shoulders' line.
-pub fn hands_crossed(t: &BodyTemplate, pose: &BodyPose) -> bool {
-    let s = Posed::new(t, pose).skeleton(t);
+pub fn hands_crossed(s: &Skeleton) -> bool {
     let Some(across) = (s[Joint::LeftShoulder] - s[Joint::RightShoulder]).try_normalize(1e-6)
     else {
         return false;

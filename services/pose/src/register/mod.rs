@@ -217,7 +217,10 @@ impl Registration {
                     true,
                 );
                 passes += fit.passes;
-                let crossed = held && arm_search::hands_crossed(t, &fit.pose);
+                let crossed = held
+                    && arm_search::hands_crossed(
+                        &crate::body::Posed::new(t, &fit.pose).skeleton(t),
+                    );
                 if !crossed && evidence(&fit) < evidence(&b) {
                     b = fit;
                 }
