@@ -255,7 +255,10 @@ fn main() {
     shape.chest = centre(origin_in(s0, Abdomen, Chest));
     shape.neck = centre(mean(&|s| joint_in(s, Chest, Joint::Neck)));
     shape.torso = centre(mean(&|s| joint_in(s, Chest, Joint::Torso)));
-    shape.head = centre(mean(&|s| joint_in(s, Head, Joint::Head)));
+    // The truth's head is the top of the head; the skull's centre (`shape.head`, where
+    // the seed's head chain ends) is not among the truth's joints and stays as measured
+    // before the head joint moved to the top (pose NOTES, 2026-12-06, evening).
+    shape.crown = centre(mean(&|s| joint_in(s, Head, Joint::Head)));
     let pair = |seg: Segment, l: Joint, r: Joint| {
         let a = mean(&|s| joint_in(s, seg, l));
         let b = mean(&|s| {
@@ -310,7 +313,7 @@ fn main() {
     shape.ankle = lr(LeftShin, RightShin, Joint::LeftFoot, Joint::RightFoot);
     for (name, j, seg) in [
         ("neck", Joint::Neck, Chest),
-        ("head", Joint::Head, Head),
+        ("crown", Joint::Head, Head),
         ("shoulder", Joint::LeftShoulder, Chest),
         ("hand", Joint::LeftHand, LeftForearm),
         ("ankle", Joint::LeftFoot, LeftShin),

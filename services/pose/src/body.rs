@@ -185,6 +185,9 @@ pub struct BodyTemplate {
     /// The extremity of each limb of [`crate::Limb::ALL`] (top of the head, fingertips,
     /// toes): where its geodesic maximum lies.
     pub tips: [(Segment, Point3<f32>); 5],
+    /// The top of the head in the head's frame: the head joint reported, where the
+    /// template's own skeletons carry the skull's centre ([`Shape::crown`]).
+    pub crown: Point3<f32>,
 }
 
 /// A capsule of a [`Shape`]: endpoints in its segment's frame, where a limb segment's y
@@ -223,8 +226,13 @@ pub struct Shape {
     pub shoulder: [f32; 3],
     /// Pelvis frame: the left hip.
     pub hip: [f32; 3],
-    /// The head joint (centre of the skull), head frame.
+    /// The skull's centre, head frame: the head the registration's own skeletons carry
+    /// (the seed's head chain ends there, and a start turns the head onto it).
     pub head: [f32; 3],
+    /// The top of the head, head frame: the head joint reported
+    /// ([`airglyph_core::Joint::Head`]).
+    #[serde(default = "Shape::makehuman_crown")]
+    pub crown: [f32; 3],
     /// The elbow in the upper arm's frame, the hand (palm centre) in the forearm's, the
     /// knee in the thigh's, the ankle in the shin's.
     pub elbow: [f32; 3],
@@ -246,6 +254,11 @@ pub struct Shape {
 }
 
 impl Shape {
+    /// The MakeHuman body's top of the head (`crown`), for settings written before it.
+    fn makehuman_crown() -> [f32; 3] {
+        [0.000, 0.231, 0.084]
+    }
+
     /// The MakeHuman body of airglyph-synth, as `examples/fit_template.rs` measures it
     /// (scripted poses and a boxing clip, not the evaluation's clips).
     pub fn makehuman() -> Self {
@@ -266,6 +279,7 @@ impl Shape {
             shoulder: [0.149, -0.014, 0.006],
             hip: [0.110, 0.000, 0.000],
             head: [0.000, 0.094, 0.101],
+            crown: Self::makehuman_crown(),
             elbow: [0.000, -1.003, 0.000],
             hand: [0.027, -0.982, 0.005],
             knee: [0.000, -1.003, 0.000],
@@ -525,6 +539,7 @@ impl BodyTemplate {
             capsules,
             joints,
             tips: [(Head, p3(shape.head_tip)), lfinger, rfinger, ltoe, rtoe],
+            crown: p3(shape.crown),
         };
         debug_assert!(Joint::ALL
             .iter()

@@ -492,7 +492,7 @@ impl PoseEstimator {
             let reg = &mut s.registration;
             register_body(reg, &frame, t, &seed, &torso.pose, body, calib, cfg, d)?
         } else {
-            seed.skeleton
+            seed.reported()
         };
         self.times.register = lap.lap();
         // 8. Which joints the camera could see: a joint out of view is reported so,
@@ -873,6 +873,19 @@ struct Seed {
     race: bool,
 }
 
+impl Seed {
+    /// The skeleton as reported: the head chain ends at the skull's centre, which the
+    /// registration's starts are turned onto; the head reported is the top of the head,
+    /// where its geodesic maximum lies (when one was assigned).
+    fn reported(&self) -> Skeleton {
+        let mut s = self.skeleton;
+        if let Some(top) = self.tips[Limb::Head.index()] {
+            s.set(Joint::Head, top);
+        }
+        s
+    }
+}
+
 /// Step 6: the seed's skeleton: the torso's key points and, when racing, a two-joint
 /// chain per limb fitted to its target points.
 #[allow(clippy::too_many_arguments)]
@@ -1051,9 +1064,14 @@ fn register_body(
             d.body = Some((b.pose, tpl));
         }
     }
-    let Some((mut skel, hands)) = placed else {
+    let Some(Fitted {
+        skeleton: mut skel,
+        hands,
+        head_top,
+    }) = placed
+    else {
         if seed.race {
-            return Some(seed.skeleton);
+            return Some(seed.reported());
         }
         // Neither chains nor a registered body: the frame is lost.
         t.body = None;
@@ -1069,6 +1087,9 @@ fn register_body(
             skel.set(j, h);
         }
     }
+    // The template's skeleton carries the skull's centre, which the chains' state
+    // follows; the head reported is the top of the head.
+    skel.set(Joint::Head, head_top);
     Some(skel)
 }
 
@@ -1107,7 +1128,7 @@ fn fitted_joints(
     tips: &[Option<Point3<f32>>; 5],
     frame: &Frame,
     cfg: &PoseConfig,
-) -> Option<(Skeleton, [Option<Point3<f32>>; 2])> {
+) -> Option<Fitted> {
     let posed = Posed::new(tpl, &b.pose);
     let mut skel = posed.skeleton(tpl);
     if !skel.is_finite() {
@@ -1119,5 +1140,19 @@ fn fitted_joints(
     }
     hands_at_fingertips(&mut skel, &posed, tpl, tips, &cfg.hands, &cfg.chains);
     let hands = hands_at_their_points(&skel, frame, tpl, &posed, &cfg.hands);
-    Some((skel, hands))
+    Some(Fitted {
+        skeleton: skel,
+        hands,
+        head_top: posed.point(Segment::Head, &tpl.crown),
+    })
+}
+
+/// A registered body's joints ([`fitted_joints`]).
+struct Fitted {
+    /// The template's skeleton (its head the skull's centre), the hands at their tips.
+    skeleton: Skeleton,
+    /// Where each hand (left, right) lies among its points, if it was placed.
+    hands: [Option<Point3<f32>>; 2],
+    /// The top of the head: the head joint reported.
+    head_top: Point3<f32>,
 }

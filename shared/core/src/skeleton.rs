@@ -1,18 +1,18 @@
-//! The 16 joints and the skeleton of one frame. Each joint is an anatomical centre
-//! inside the body: head = centre of the skull, hand = centre of the palm, foot = the
-//! ankle, torso = mid-chest on the spine, pelvis = between the hips (docs/architecture.md,
-//! "Camera frame and joints").
+//! The 16 joints and the skeleton of one frame. Each joint but the head is an anatomical
+//! centre inside the body: hand = centre of the palm, foot = the ankle, torso = mid-chest
+//! on the spine, pelvis = between the hips; the head is the top of the head, where
+//! hand-labelled frames put it (docs/architecture.md, "Camera frame and joints").
 
 use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 
-/// One of the 16 joints, each an anatomical centre inside the body. "Left" is the
-/// person's left. The discriminant is the joint's index in every array and file.
+/// One of the 16 joints, each an anatomical centre inside the body but the head (the
+/// top of the head). "Left" is the person's left. The discriminant is the joint's index in every array and file.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 #[repr(u8)]
 pub enum Joint {
-    /// Centre of the skull.
+    /// The top of the head (the crown).
     Head,
     /// Base of the neck.
     Neck,

@@ -88,6 +88,8 @@ pub struct Body {
     pub(crate) bones: Vec<RigBone>,
     /// Ground-truth joints: (rig bone, rest position).
     pub(crate) joints: [(usize, Point3<f32>); Joint::COUNT],
+    /// The skull's centre: (rig bone, rest position).
+    pub(crate) skull: (usize, Point3<f32>),
     pub(crate) tpose: TposeSkeleton,
 }
 
@@ -194,6 +196,7 @@ impl Body {
         weights: Vec<[(u16, f32); 4]>,
         mut bones: Vec<RigBone>,
         joints: [(usize, Point3<f32>); Joint::COUNT],
+        skull: (usize, Point3<f32>),
     ) -> Result<Body, SynthError> {
         for c in Bone::ALL {
             let n = bones.iter().filter(|b| b.canon == Some(c)).count();
@@ -235,10 +238,12 @@ impl Body {
             weights,
             bones,
             joints,
+            skull,
             tpose: TposeSkeleton {
                 head: [Point3::origin(); Bone::COUNT],
                 tail: [Point3::origin(); Bone::COUNT],
                 joints: [Point3::origin(); Joint::COUNT],
+                skull: Point3::origin(),
             },
         };
         // The T-pose: every canonical rotation identity.
@@ -257,6 +262,7 @@ impl Body {
             }
         }
         body.tpose.joints = body.joints_from(&xf);
+        body.tpose.skull = xf[body.skull.0].apply(&body.skull.1);
         // Labels: each triangle takes the canonical bone of its first vertex's heaviest
         // influence (or of that bone's nearest driven ancestor).
         let canon_of: Vec<u8> = (0..body.bones.len())
@@ -562,8 +568,10 @@ fn build_procedural(p: &ProceduralBody) -> Result<Body, SynthError> {
         bone(RightFoot, ankle(-1.0), toe(-1.0)),
     ];
     let palm = |s: f32| pt(s * (sh_x + ua + fa + 0.42 * hand), sh_y, 0.0);
+    // The top of the head: the skull's ellipsoid's top.
+    let crown = pt(0.0, 0.935 + 0.064, 0.008);
     let joints = [
-        (Head.index(), skull),
+        (Head.index(), crown),
         (Neck.index(), neck),
         (Chest.index(), pt(0.0, 0.735, -0.004)),
         (Hips.index(), hips),
@@ -592,5 +600,6 @@ fn build_procedural(p: &ProceduralBody) -> Result<Body, SynthError> {
         weights,
         bones,
         joints,
+        (Head.index(), skull),
     )
 }

@@ -272,6 +272,9 @@ pub struct TposeSkeleton {
     pub tail: [Point3<f32>; Bone::COUNT],
     /// Ground-truth joints (airglyph-core's [`airglyph_core::Joint`] order) in the T-pose.
     pub joints: [Point3<f32>; airglyph_core::Joint::COUNT],
+    /// The skull's centre in the T-pose: where motions put a hand by the face (the
+    /// head joint is the top of the head).
+    pub skull: Point3<f32>,
 }
 
 impl TposeSkeleton {

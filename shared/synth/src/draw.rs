@@ -146,7 +146,7 @@ impl Drawing {
         let lift = rest.root - sk.head(Bone::Hips);
         let shoulder = sk.joint(Joint::RightShoulder) + lift;
         let chest = sk.joint(Joint::Torso) + lift;
-        let head = sk.joint(Joint::Head) + lift;
+        let head = sk.skull + lift;
         let frames = |secs: f32| (secs * fps).round().max(1.0) as usize;
         let mut targets: Vec<Point3<f32>> = Vec::new();
         let mut gestures = Vec::new();

@@ -3,9 +3,9 @@
 //! A [`Synthesizer`] renders a person into 16-bit depth frames (millimetres, 0 = no
 //! data) with the pinhole intrinsics of airglyph-core, and reports the 16 ground-truth
 //! joints of airglyph-core for every frame, at anatomical joint centres inside the body
-//! (head = skull centre, hand = palm centre, foot = ankle, torso = mid-chest on the
-//! spine, pelvis = between the hips), in the camera frame (docs/architecture.md, "Camera
-//! frame and joints").
+//! (hand = palm centre, foot = ankle, torso = mid-chest on the spine, pelvis = between
+//! the hips) but for the head, the top of the head, in the camera frame
+//! (docs/architecture.md, "Camera frame and joints").
 //!
 //! ```no_run
 //! use airglyph_synth::{SceneConfig, Synthesizer, MotionSpec, ScriptedPose, Background};

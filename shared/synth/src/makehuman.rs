@@ -455,22 +455,43 @@ pub fn load_shaped(dir: &Path, shape: &MakeHumanShape) -> Result<Body, SynthErro
     let b = |n: &str| -> Result<&RigBone, SynthError> { Ok(&bones[bone_index(n)?]) };
     let lerp = |a: Point3<f32>, c: Point3<f32>, t: f32| a + (c - a) * t;
     let mut joints = [(0usize, Point3::origin()); Joint::COUNT];
-    // Skull centre: the centroid of the vertices the head bone alone moves.
+    // The skull's centre: the centroid of the vertices the head bone alone moves; the
+    // head joint is the top of the head above it: the centroid of those vertices
+    // within 5 mm of the highest.
     let head_bone = bone_index("Head")?;
-    let (mut sum, mut n) = (nalgebra::Vector3::zeros(), 0);
-    for (v, w) in verts.iter().zip(&weights) {
-        if w[0].0 as usize == head_bone && w[0].1 > 0.99 {
-            sum += v.coords;
-            n += 1;
-        }
-    }
     let head = b("Head")?;
-    let skull = if n > 100 {
-        Point3::from(sum / n as f32)
+    // The body stands upright at rest, its head level: "highest" is the rest's up.
+    let up = nalgebra::Vector3::y();
+    let skull_verts: Vec<Point3<f32>> = verts
+        .iter()
+        .zip(&weights)
+        .filter(|(_, w)| w[0].0 as usize == head_bone && w[0].1 > 0.99)
+        .map(|(v, _)| *v)
+        .collect();
+    let (skull, crown) = if skull_verts.len() > 100 {
+        let n = skull_verts.len() as f32;
+        let skull = Point3::from(
+            skull_verts
+                .iter()
+                .fold(nalgebra::Vector3::zeros(), |s, v| s + v.coords)
+                / n,
+        );
+        let height = |v: &Point3<f32>| (v - head.head).dot(&up);
+        let top = skull_verts.iter().map(height).fold(f32::MIN, f32::max);
+        let cap: Vec<&Point3<f32>> = skull_verts
+            .iter()
+            .filter(|v| height(v) > top - 0.005)
+            .collect();
+        let crown = Point3::from(
+            cap.iter()
+                .fold(nalgebra::Vector3::zeros(), |s, v| s + v.coords)
+                / cap.len() as f32,
+        );
+        (skull, crown)
     } else {
-        lerp(head.head, head.tail, 0.5)
+        (lerp(head.head, head.tail, 0.5), head.tail)
     };
-    joints[Joint::Head.index()] = (head_bone, skull);
+    joints[Joint::Head.index()] = (head_bone, crown);
     joints[Joint::Neck.index()] = (bone_index("Neck")?, b("Neck")?.head);
     let chest = b("Spine1")?;
     joints[Joint::Torso.index()] = (bone_index("Spine1")?, lerp(chest.head, chest.tail, 0.4));
@@ -514,5 +535,13 @@ pub fn load_shaped(dir: &Path, shape: &MakeHumanShape) -> Result<Body, SynthErro
     } else {
         format!("makehuman cmu_mb ({})", shape.label())
     };
-    Body::finish(name, verts, tris, weights, bones, joints)
+    Body::finish(
+        name,
+        verts,
+        tris,
+        weights,
+        bones,
+        joints,
+        (head_bone, skull),
+    )
 }

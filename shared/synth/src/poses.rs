@@ -117,7 +117,7 @@ impl ScriptedPose {
         posture.apply(sk, &mut p);
         let lift = p.root - sk.head(Bone::Hips);
         let h = height(sk);
-        let head = sk.joint(Joint::Head) + lift;
+        let head = sk.skull + lift;
         match self {
             ScriptedPose::Neutral => {}
             ScriptedPose::TPose => {
