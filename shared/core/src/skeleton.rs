@@ -7,7 +7,8 @@ use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 
 /// One of the 16 joints, each an anatomical centre inside the body but the head (the
-/// top of the head). "Left" is the person's left. The discriminant is the joint's index in every array and file.
+/// top of the head). "Left" is the person's left. The discriminant is the joint's index
+/// in every array and file.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 #[repr(u8)]

@@ -502,7 +502,8 @@ fn build_procedural(p: &ProceduralBody) -> Result<Body, SynthError> {
         Bone::Neck,
     );
     let skull = pt(0.0, 0.935, 0.008);
-    mb.ellipsoid(skull, v(0.044, 0.064, 0.054), 1, Bone::Head);
+    let skull_radii = v(0.044, 0.064, 0.054);
+    mb.ellipsoid(skull, skull_radii, 1, Bone::Head);
     // Arms.
     for (s, c, u, f, hb) in [
         (
@@ -568,8 +569,7 @@ fn build_procedural(p: &ProceduralBody) -> Result<Body, SynthError> {
         bone(RightFoot, ankle(-1.0), toe(-1.0)),
     ];
     let palm = |s: f32| pt(s * (sh_x + ua + fa + 0.42 * hand), sh_y, 0.0);
-    // The top of the head: the skull's ellipsoid's top.
-    let crown = pt(0.0, 0.935 + 0.064, 0.008);
+    let crown = skull + Vector3::y() * skull_radii.y;
     let joints = [
         (Head.index(), crown),
         (Neck.index(), neck),
