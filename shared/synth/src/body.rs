@@ -88,8 +88,6 @@ pub struct Body {
     pub(crate) bones: Vec<RigBone>,
     /// Ground-truth joints: (rig bone, rest position).
     pub(crate) joints: [(usize, Point3<f32>); Joint::COUNT],
-    /// The skull's centre: (rig bone, rest position).
-    pub(crate) skull: (usize, Point3<f32>),
     pub(crate) tpose: TposeSkeleton,
 }
 
@@ -238,7 +236,6 @@ impl Body {
             weights,
             bones,
             joints,
-            skull,
             tpose: TposeSkeleton {
                 head: [Point3::origin(); Bone::COUNT],
                 tail: [Point3::origin(); Bone::COUNT],
@@ -262,7 +259,7 @@ impl Body {
             }
         }
         body.tpose.joints = body.joints_from(&xf);
-        body.tpose.skull = xf[body.skull.0].apply(&body.skull.1);
+        body.tpose.skull = xf[skull.0].apply(&skull.1);
         // Labels: each triangle takes the canonical bone of its first vertex's heaviest
         // influence (or of that bone's nearest driven ancestor).
         let canon_of: Vec<u8> = (0..body.bones.len())

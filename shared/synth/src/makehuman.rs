@@ -460,34 +460,24 @@ pub fn load_shaped(dir: &Path, shape: &MakeHumanShape) -> Result<Body, SynthErro
     // within 5 mm of the highest.
     let head_bone = bone_index("Head")?;
     let head = b("Head")?;
-    // The body stands upright at rest, its head level: "highest" is the rest's up.
-    let up = nalgebra::Vector3::y();
     let skull_verts: Vec<Point3<f32>> = verts
         .iter()
         .zip(&weights)
         .filter(|(_, w)| w[0].0 as usize == head_bone && w[0].1 > 0.99)
         .map(|(v, _)| *v)
         .collect();
+    let centroid = |vs: &[Point3<f32>]| {
+        Point3::from(vs.iter().map(|v| v.coords).sum::<nalgebra::Vector3<f32>>() / vs.len() as f32)
+    };
     let (skull, crown) = if skull_verts.len() > 100 {
-        let n = skull_verts.len() as f32;
-        let skull = Point3::from(
-            skull_verts
-                .iter()
-                .fold(nalgebra::Vector3::zeros(), |s, v| s + v.coords)
-                / n,
-        );
-        let height = |v: &Point3<f32>| (v - head.head).dot(&up);
-        let top = skull_verts.iter().map(height).fold(f32::MIN, f32::max);
-        let cap: Vec<&Point3<f32>> = skull_verts
+        // The body stands upright at rest (y up), its head level.
+        let top = skull_verts.iter().map(|v| v.y).fold(f32::MIN, f32::max);
+        let cap: Vec<Point3<f32>> = skull_verts
             .iter()
-            .filter(|v| height(v) > top - 0.005)
+            .filter(|v| v.y > top - 0.005)
+            .copied()
             .collect();
-        let crown = Point3::from(
-            cap.iter()
-                .fold(nalgebra::Vector3::zeros(), |s, v| s + v.coords)
-                / cap.len() as f32,
-        );
-        (skull, crown)
+        (centroid(&skull_verts), centroid(&cap))
     } else {
         (lerp(head.head, head.tail, 0.5), head.tail)
     };
