@@ -12,6 +12,7 @@ pub use crate::chains::ChainConfig;
 pub use crate::geodesic::GeodesicConfig;
 pub use crate::graph::GraphConfig;
 pub use crate::hands::HandsConfig;
+pub use crate::head_top::HeadConfig;
 pub use crate::register::{
     EnergyConfig, LengthsConfig, PriorsConfig, RaceConfig, RegisterConfig, SamplingConfig,
     SolverConfig,
@@ -50,6 +51,8 @@ pub struct PoseConfig {
     pub register: RegisterConfig,
     /// Where the hands go once the body is fitted.
     pub hands: HandsConfig,
+    /// Where the head joint (the top of the head) goes once the body is fitted.
+    pub head: HeadConfig,
     /// The bone lengths of the body fitted.
     pub body: BodyConfig,
     /// Learning the person's limb lengths.
@@ -71,6 +74,7 @@ impl Default for PoseConfig {
             chains: ChainConfig::default(),
             register: RegisterConfig::default(),
             hands: HandsConfig::default(),
+            head: HeadConfig::default(),
             body: BodyConfig::default(),
             calibrate: CalibrateConfig::default(),
             smoothing: SmoothingConfig::default(),

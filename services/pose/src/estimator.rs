@@ -12,6 +12,7 @@ use crate::dijkstra::Graph;
 use crate::geodesic::Geodesic;
 use crate::graph::{GeoGraph, NONE};
 use crate::hands::{hands_at_fingertips, hands_at_their_points};
+use crate::head_top::head_top_at_its_points;
 use crate::legs_seen::{leg_seen, LegEnd};
 use crate::neck::{neck_base, NeckBase};
 use crate::register::{
@@ -1140,10 +1141,12 @@ fn fitted_joints(
     }
     hands_at_fingertips(&mut skel, &posed, tpl, tips, &cfg.hands, &cfg.chains);
     let hands = hands_at_their_points(&skel, frame, tpl, &posed, &cfg.hands);
+    let head_top = head_top_at_its_points(frame, tpl, &posed, &cfg.head)
+        .unwrap_or_else(|| posed.point(Segment::Head, &tpl.crown));
     Some(Fitted {
         skeleton: skel,
         hands,
-        head_top: posed.point(Segment::Head, &tpl.crown),
+        head_top,
     })
 }
 

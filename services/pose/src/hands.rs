@@ -117,7 +117,9 @@ pub fn hands_at_their_points(
         let axis = (start - skel[elbow]).try_normalize(1e-6)?;
         // The forearm's points within reach of every step, found once: the hand moves
         // by centimetres.
-        let own: Vec<Point3<f32>> = near_pixels(frame, &start, 1.5 * radius)
+        let own: Vec<Point3<f32>> = frame
+            .pixels_near(&start, 1.5 * radius)
+            .map(|i| frame.points[i])
             .filter(|p| nearest_is(&placed, p, forearm))
             .collect();
         let mut h = start;
@@ -138,33 +140,6 @@ pub fn hands_at_their_points(
         }
         (h != start).then_some(h)
     })
-}
-
-/// The person's points within `reach` of `at`, searched in the image box its sphere
-/// projects into.
-fn near_pixels<'a>(
-    frame: &'a Frame,
-    at: &Point3<f32>,
-    reach: f32,
-) -> impl Iterator<Item = Point3<f32>> + 'a {
-    let (w, h) = (frame.width, frame.height);
-    let window = frame.k.project(at).filter(|_| at.z > reach).map(|(u, v)| {
-        let r = (reach * frame.k.fx.max(frame.k.fy) / (at.z - reach)).ceil();
-        let clamp = |x: f32, hi: usize| (x.max(0.0) as usize).min(hi);
-        (
-            clamp(u - r, w),
-            clamp(u + r + 1.0, w),
-            clamp(v - r, h),
-            clamp(v + r + 1.0, h),
-        )
-    });
-    let (u0, u1, v0, v1) = window.unwrap_or((0, 0, 0, 0));
-    let at = *at;
-    (v0..v1)
-        .flat_map(move |v| (u0..u1).map(move |u| v * w + u))
-        .filter(move |&i| frame.mask[i])
-        .map(move |i| frame.points[i])
-        .filter(move |p| p.z > 0.0 && (p - at).norm_squared() < reach * reach)
 }
 
 #[cfg(test)]

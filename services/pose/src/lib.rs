@@ -154,6 +154,7 @@ mod geodesic;
 mod geom;
 mod graph;
 mod hands;
+mod head_top;
 mod legs_seen;
 mod limb;
 pub mod metrics;

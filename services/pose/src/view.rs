@@ -126,8 +126,36 @@ impl Frame<'_> {
         })
     }
 
+    /// The person's pixels whose points lie within `reach` of `at`, searched in the
+    /// image box its sphere projects into.
+    pub(crate) fn pixels_near<'f>(
+        &'f self,
+        at: &Point3<f32>,
+        reach: f32,
+    ) -> impl Iterator<Item = usize> + 'f {
+        let (w, h) = (self.width, self.height);
+        let window = self.k.project(at).filter(|_| at.z > reach).map(|(u, v)| {
+            let r = (reach * self.k.fx.max(self.k.fy) / (at.z - reach)).ceil();
+            let clamp = |x: f32, hi: usize| (x.max(0.0) as usize).min(hi);
+            (
+                clamp(u - r, w),
+                clamp(u + r + 1.0, w),
+                clamp(v - r, h),
+                clamp(v + r + 1.0, h),
+            )
+        });
+        let (u0, u1, v0, v1) = window.unwrap_or((0, 0, 0, 0));
+        let at = *at;
+        (v0..v1)
+            .flat_map(move |v| (u0..u1).map(move |u| v * w + u))
+            .filter(move |&i| {
+                let p = self.points[i];
+                self.mask[i] && p.z > 0.0 && (p - at).norm_squared() < reach * reach
+            })
+    }
+
     /// Whether pixel `idx` lies in the image's last [`BORDER_PX`] pixels.
-    fn at_the_edge(&self, idx: usize) -> bool {
+    pub(crate) fn at_the_edge(&self, idx: usize) -> bool {
         let (u, v) = (idx % self.width, idx / self.width);
         u < BORDER_PX
             || v < BORDER_PX
@@ -197,8 +225,9 @@ impl Frame<'_> {
 pub(crate) mod testing {
     //! Frames for the steps' unit tests.
     use super::Frame;
+    use crate::body::{BodyPose, BodyTemplate, Posed};
     use airglyph_core::Intrinsics;
-    use nalgebra::Point3;
+    use nalgebra::{Point3, Vector3};
 
     /// A frame of 320×240 whose columns are the person's where `person` says so, at
     /// `person_z` metres, and elsewhere something at `other_z`: its points and mask.
@@ -219,6 +248,63 @@ pub(crate) mod testing {
             }
         }
         (points, mask, k)
+    }
+
+    /// The template's own surface seen by the camera `k` at `pose`: dense points on every
+    /// capsule splatted into a z-buffer.
+    pub(crate) fn rendered(
+        t: &BodyTemplate,
+        pose: &BodyPose,
+        k: &Intrinsics,
+    ) -> (Vec<Point3<f32>>, Vec<bool>) {
+        let (w, h) = (k.width as usize, k.height as usize);
+        let mut points = vec![Point3::origin(); w * h];
+        let mut mask = vec![false; w * h];
+        let posed = Posed::new(t, pose);
+        for c in &t.capsules {
+            let a = posed.point(c.segment, &c.a);
+            let b = posed.point(c.segment, &c.b);
+            let axis = b - a;
+            let len = axis.norm();
+            let along = axis / len.max(1e-6);
+            let side = along
+                .cross(&Vector3::z())
+                .try_normalize(1e-6)
+                .unwrap_or(Vector3::x());
+            let up = along.cross(&side);
+            // Rings 4 mm apart, the caps too: past both ends by a radius.
+            let reach = c.ra.max(c.rb);
+            let rings = ((len + 2.0 * reach) / 0.004).ceil() as usize;
+            for i in 0..=rings {
+                let s = i as f32 * 0.004 - reach;
+                for j in 0..120 {
+                    let th = std::f32::consts::TAU * j as f32 / 120.0;
+                    let tt = (s / len.max(1e-6)).clamp(0.0, 1.0);
+                    let r = c.ra + (c.rb - c.ra) * tt;
+                    let dir = side * th.cos() + up * th.sin();
+                    // Past the ends, the cap's sphere.
+                    let beyond = s - tt * len;
+                    if beyond.abs() > r {
+                        continue;
+                    }
+                    let rr = (r * r - beyond * beyond).sqrt();
+                    let p = a + along * s + dir * rr;
+                    let Some((u, v)) = k.project(&p) else {
+                        continue;
+                    };
+                    let (u, v) = (u.round() as i64, v.round() as i64);
+                    if u < 0 || v < 0 || u >= w as i64 || v >= h as i64 {
+                        continue;
+                    }
+                    let i = v as usize * w + u as usize;
+                    if !mask[i] || p.z < points[i].z {
+                        points[i] = p;
+                        mask[i] = true;
+                    }
+                }
+            }
+        }
+        (points, mask)
     }
 
     /// The frame of `points` and `mask` seen by `k`, no floor taken out.

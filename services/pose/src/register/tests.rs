@@ -1,62 +1,9 @@
 use super::solver::bone_steps;
 use super::*;
 use crate::body::{BodyConfig, Posed, Shape};
-use crate::view::testing::frame_of;
+use crate::view::testing::{frame_of, rendered};
 use airglyph_core::{Intrinsics, Joint, Skeleton};
 use nalgebra::{Rotation3, Unit, Vector3};
-
-/// The template's own surface seen by a 320×240 camera at `pose`: dense points on
-/// every capsule splatted into a z-buffer, so the registration must find the pose
-/// the body was drawn at.
-fn render(t: &BodyTemplate, pose: &BodyPose, k: &Intrinsics) -> (Vec<Point3<f32>>, Vec<bool>) {
-    let (w, h) = (k.width as usize, k.height as usize);
-    let mut points = vec![Point3::origin(); w * h];
-    let mut mask = vec![false; w * h];
-    let posed = Posed::new(t, pose);
-    for c in &t.capsules {
-        let a = posed.point(c.segment, &c.a);
-        let b = posed.point(c.segment, &c.b);
-        let axis = b - a;
-        let len = axis.norm();
-        let along = axis / len.max(1e-6);
-        let side = along
-            .cross(&Vector3::z())
-            .try_normalize(1e-6)
-            .unwrap_or(Vector3::x());
-        let up = along.cross(&side);
-        let rings = (len / 0.004).ceil() as usize + 1;
-        // The caps too: run past both ends by a radius.
-        for i in 0..=rings + 2 * 12 {
-            let s = i as f32 / rings as f32 * len - c.ra.max(c.rb);
-            for j in 0..120 {
-                let th = std::f32::consts::TAU * j as f32 / 120.0;
-                let tt = (s / len.max(1e-6)).clamp(0.0, 1.0);
-                let r = c.ra + (c.rb - c.ra) * tt;
-                let dir = side * th.cos() + up * th.sin();
-                // Past the ends, the cap's sphere.
-                let beyond = s - tt * len;
-                if beyond.abs() > r {
-                    continue;
-                }
-                let rr = (r * r - beyond * beyond).sqrt();
-                let p = a + along * s + dir * rr;
-                let Some((u, v)) = k.project(&p) else {
-                    continue;
-                };
-                let (u, v) = (u.round() as i64, v.round() as i64);
-                if u < 0 || v < 0 || u >= w as i64 || v >= h as i64 {
-                    continue;
-                }
-                let i = v as usize * w + u as usize;
-                if !mask[i] || p.z < points[i].z {
-                    points[i] = p;
-                    mask[i] = true;
-                }
-            }
-        }
-    }
-    (points, mask)
-}
 
 fn facing(at: Point3<f32>) -> BodyPose {
     let r = Rotation3::from_basis_unchecked(&[Vector3::x(), -Vector3::y(), -Vector3::z()]);
@@ -98,7 +45,7 @@ fn registration_finds_the_pose_a_body_was_drawn_at() {
     w[Segment::RightForearm.index()] = turn(Vector3::x(), -0.5);
     w[Segment::LeftShin.index()] = turn(Vector3::x(), 0.6);
     truth.step(&Vector3::zeros(), &w);
-    let (points, mask) = render(&t, &truth, &k);
+    let (points, mask) = rendered(&t, &truth, &k);
     let frame = frame_of(&points, &mask, &k);
     // The start: where a person moving fast was a frame before: 6 cm off, turned
     // 8° less, the arm 11° and 17° lower, the knee straighter.
@@ -146,7 +93,7 @@ fn an_arm_held_out_beside_the_silhouette_is_pulled_back_onto_it() {
     // hidden). Only the silhouette tells it is not there, and the arm lies beside
     // the person's pixels, not above or below them.
     let truth = facing(Point3::new(0.0, 0.1, 2.6));
-    let (points, mask) = render(&t, &truth, &k);
+    let (points, mask) = rendered(&t, &truth, &k);
     let frame = frame_of(&points, &mask, &k);
     let mut start = truth;
     let mut w = [Vector3::zeros(); Segment::COUNT];
@@ -287,7 +234,7 @@ fn only_a_bent_arm_tells_its_bones_apart() {
 fn the_better_start_wins_the_race() {
     let (t, k) = scene();
     let truth = facing(Point3::new(0.0, 0.1, 2.6));
-    let (points, mask) = render(&t, &truth, &k);
+    let (points, mask) = rendered(&t, &truth, &k);
     let frame = frame_of(&points, &mask, &k);
     // A start turned half round (back to the camera) cannot reach the truth in a
     // few steps; one a little off can.
@@ -332,7 +279,7 @@ fn the_better_start_wins_the_race() {
 fn a_run_that_stops_early_is_measured_where_it_stopped() {
     let (t, k) = scene();
     let truth = facing(Point3::new(0.0, 0.1, 2.6));
-    let (points, mask) = render(&t, &truth, &k);
+    let (points, mask) = rendered(&t, &truth, &k);
     let frame = frame_of(&points, &mask, &k);
     let mut start = truth;
     start.step(
@@ -385,7 +332,7 @@ fn an_arm_searched_for_does_not_take_the_other_arms_hand() {
     w[Segment::RightUpperArm.index()] = Vector3::x() * -0.6;
     w[Segment::RightForearm.index()] = Vector3::x() * -1.0;
     truth.step(&Vector3::zeros(), &w);
-    let (points, mask) = render(&t, &truth, &k);
+    let (points, mask) = rendered(&t, &truth, &k);
     let frame = frame_of(&points, &mask, &k);
     // The start: the left arm across the chest, its hand on the right one.
     let mut crossed = Posed::new(&t, &truth).skeleton(&t);
