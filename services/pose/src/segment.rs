@@ -601,6 +601,10 @@ impl Segmenter {
             if b.cut || b.area < cfg.min_person_area || b.area > cfg.max_person_area {
                 continue;
             }
+            // Wholly under the floor: under a table's top taken for it.
+            if floor.is_some() && b.hmax < 0.0 {
+                continue;
+            }
             let height = extent([b], floor.is_some());
             let tracked = prev_centroid.is_some_and(|c| (b.moments.mean() - c).norm() < TRACKED);
             // A forearm raised before the face can cut a person in two, neither as tall
@@ -1198,10 +1202,16 @@ impl Segmenter {
         if zmax - zmin < 0.6 || xmax - xmin < 0.6 {
             return None;
         }
-        // A floor fills the bottom of the image, except where someone stands on it.
+        // A floor fills the bottom of the image, except where someone stands on it. A
+        // table's top seen from just above it may not (a seated person's forearms
+        // resting on it, the table's front edge below it), but it hides the floor and
+        // holds a third of the samples: it is taken for the floor, as when it fills
+        // the bottom. Left in the image, its level pixels join the forearms resting on
+        // it to the whole table, which then outweighs a small person.
         let bottom = &s[s.len() * 17 / 20..];
         let on = bottom.iter().filter(|p| pl.height(p).abs() < tol).count();
-        if bottom.is_empty() || on * 2 < bottom.len() {
+        let fills_bottom = !bottom.is_empty() && on * 2 >= bottom.len();
+        if !fills_bottom && c * 3 < s.len() {
             return None;
         }
         let pca = m.pca()?;

@@ -300,6 +300,39 @@ fn seated_hanging_arms_are_not_pulled_into_the_chairs_back() {
     }
 }
 
+#[test]
+fn forearms_resting_on_a_table_do_not_make_the_table_the_person() {
+    // Seen from the face's height, a table's top just below the camera holds half the
+    // lower image without filling its bottom (its front edge and the floor do), and
+    // was taken for no floor: the forearms resting on it joined the whole table to a
+    // person smaller than it, and the skeleton was fitted to the table (shoulders 0.5–
+    // 1 m off). (Not yet: the sixteen-year-old through the sensor model, the camera
+    // 15 cm above the table's top, whose body is fitted upside down; pose NOTES.)
+    for (shape, distance_m, noise) in [
+        ("gender=0", 1.5, false),
+        ("gender=0", 1.5, true),
+        ("age=0.3", 1.4, false),
+    ] {
+        let Some(body) = makehuman(shape) else {
+            return;
+        };
+        let mut cfg = seated(at(distance_m, ScriptedPose::HandsOnTable), true);
+        cfg.body = body;
+        cfg.sensor_noise = noise;
+        let (r, truth) = single(upper_body(cfg), 0);
+        assert!(r.person_found, "{shape}, noise {noise}");
+        for j in [
+            Joint::Head,
+            Joint::Neck,
+            Joint::LeftShoulder,
+            Joint::RightShoulder,
+        ] {
+            let e = error_m(&r.skeleton, &truth.skeleton, j);
+            assert!(e < 0.1, "{shape}, noise {noise}: {j:?} off by {e:.2} m");
+        }
+    }
+}
+
 /// The MakeHuman body seated at a desk drawing A–J, from the waist up, without the
 /// sensor model; None when the body is not fetched.
 fn drawing_at_a_desk(distance_m: f32) -> Option<SceneConfig> {
