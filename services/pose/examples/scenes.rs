@@ -215,6 +215,14 @@ fn kinds() -> Vec<Kind> {
             held_out: true,
         },
         Kind {
+            name: "seated-rest at a table heavy man (1.6 m)",
+            scene: near(seeded(
+                seated(base(&heavy_man, MotionSpec::Rest, 1.6), true),
+                25,
+            )),
+            held_out: true,
+        },
+        Kind {
             name: "seated-rest older short woman (1.1 m, no table)",
             scene: near(seeded(
                 seated(base(&older_short_woman, MotionSpec::Rest, 1.1), false),
