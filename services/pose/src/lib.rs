@@ -82,7 +82,8 @@
 //!    last frame's body and, when the seed's estimate races, from it too; the start
 //!    that explains the frame better wins. Its joints are the skeleton; the hands are
 //!    then placed behind the fingertips seen and across the forearm onto the hand's own
-//!    points (`hands.rs`, [`config::HandsConfig`]). The arms' and legs' lengths are
+//!    points (`hands.rs`, [`config::HandsConfig`]), and the head at the height of the
+//!    head's own top (`head_top.rs`, [`config::HeadConfig`]). The arms' and legs' lengths are
 //!    learned from the fits (`calibrate.rs`, [`config::CalibrateConfig`]).
 //! 8. Smoothing (`smooth.rs`, [`config::SmoothingConfig`]): the One Euro filter per
 //!    joint coordinate.
