@@ -1,14 +1,16 @@
 //! Where the head joint (the top of the head) goes once the body is registered: the
-//! template's top of the head, moved along the head's axis to the height of the head's
-//! own highest points ([`head_top_at_its_points`]).
+//! template's top of the head, moved along the line from the neck's base to it, to the
+//! height of the head's own highest points ([`head_top_at_its_points`]).
 //!
 //! The template's top of the head is MakeHuman's, a fixed distance above the neck. A
 //! longer head or neck, or hair, puts the person's top higher; a shorter one lower. The
 //! head's points say where it is: the highest of those the fitted body gives to its
-//! head, measured along the head's axis (not the image's up, so a bowed head is no
-//! different). Only the height is taken from them: across the head and in depth the
-//! camera sees the front of the head's top, and the template's midline is nearer the
-//! truth there.
+//! head, measured along the line from the neck's base to the template's top, which
+//! turns with the head (a bowed head is no different) and passes through the top the
+//! template was measured at (along the head segment's own axis the highest points lie
+//! behind it, and the top came out low: pose NOTES). Only the height is taken from
+//! them: across the head and in depth the camera sees the front of the head's top, and
+//! the template's midline is nearer the truth there.
 //!
 //! Like the hands' step, this moves only the published joint: the tracked body and the
 //! next frame's start are the fit's.
@@ -26,7 +28,7 @@ pub struct HeadConfig {
     /// The head's points are looked for within this distance of the template's top of
     /// the head; 0 = the template's top is reported as it is.
     pub reach: f32,
-    /// The top seen farther than this from the template's, along the head's axis, is
+    /// The top seen farther than this from the template's, along that line, is
     /// not the head's (a raised hand the fit gave to it, hair of no head's shape): the
     /// template's stays.
     pub max_shift: f32,
@@ -52,8 +54,8 @@ const TOP_RANK: usize = 4;
 const CLEAR_ABOVE: usize = 3;
 
 /// The top of the head of the body `posed` registered to `frame`: the template's,
-/// moved along the head's axis to the head's own highest points where the camera sees
-/// them clearly. None where the template's stays: too few points, the top cut by the
+/// moved along the line from the neck's base to the head's own highest points where
+/// the camera sees them clearly. None where the template's stays: too few points, the top cut by the
 /// image's edge or hidden by another part of the person, or farther than
 /// [`HeadConfig::max_shift`].
 pub fn head_top_at_its_points(
