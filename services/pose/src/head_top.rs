@@ -6,9 +6,9 @@
 //! longer head or neck, or hair, puts the person's top higher; a shorter one lower. The
 //! head's points say where it is: the highest of those the fitted body gives to its
 //! head, measured along the line from the neck's base to the template's top, which
-//! turns with the head (a bowed head is no different) and passes through the top the
-//! template was measured at (along the head segment's own axis the highest points lie
-//! behind it, and the top came out low: pose NOTES). Only the height is taken from
+//! turns with the head (a bowed head is no different); along the head segment's own
+//! axis the top came out about 2 cm low on every body (pose NOTES). Only the height is
+//! taken from
 //! them: across the head and in depth the camera sees the front of the head's top, and
 //! the template's midline is nearer the truth there.
 //!
