@@ -8,9 +8,8 @@
 //! head, measured along the line from the neck's base to the template's top, which
 //! turns with the head (a bowed head is no different); along the head segment's own
 //! axis the top came out about 2 cm low on every body (pose NOTES). Only the height is
-//! taken from
-//! them: across the head and in depth the camera sees the front of the head's top, and
-//! the template's midline is nearer the truth there.
+//! taken from them: across the head and in depth the camera sees the front of the
+//! head's top, and the template's midline is nearer the truth there.
 //!
 //! Like the hands' step, this moves only the published joint: the tracked body and the
 //! next frame's start are the fit's.
