@@ -16,7 +16,8 @@ use crate::head_top::head_top_at_its_points;
 use crate::legs_seen::{leg_seen, LegEnd};
 use crate::neck::{neck_base, NeckBase};
 use crate::register::{
-    drop_borrowed_tips, hidden_limbs, starts, tips_strayed, Fit, Frame, OfferedStart, Registration,
+    drop_borrowed_tips, hidden_limbs, place, starts, tips_strayed, Fit, Frame, OfferedStart,
+    Registration,
 };
 use crate::segment::{Plane, Segmentation, Segmenter, TRACKED};
 use crate::smooth::Smoother;
@@ -1140,8 +1141,10 @@ fn fitted_joints(
         skel.confidence[j.index()] = (0.1 + 0.9 * seen).clamp(0.0, 1.0);
     }
     hands_at_fingertips(&mut skel, &posed, tpl, tips, &cfg.hands, &cfg.chains);
-    let hands = hands_at_their_points(&skel, frame, tpl, &posed, &cfg.hands);
-    let head_top = head_top_at_its_points(frame, tpl, &posed, &cfg.head)
+    // The capsules where the body puts them, placed once for both steps.
+    let placed = place(tpl, &posed);
+    let hands = hands_at_their_points(&skel, frame, &placed, &cfg.hands);
+    let head_top = head_top_at_its_points(frame, tpl, &posed, &placed, &cfg.head)
         .unwrap_or_else(|| posed.point(Segment::Head, &tpl.crown));
     Some(Fitted {
         skeleton: skel,

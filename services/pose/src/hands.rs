@@ -16,7 +16,7 @@
 //! it.
 
 use crate::chains::ChainConfig;
-use crate::register::{nearest_is, place, Frame};
+use crate::register::{nearest_is, Frame, Placed};
 use crate::{body::BodyTemplate, body::Posed, body::Segment, Limb};
 use airglyph_core::{Joint, Skeleton};
 use nalgebra::{Point3, Vector3};
@@ -93,21 +93,20 @@ pub fn hands_at_fingertips(
     }
 }
 
-/// Where each hand (left, right) lies among its points, for the body `posed`
-/// registered to `frame`; None where the hand keeps the fit's place (too few points, or
-/// [`HandsConfig::points_radius`] 0). `skel` holds the fitted hands and elbows.
+/// Where each hand (left, right) lies among its points, for the body whose capsules
+/// `placed` are registered to `frame`; None where the hand keeps the fit's place (too
+/// few points, or [`HandsConfig::points_radius`] 0). `skel` holds the fitted hands and
+/// elbows.
 pub fn hands_at_their_points(
     skel: &Skeleton,
     frame: &Frame,
-    template: &BodyTemplate,
-    posed: &Posed,
+    placed: &[Placed],
     cfg: &HandsConfig,
 ) -> [Option<Point3<f32>>; 2] {
     let radius = cfg.points_radius;
     if radius <= 0.0 {
         return [None; 2];
     }
-    let placed = place(template, posed);
     [
         (Joint::LeftHand, Joint::LeftElbow, Segment::LeftForearm),
         (Joint::RightHand, Joint::RightElbow, Segment::RightForearm),
@@ -120,7 +119,7 @@ pub fn hands_at_their_points(
         let own: Vec<Point3<f32>> = frame
             .pixels_near(&start, 1.5 * radius)
             .map(|i| frame.points[i])
-            .filter(|p| nearest_is(&placed, p, forearm))
+            .filter(|p| nearest_is(placed, p, forearm))
             .collect();
         let mut h = start;
         for _ in 0..STEPS {
@@ -145,20 +144,16 @@ pub fn hands_at_their_points(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::body::{BodyConfig, BodyPose, Shape};
+    use crate::body::{BodyConfig, Shape};
+    use crate::register::place;
+    use crate::view::testing::facing;
     use airglyph_core::Intrinsics;
-    use nalgebra::Rotation3;
 
     /// A body standing 2.5 m before the camera, arms hanging, and a camera image to
     /// put points in.
     fn standing() -> (BodyTemplate, Posed, Skeleton, Intrinsics) {
         let t = BodyTemplate::new(&Shape::makehuman(), &BodyConfig::default());
-        let r = Rotation3::from_basis_unchecked(&[Vector3::x(), -Vector3::y(), -Vector3::z()]);
-        let pose = BodyPose {
-            pelvis: Point3::new(0.0, 0.0, 2.5),
-            rotation: [r; Segment::COUNT],
-        };
-        let posed = Posed::new(&t, &pose);
+        let posed = Posed::new(&t, &facing(Point3::new(0.0, 0.0, 2.5)));
         let skel = posed.skeleton(&t);
         (t, posed, skel, Intrinsics::default().scaled_to(320, 240))
     }
@@ -215,7 +210,7 @@ mod tests {
                 k: &k,
                 floor: None,
             };
-            hands_at_their_points(&skel, &frame, &t, &posed, cfg)
+            hands_at_their_points(&skel, &frame, &place(&t, &posed), cfg)
         };
         let [left, right] = place_in(&seen, &cfg);
         let moved = left.expect("the left hand has its points") - hand;

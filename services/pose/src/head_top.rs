@@ -15,7 +15,7 @@
 //! next frame's start are the fit's.
 
 use crate::body::{BodyTemplate, Posed, Segment};
-use crate::register::{nearest_is, place, Placed};
+use crate::register::{nearest_is, Placed};
 use crate::view::Frame;
 use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
@@ -52,15 +52,16 @@ const TOP_RANK: usize = 4;
 /// hides the head's top.
 const CLEAR_ABOVE: usize = 3;
 
-/// The top of the head of the body `posed` registered to `frame`: the template's,
-/// moved along the line from the neck's base to the head's own highest points where
-/// the camera sees them clearly. None where the template's stays: too few points, the top cut by the
-/// image's edge or hidden by another part of the person, or farther than
-/// [`HeadConfig::max_shift`].
+/// The top of the head of the body `posed` (its capsules `placed`) registered to
+/// `frame`: the template's, moved along the line from the neck's base to the head's own
+/// highest points where the camera sees them clearly. None where the template's stays:
+/// too few points, the top cut by the image's edge or hidden by another part of the
+/// person, or farther than [`HeadConfig::max_shift`].
 pub fn head_top_at_its_points(
     frame: &Frame,
     template: &BodyTemplate,
     posed: &Posed,
+    placed: &[Placed],
     cfg: &HeadConfig,
 ) -> Option<Point3<f32>> {
     if cfg.reach <= 0.0 {
@@ -69,10 +70,9 @@ pub fn head_top_at_its_points(
     let crown = posed.point(Segment::Head, &template.crown);
     let neck = posed.joint[Segment::Head.index()];
     let up = (crown - neck).try_normalize(1e-6)?;
-    let placed = place(template, posed);
     let mut heights: Vec<(f32, usize)> = frame
         .pixels_near(&crown, cfg.reach)
-        .filter(|&i| nearest_is(&placed, &frame.points[i], Segment::Head))
+        .filter(|&i| nearest_is(placed, &frame.points[i], Segment::Head))
         .map(|i| ((frame.points[i] - crown).dot(&up), i))
         .collect();
     if heights.len() < MIN_POINTS {
@@ -80,7 +80,7 @@ pub fn head_top_at_its_points(
     }
     let (_, top, _) = heights.select_nth_unstable_by(TOP_RANK, |a, b| b.0.total_cmp(&a.0));
     let (shift, idx) = *top;
-    let hidden = frame.at_the_edge(idx) || covered_above(frame, &placed, idx);
+    let hidden = frame.at_the_edge(idx) || covered_above(frame, placed, idx);
     (!hidden && shift.abs() <= cfg.max_shift).then(|| crown + up * shift)
 }
 
@@ -100,8 +100,9 @@ fn covered_above(frame: &Frame, placed: &[Placed], idx: usize) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::body::{BodyConfig, BodyPose, Limbs, Shape};
-    use crate::view::testing::{frame_of, rendered};
+    use crate::body::{BodyConfig, Limbs, Shape};
+    use crate::register::place;
+    use crate::view::testing::{facing, frame_of, rendered};
     use airglyph_core::Intrinsics;
     use nalgebra::{Rotation3, Vector3};
 
@@ -119,18 +120,12 @@ mod tests {
         BodyTemplate::from_shape(&shape, &Limbs::from_config(&BodyConfig::default()))
     }
 
-    /// Standing facing the camera, arms hanging, the pelvis at `pelvis`.
-    fn facing(pelvis: Point3<f32>) -> BodyPose {
-        let r = Rotation3::from_basis_unchecked(&[Vector3::x(), -Vector3::y(), -Vector3::z()]);
-        BodyPose {
-            pelvis,
-            rotation: [r; Segment::COUNT],
-        }
-    }
-
     /// The top of the head reported for a body of `seen` drawn at `pose`, registered as
     /// the plain template at that pose; and the template's own top there.
-    fn top_of(seen: &BodyTemplate, pose: &BodyPose) -> (Option<Point3<f32>>, Point3<f32>) {
+    fn top_of(
+        seen: &BodyTemplate,
+        pose: &crate::body::BodyPose,
+    ) -> (Option<Point3<f32>>, Point3<f32>) {
         let k = Intrinsics::default().scaled_to(320, 240);
         let (points, mask) = rendered(seen, pose, &k);
         let fitted = template(0.0);
@@ -139,6 +134,7 @@ mod tests {
             &frame_of(&points, &mask, &k),
             &fitted,
             &posed,
+            &place(&fitted, &posed),
             &HeadConfig::default(),
         );
         (top, posed.point(Segment::Head, &fitted.crown))

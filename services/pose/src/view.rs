@@ -307,6 +307,19 @@ pub(crate) mod testing {
         (points, mask)
     }
 
+    /// A body standing facing the camera, arms hanging, its pelvis at `pelvis`.
+    pub(crate) fn facing(pelvis: Point3<f32>) -> BodyPose {
+        let r = nalgebra::Rotation3::from_basis_unchecked(&[
+            Vector3::x(),
+            -Vector3::y(),
+            -Vector3::z(),
+        ]);
+        BodyPose {
+            pelvis,
+            rotation: [r; crate::body::Segment::COUNT],
+        }
+    }
+
     /// The frame of `points` and `mask` seen by `k`, no floor taken out.
     pub(crate) fn frame_of<'a>(
         points: &'a [Point3<f32>],

@@ -1,17 +1,9 @@
 use super::solver::bone_steps;
 use super::*;
 use crate::body::{BodyConfig, Posed, Shape};
-use crate::view::testing::{frame_of, rendered};
+use crate::view::testing::{facing, frame_of, rendered};
 use airglyph_core::{Intrinsics, Joint, Skeleton};
-use nalgebra::{Rotation3, Unit, Vector3};
-
-fn facing(at: Point3<f32>) -> BodyPose {
-    let r = Rotation3::from_basis_unchecked(&[Vector3::x(), -Vector3::y(), -Vector3::z()]);
-    BodyPose {
-        pelvis: at,
-        rotation: [r; Segment::COUNT],
-    }
-}
+use nalgebra::{Unit, Vector3};
 
 /// The MakeHuman template at the default limb lengths, seen by a 320×240 camera.
 fn scene() -> (BodyTemplate, Intrinsics) {
