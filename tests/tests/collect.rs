@@ -114,6 +114,8 @@ fn collect_writes_each_repetition_and_train_takes_the_file() {
     let mut m = read(&model);
     assert_eq!(m["labels"], serde_json::json!(["7", "L"]));
     assert!(m["classifier"]["features"].get("depth").is_none());
+    // Its spotting part learned from both kinds of stream unless told otherwise.
+    assert_eq!(m["training"]["parameters"]["generator"], "mixed");
 
     // Calibrating the label bars again keeps everything else of the model.
     let again = tmp.path().join("again.json");

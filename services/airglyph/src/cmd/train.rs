@@ -93,9 +93,11 @@ pub struct Args {
     /// pauses at corners, slow and fast drawers, rest poses, everyday actions such as
     /// waving, pointing, scratching, touching the face), or mixed (a stream of each in
     /// turn; each label's bar calibrated on each generator's streams alone, the lower
-    /// kept; the built-in model's spotting part is trained so). `airglyph eval-spotting
-    /// --generator` measures on any of them.
-    #[arg(long, default_value = "lab", value_parser = ["lab", "everyday", "mixed"])]
+    /// kept; the built-in model's spotting part is trained so). Mixed is the default:
+    /// a spotter trained on one kind of mover loses more on the other kind's streams
+    /// than one trained on both gives up on either (the gesture README has the
+    /// figures). `airglyph eval-spotting --generator` measures on any of them.
+    #[arg(long, default_value = "mixed", value_parser = ["lab", "everyday", "mixed"])]
     pub generator: String,
     /// After training, warn about labels the vocabulary cannot separate: a quick
     /// classifier (one network) trained on four writers in five reads the fifth's
