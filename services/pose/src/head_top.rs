@@ -100,7 +100,7 @@ fn covered_above(frame: &Frame, placed: &[Placed], idx: usize) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::body::{BodyConfig, Limbs, Shape};
+    use crate::body::{BodyConfig, BodyPose, Limbs, Shape};
     use crate::register::place;
     use crate::view::testing::{facing, frame_of, rendered};
     use airglyph_core::Intrinsics;
@@ -122,10 +122,7 @@ mod tests {
 
     /// The top of the head reported for a body of `seen` drawn at `pose`, registered as
     /// the plain template at that pose; and the template's own top there.
-    fn top_of(
-        seen: &BodyTemplate,
-        pose: &crate::body::BodyPose,
-    ) -> (Option<Point3<f32>>, Point3<f32>) {
+    fn top_of(seen: &BodyTemplate, pose: &BodyPose) -> (Option<Point3<f32>>, Point3<f32>) {
         let k = Intrinsics::default().scaled_to(320, 240);
         let (points, mask) = rendered(seen, pose, &k);
         let fitted = template(0.0);

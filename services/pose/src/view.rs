@@ -225,9 +225,9 @@ impl Frame<'_> {
 pub(crate) mod testing {
     //! Frames for the steps' unit tests.
     use super::Frame;
-    use crate::body::{BodyPose, BodyTemplate, Posed};
+    use crate::body::{BodyPose, BodyTemplate, Posed, Segment};
     use airglyph_core::Intrinsics;
-    use nalgebra::{Point3, Vector3};
+    use nalgebra::{Point3, Rotation3, Vector3};
 
     /// A frame of 320×240 whose columns are the person's where `person` says so, at
     /// `person_z` metres, and elsewhere something at `other_z`: its points and mask.
@@ -309,14 +309,10 @@ pub(crate) mod testing {
 
     /// A body standing facing the camera, arms hanging, its pelvis at `pelvis`.
     pub(crate) fn facing(pelvis: Point3<f32>) -> BodyPose {
-        let r = nalgebra::Rotation3::from_basis_unchecked(&[
-            Vector3::x(),
-            -Vector3::y(),
-            -Vector3::z(),
-        ]);
+        let r = Rotation3::from_basis_unchecked(&[Vector3::x(), -Vector3::y(), -Vector3::z()]);
         BodyPose {
             pelvis,
-            rotation: [r; crate::body::Segment::COUNT],
+            rotation: [r; Segment::COUNT],
         }
     }
 
