@@ -51,9 +51,12 @@ const DIRS: [(i32, i32); 8] = [
     (1, 1),
 ];
 
+/// A length in whole millimetres, at least 1. `d` is a distance (≥ 0): a half added
+/// and truncated rounds it without `f32::round`, a libm call on x86-64's baseline,
+/// made for every edge of every frame.
 #[inline]
 fn mm(d: f32) -> u32 {
-    ((d * 1000.0).round() as u32).max(1)
+    ((d * 1000.0 + 0.5) as u32).max(1)
 }
 
 /// Consecutive samples of a component (neighbours in raster order, so near each other)
@@ -83,6 +86,22 @@ impl SampleBox {
             hi = hi.sup(&pos[q as usize].coords);
         }
         Self { range, lo, hi }
+    }
+
+    /// One box around `runs` (a component's [`SampleBox::cover`]), without going over
+    /// the samples again.
+    fn hull(runs: &[SampleBox]) -> Self {
+        let (mut lo, mut hi) = (Vector3::repeat(f32::MAX), Vector3::repeat(f32::MIN));
+        for r in runs {
+            lo = lo.inf(&r.lo);
+            hi = hi.sup(&r.hi);
+        }
+        let end = runs.last().map_or(0, |r| r.range.end);
+        Self {
+            range: 0..end,
+            lo,
+            hi,
+        }
     }
 
     /// Whether every point of this box is at least `d2` (squared) from every point of
@@ -381,10 +400,7 @@ impl GeoGraph {
         // Each component's samples in one box, and its probes in another: most pairs of
         // components lie farther apart than the best join found so far, and are
         // skipped whole.
-        let whole: Vec<SampleBox> = samples
-            .iter()
-            .map(|s| SampleBox::of(pos, s, 0..s.len()))
-            .collect();
+        let whole: Vec<SampleBox> = boxes.iter().map(|b| SampleBox::hull(b)).collect();
         let probe_box: Vec<SampleBox> = probes
             .iter()
             .map(|s| SampleBox::of(pos, s, 0..s.len()))

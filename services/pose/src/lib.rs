@@ -145,6 +145,7 @@
 mod assign;
 pub mod body;
 mod calibrate;
+mod cells;
 mod chains;
 pub mod config;
 mod debug;

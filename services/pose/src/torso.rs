@@ -2,6 +2,7 @@
 //! rigid torso model registered by mutual closest points and Horn's closed form.
 
 use crate::body::{BodyPose, BodyTemplate, Posed};
+use crate::cells::Cells;
 use crate::dt::{DistanceTransform, Open};
 use crate::geodesic::Geodesic;
 use crate::geom::{horn_rigid, Moments, Rigid};
@@ -249,7 +250,8 @@ pub struct TorsoEstimator {
     data: Vec<Point3<f32>>,
     world: Vec<Point3<f32>>,
     visible: Vec<usize>,
-    nn_model: Vec<u32>,
+    cells: Cells,
+    nn_model: Vec<(u32, f32)>,
     nn_data: Vec<(u32, f32)>,
     src: Vec<Point3<f32>>,
     dst: Vec<Point3<f32>>,
@@ -270,6 +272,7 @@ impl TorsoEstimator {
             data: Vec::new(),
             world: Vec::new(),
             visible: Vec::new(),
+            cells: Cells::default(),
             nn_model: Vec::new(),
             nn_data: Vec::new(),
             src: Vec::new(),
@@ -437,6 +440,7 @@ impl TorsoEstimator {
             return (pose, residual, 0);
         }
         let max2 = cfg.icp_max_dist * cfg.icp_max_dist;
+        self.cells.build(&self.data, cfg.icp_max_dist);
         for _ in 0..cfg.icp_iterations {
             // Model points facing the camera (at the origin).
             self.world.clear();
@@ -458,30 +462,33 @@ impl TorsoEstimator {
             if self.world.is_empty() {
                 break;
             }
-            // Closest data point of each visible model point, and vice versa.
+            // Closest data point of each visible model point, and vice versa, among
+            // those within `icp_max_dist`: a farther pair is no match. Of equally near
+            // points, the first.
             self.nn_model.clear();
-            self.nn_model.resize(self.data.len(), 0);
+            self.nn_model
+                .resize(self.data.len(), (u32::MAX, f32::INFINITY));
             self.nn_data.clear();
-            self.nn_data
-                .resize(self.world.len(), (u32::MAX, f32::INFINITY));
-            for (di, d) in self.data.iter().enumerate() {
-                let mut best = (0u32, f32::INFINITY);
-                for (mi, m) in self.world.iter().enumerate() {
-                    let e = (m - d).norm_squared();
-                    if e < best.1 {
-                        best = (mi as u32, e);
+            for (mi, m) in self.world.iter().enumerate() {
+                let mut best = (u32::MAX, f32::INFINITY);
+                let (data, nn_model) = (&self.data, &mut self.nn_model);
+                self.cells.near(m, |di| {
+                    let e = (m - data[di as usize]).norm_squared();
+                    if e < best.1 || (e == best.1 && di < best.0) {
+                        best = (di, e);
                     }
-                    if e < self.nn_data[mi].1 {
-                        self.nn_data[mi] = (di as u32, e);
+                    let back = &mut nn_model[di as usize];
+                    if e < back.1 {
+                        *back = (mi as u32, e);
                     }
-                }
-                self.nn_model[di] = best.0;
+                });
+                self.nn_data.push(best);
             }
             self.src.clear();
             self.dst.clear();
             let mut sum = 0.0f32;
             for (mi, &(di, e)) in self.nn_data.iter().enumerate() {
-                if di != u32::MAX && e < max2 && self.nn_model[di as usize] == mi as u32 {
+                if di != u32::MAX && e < max2 && self.nn_model[di as usize].0 == mi as u32 {
                     self.src.push(self.world[mi]);
                     self.dst.push(self.data[di as usize]);
                     sum += e;

@@ -131,16 +131,22 @@ impl Registration {
                 Others::Held => c.segment != arm.upper && c.segment != arm.fore,
             })
             .collect();
-        let near: Vec<(Point3<f32>, f32, f32)> = self
+        let sigma = cfg.energy.sigma;
+        let near: Vec<Near> = self
             .data
             .iter()
             .filter(|(p, _)| (p - shoulder).norm() < reach)
             .map(|(p, area)| {
-                let d = rest
+                let d_rest = rest
                     .iter()
                     .map(|c| c.nearest(p).2)
                     .fold(f32::INFINITY, f32::min);
-                (*p, *area, d)
+                Near {
+                    p: *p,
+                    area: *area,
+                    d_rest,
+                    rest_cost: area * cauchy_cost(d_rest, sigma),
+                }
             })
             .collect();
         let turned = |u: &Vector3<f32>, v: &Vector3<f32>| {
@@ -206,7 +212,7 @@ impl Registration {
         t: &BodyTemplate,
         pose: &BodyPose,
         arm: Arm,
-        near: &[(Point3<f32>, f32, f32)],
+        near: &[Near],
         cfg: &RegisterConfig,
     ) -> f32 {
         let capsules: Vec<Placed> = place(t, &Posed::new(t, pose))
@@ -214,13 +220,39 @@ impl Registration {
             .filter(|c| c.segment == arm.upper || c.segment == arm.fore)
             .collect();
         let sigma = cfg.energy.sigma;
-        let mut e = 0.0;
-        for (p, area, d_rest) in near {
-            let d = capsules
+        // One sphere around both capsules: most points lie nearer the rest of the
+        // body than it, and cost what the search started with.
+        let centre = Point3::from(
+            capsules
                 .iter()
-                .map(|c| c.nearest(p).2)
-                .fold(*d_rest, f32::min);
-            e += area * cauchy_cost(d, sigma);
+                .map(|c| c.centre.coords)
+                .sum::<Vector3<f32>>()
+                / capsules.len().max(1) as f32,
+        );
+        let bound = capsules
+            .iter()
+            .map(|c| (c.centre - centre).norm() + c.bound)
+            .fold(0.0, f32::max);
+        let mut e = 0.0;
+        for n in near {
+            let reach = n.d_rest + bound;
+            if reach > 0.0 && (n.p - centre).norm_squared() > reach * reach {
+                e += n.rest_cost;
+                continue;
+            }
+            let mut d = n.d_rest;
+            for c in &capsules {
+                let reach = d + c.bound;
+                if reach > 0.0 && (n.p - c.centre).norm_squared() > reach * reach {
+                    continue;
+                }
+                d = d.min(c.nearest(&n.p).2);
+            }
+            e += if d < n.d_rest {
+                n.area * cauchy_cost(d, sigma)
+            } else {
+                n.rest_cost
+            };
         }
         let (w, h) = (f.width as i32, f.height as i32);
         let scale = cfg.energy.silhouette_scale;
@@ -255,6 +287,16 @@ impl Registration {
         }
         e
     }
+}
+
+/// A person's point within an arm's reach, with how well the rest of the body explains
+/// it: its distance to the nearest other capsule's surface and the cost of that.
+#[derive(Debug, Clone, Copy)]
+struct Near {
+    p: Point3<f32>,
+    area: f32,
+    d_rest: f32,
+    rest_cost: f32,
 }
 
 /// Hands nearer each other than this, metres, may be one hand taken by both arms.
