@@ -26,9 +26,17 @@ fn main() {
     };
     let mut est = PoseEstimator::new(k, PoseConfig::default());
     let (mut sum, mut windowed) = (0f64, 0);
+    let mut steps = [0f64; 6];
     let t0 = Instant::now();
     for i in 0..n {
         let r = est.estimate(frames[i % frames.len()].view());
+        let t = est.step_times();
+        for (s, x) in steps
+            .iter_mut()
+            .zip([t.segment, t.torso, t.graph, t.geodesic, t.limbs, t.register])
+        {
+            *s += x;
+        }
         windowed += usize::from(est.debug().windowed);
         for (j, c) in r.skeleton.joints.iter().zip(r.skeleton.confidence) {
             sum += (j.x + 2.0 * j.y + 3.0 * j.z + 4.0 * c) as f64;
@@ -40,6 +48,13 @@ fn main() {
          {windowed} segmented around the last person",
         dt * 1e3 / n as f64
     );
+    let names = ["segment", "torso", "graph", "geodesic", "limbs", "register"];
+    let per_frame: Vec<String> = names
+        .iter()
+        .zip(steps)
+        .map(|(name, s)| format!("{name} {:.3}", s * 1e3 / n as f64))
+        .collect();
+    println!("steps, ms a frame: {}", per_frame.join(", "));
 }
 
 fn scene(k: Intrinsics, motion: MotionSpec) -> Synthesizer {

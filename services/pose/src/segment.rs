@@ -381,9 +381,11 @@ pub struct Segmenter {
     behind_body: Vec<Option<Point3<f32>>>,
     /// The flood fill of the holes in the person: its queue, the pixels it reached and
     /// those it has been to (over the person's box).
-    queue: Vec<u32>,
+    queue: Vec<(u32, u32)>,
     reached: Vec<u32>,
     visited: Vec<bool>,
+    /// Per row of the person's box, their first and last pixel.
+    rows: Vec<(usize, usize)>,
     /// The floor's pixels [`Segmenter::drop_floor`] drops.
     floor_points: Vec<u32>,
     /// The pixels [`Segmenter::mend_flying_pixels`] mends, with their nearer
@@ -744,35 +746,65 @@ impl Segmenter {
         let (u0, v0, u1, v1) = (u0 as usize, v0 as usize, u1 as usize, v1 as usize);
         let bw = u1 - u0 + 1;
         let hole = |i: usize, mask: &[bool]| !mask[i] && points[i].z <= 0.0;
-        let at = |i: usize| (i / w - v0) * bw + i % w - u0;
+        // A pixel's place in the box, where `visited` is kept.
+        let at = |x: usize, y: usize| (y - v0) * bw + x - u0;
+        // Each row's first and last pixel of the person. A hole that reaches past them
+        // reaches the box's edge or data not the person's: it is not enclosed, and
+        // the floor dropped beside and below the person is not flooded pixel by pixel.
+        self.rows.clear();
+        self.rows.extend((v0..=v1).map(|v| {
+            let row = &mask[v * w + u0..=v * w + u1];
+            match (row.iter().position(|&m| m), row.iter().rposition(|&m| m)) {
+                (Some(a), Some(b)) => (u0 + a, u0 + b),
+                _ => (1, 0),
+            }
+        }));
+        let inside = |rows: &[(usize, usize)], x: usize, y: usize| {
+            let (a, b) = rows[y - v0];
+            (a..=b).contains(&x)
+        };
+        let edge = |x: usize, y: usize| x == u0 || x == u1 || y == v0 || y == v1;
         self.visited.clear();
         self.visited.resize(bw * (v1 - v0 + 1), false);
         for v in v0..=v1 {
-            for u in u0..=u1 {
+            let (first, last) = self.rows[v - v0];
+            for u in first..=last {
                 let start = v * w + u;
-                if !hole(start, mask) || self.visited[at(start)] {
+                if !hole(start, mask) || self.visited[at(u, v)] {
                     continue;
                 }
-                // Grow the hole: no hole when it reaches the box's edge or data that is
-                // not the person's.
+                // Grow the hole: no hole when it reaches the box's edge, past the
+                // person's pixels of a row, or data that is not the person's.
                 self.queue.clear();
                 self.reached.clear();
-                self.queue.push(start as u32);
-                self.visited[at(start)] = true;
+                self.queue.push((u as u32, v as u32));
+                self.visited[at(u, v)] = true;
                 let mut enclosed = true;
-                while let Some(i) = self.queue.pop() {
-                    let i = i as usize;
+                while let Some((x, y)) = self.queue.pop() {
+                    let (x, y) = (x as usize, y as usize);
+                    let i = y * w + x;
                     self.reached.push(i as u32);
-                    let (x, y) = (i % w, i / w);
-                    if x == u0 || x == u1 || y == v0 || y == v1 {
+                    if edge(x, y) {
                         enclosed = false;
                         continue;
                     }
-                    for j in [i - 1, i + 1, i - w, i + w] {
+                    for (j, xj, yj) in [
+                        (i - 1, x - 1, y),
+                        (i + 1, x + 1, y),
+                        (i - w, x, y - 1),
+                        (i + w, x, y + 1),
+                    ] {
                         if hole(j, mask) {
-                            if !self.visited[at(j)] {
-                                self.visited[at(j)] = true;
-                                self.queue.push(j as u32);
+                            // Tested here, not when popped: an edge pixel another
+                            // flood took would otherwise not count.
+                            if edge(xj, yj) || !inside(&self.rows, xj, yj) {
+                                enclosed = false;
+                                continue;
+                            }
+                            let a = at(xj, yj);
+                            if !self.visited[a] {
+                                self.visited[a] = true;
+                                self.queue.push((xj as u32, yj as u32));
                             }
                         } else if !mask[j] {
                             enclosed = false;
@@ -1289,6 +1321,93 @@ mod tests {
             z[rng.below(w * h)] = 0.0;
         }
         z.iter().map(|&z| Point3::new(0.0, 0.0, z)).collect()
+    }
+
+    /// The rule `fill_holes` keeps, by whole components: a 4-connected piece of pixels
+    /// without data and not the person's is given to the person when none of it lies
+    /// on the box's edge, none of it borders data that is not the person's, and it is
+    /// no larger than `max_area`.
+    fn holes_by_components(
+        mask: &[bool],
+        points: &[Point3<f32>],
+        w: usize,
+        (u0, v0, u1, v1): (usize, usize, usize, usize),
+        max_area: usize,
+    ) -> Vec<bool> {
+        let hole = |i: usize| !mask[i] && points[i].z <= 0.0;
+        let mut out = mask.to_vec();
+        let mut seen = vec![false; mask.len()];
+        for v in v0..=v1 {
+            for u in u0..=u1 {
+                let s = v * w + u;
+                if !hole(s) || seen[s] {
+                    continue;
+                }
+                seen[s] = true;
+                let (mut piece, mut stack, mut enclosed) = (Vec::new(), vec![(u, v)], true);
+                while let Some((x, y)) = stack.pop() {
+                    piece.push(y * w + x);
+                    enclosed &= x != u0 && x != u1 && y != v0 && y != v1;
+                    let near = [
+                        (x > u0).then(|| (x - 1, y)),
+                        (x < u1).then(|| (x + 1, y)),
+                        (y > v0).then(|| (x, y - 1)),
+                        (y < v1).then(|| (x, y + 1)),
+                    ];
+                    for (xj, yj) in near.into_iter().flatten() {
+                        let j = yj * w + xj;
+                        if hole(j) {
+                            if !seen[j] {
+                                seen[j] = true;
+                                stack.push((xj, yj));
+                            }
+                        } else if !mask[j] {
+                            enclosed = false;
+                        }
+                    }
+                }
+                if enclosed && piece.len() <= max_area {
+                    for j in piece {
+                        out[j] = true;
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn holes_are_filled_by_whole_components_of_the_box() {
+        let mut rng = XorShift::new(17);
+        let mut seg = Segmenter::default();
+        let mut filled_some = 0;
+        for case in 0..3000 {
+            let (w, h) = (3 + rng.below(12), 3 + rng.below(12));
+            let share = rng.below(100);
+            let mask: Vec<bool> = (0..w * h).map(|_| rng.below(100) < share).collect();
+            let points: Vec<Point3<f32>> = (0..w * h)
+                .map(|_| Point3::new(0.0, 0.0, if rng.below(2) == 0 { 0.0 } else { 1.0 }))
+                .collect();
+            let on: Vec<usize> = (0..w * h).filter(|&i| mask[i]).collect();
+            if on.is_empty() {
+                continue;
+            }
+            let bbox = (
+                on.iter().map(|i| i % w).min().unwrap(),
+                on.iter().map(|i| i / w).min().unwrap(),
+                on.iter().map(|i| i % w).max().unwrap(),
+                on.iter().map(|i| i / w).max().unwrap(),
+            );
+            let max_area = 1 + rng.below(30);
+            let want = holes_by_components(&mask, &points, w, bbox, max_area);
+            let mut got = mask.clone();
+            let b32 = (bbox.0 as u32, bbox.1 as u32, bbox.2 as u32, bbox.3 as u32);
+            seg.fill_holes(&points, &mut got, w, b32, max_area);
+            assert_eq!(got, want, "case {case}: {w}x{h}, box {bbox:?}");
+            filled_some += usize::from(got != mask);
+        }
+        // The cases exercise the filling, not only its refusals.
+        assert!(filled_some > 100, "{filled_some}");
     }
 
     /// Frames of the drawing person before floor and wall, with sensor noise.
