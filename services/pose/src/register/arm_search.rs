@@ -9,7 +9,7 @@
 //! the body, whichever is nearer; the arm's front where the camera sees background
 //! (pulled to the person) or sees past it (free space).
 
-use super::capsules::{place, Placed};
+use super::capsules::{place, sphere_beyond, Placed};
 use super::energy::{cauchy_cost, front_surface, huber};
 use super::{Frame, RegisterConfig, Registration};
 use crate::body::{shortest_turn, BodyPose, BodyTemplate, Posed, Segment};
@@ -235,18 +235,15 @@ impl Registration {
             .fold(0.0, f32::max);
         let mut e = 0.0;
         for n in near {
-            let reach = n.d_rest + bound;
-            if reach > 0.0 && (n.p - centre).norm_squared() > reach * reach {
+            if sphere_beyond(&centre, bound, &n.p, n.d_rest) {
                 e += n.rest_cost;
                 continue;
             }
             let mut d = n.d_rest;
             for c in &capsules {
-                let reach = d + c.bound;
-                if reach > 0.0 && (n.p - c.centre).norm_squared() > reach * reach {
-                    continue;
+                if !sphere_beyond(&c.centre, c.bound, &n.p, d) {
+                    d = d.min(c.nearest(&n.p).2);
                 }
-                d = d.min(c.nearest(&n.p).2);
             }
             e += if d < n.d_rest {
                 n.area * cauchy_cost(d, sigma)

@@ -34,6 +34,15 @@ impl Placed {
     }
 }
 
+/// Whether a sphere of `radius` about `centre` lies wholly farther than `d` from `p`:
+/// what a capsule's bounding sphere rules out without a square root. Never when
+/// `d + radius` ≤ 0 (`p` deep inside a capsule).
+#[inline]
+pub(super) fn sphere_beyond(centre: &Point3<f32>, radius: f32, p: &Point3<f32>, d: f32) -> bool {
+    let reach = d + radius;
+    reach > 0.0 && (p - centre).norm_squared() > reach * reach
+}
+
 /// For the nearest-capsule search, per placed capsule g the others c by the gap
 /// between their bounding spheres, |centre_g − centre_c| − bound_g − bound_c, least
 /// first. A point whose surface distance to g is d lies within d + bound_g of g's
@@ -98,8 +107,7 @@ pub(super) fn nearest_capsule(
         if !c.in_view {
             continue;
         }
-        let reach = best.2 + c.bound;
-        if reach > 0.0 && (p - c.centre).norm_squared() > reach * reach {
+        if sphere_beyond(&c.centre, c.bound, p, best.2) {
             continue;
         }
         let (q, _, d) = c.nearest(p);
