@@ -151,6 +151,65 @@ fn a_vocabulary_from_three_samples_a_label_gets_templates_and_is_read_well() {
     assert_eq!(accuracy(&back, &te), acc);
 }
 
+/// Samples drawn in space of four gestures, two pairs that differ only in depth: a
+/// stroke to the right pushed towards the camera or pulled away from it, and a circle
+/// drawn flat or as a helix coming towards the camera.
+fn samples_in_space(per_class: usize, seed: u64) -> Vec<Sample> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let names = ["push", "pull", "circle", "helix"];
+    let mut v = Vec::new();
+    for i in 0..per_class {
+        for (k, name) in names.iter().enumerate() {
+            let flat = shape(if k < 2 { 3 } else { 0 }, &mut rng);
+            let size = rng.gen_range(0.5..1.0f32);
+            let n = flat.len();
+            let depth: Vec<f32> = (0..n)
+                .map(|j| {
+                    let t = j as f32 / (n - 1) as f32;
+                    let dz = match k {
+                        0 | 3 => t,
+                        1 => -t,
+                        _ => 0.0,
+                    };
+                    // In the strokes' unit (shape's sizes are 50-400).
+                    200.0 * size * dz + rng.gen_range(-8.0..8.0)
+                })
+                .collect();
+            v.push(Sample {
+                label: name.to_string(),
+                subject: format!("w{}", i % 5),
+                strokes: vec![flat],
+                depth: Some(vec![depth]),
+            });
+        }
+    }
+    v
+}
+
+#[test]
+fn a_vocabulary_in_space_from_three_samples_a_label_is_matched_in_space() {
+    let tr = samples_in_space(3, 21);
+    let te = samples_in_space(30, 22);
+    let mut cfg = small_config(ClassifierKind::Mlp);
+    cfg.spotting = false;
+    let plan = few_shot_plan(&tr, &cfg);
+    assert!(plan.to_string().contains("in space"), "{plan}");
+    // The member deciding alone: in the plane a push is a pull and a helix a circle.
+    cfg.few_shot.weight_in_space = 1.0;
+    let model = train(&tr, &cfg, &|_, _| {}).unwrap();
+    let Classifier::Mlp {
+        templates: Some(t), ..
+    } = &model.classifier
+    else {
+        panic!("no template member in a model from three samples a label");
+    };
+    assert!(t.depth);
+    let acc = accuracy(&model, &te);
+    assert!(acc >= 0.95, "the member alone: accuracy {acc}");
+    let back = Model::from_json_str(&model.to_json(), Path::new("m.json")).unwrap();
+    assert_eq!(accuracy(&back, &te), acc);
+}
+
 #[test]
 fn a_vocabulary_of_many_samples_a_label_trains_networks_only() {
     let tr = samples(30, 1);

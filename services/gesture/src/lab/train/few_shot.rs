@@ -34,6 +34,12 @@ pub struct FewShotConfig {
     pub temperature: f32,
     /// The template member's share of the ensemble's posterior.
     pub weight: f32,
+    /// [`FewShotConfig::direction_weight`] for trajectories with depth, matched in
+    /// space: a depth camera measures depth several times less precisely than across,
+    /// and a direction taken over one resampled step carries that noise whole.
+    pub direction_weight_in_space: f32,
+    /// [`FewShotConfig::weight`] for trajectories with depth.
+    pub weight_in_space: f32,
     /// Augmented samples each network sees an epoch at least (copies of every sample).
     pub min_epoch_samples: usize,
 }
@@ -51,6 +57,8 @@ impl Default for FewShotConfig {
             direction_weight: 0.5,
             temperature: 0.05,
             weight: 0.7,
+            direction_weight_in_space: 0.0,
+            weight_in_space: 0.85,
             min_epoch_samples: 1024,
         }
     }
@@ -77,6 +85,18 @@ impl FewShotConfig {
         )?;
         finite_within("few_shot.temperature", self.temperature as f64, 1e-6, 1e6)?;
         finite_within("few_shot.weight", self.weight as f64, 0.0, 1.0)?;
+        finite_within(
+            "few_shot.direction_weight_in_space",
+            self.direction_weight_in_space as f64,
+            0.0,
+            100.0,
+        )?;
+        finite_within(
+            "few_shot.weight_in_space",
+            self.weight_in_space as f64,
+            0.0,
+            1.0,
+        )?;
         within(
             "few_shot.min_epoch_samples",
             self.min_epoch_samples,
@@ -84,6 +104,17 @@ impl FewShotConfig {
             1 << 24,
         )?;
         Ok(())
+    }
+}
+
+impl FewShotConfig {
+    /// The member's direction weight and share, matching in space or in the plane.
+    fn member(&self, depth: bool) -> (f32, f32) {
+        if depth {
+            (self.direction_weight_in_space, self.weight_in_space)
+        } else {
+            (self.direction_weight, self.weight)
+        }
     }
 }
 
@@ -109,6 +140,8 @@ pub enum FewShotPlan {
         max_samples: usize,
         /// Templates of the member.
         templates: usize,
+        /// Whether they are matched in space (the samples have depth).
+        depth: bool,
         /// Its share of the posterior.
         weight: f32,
         /// Augmented copies of each sample a network sees an epoch.
@@ -140,12 +173,14 @@ impl FewShotPlan {
             .values()
             .map(|&c| c.min(cfg.templates_per_label))
             .sum();
+        let depth = samples.iter().any(Sample::has_depth);
         FewShotPlan::WithTemplates {
             fewest,
             samples: n,
             max_samples: cfg.max_samples,
             templates,
-            weight: cfg.weight,
+            depth,
+            weight: cfg.member(depth).1,
             copies: cfg.min_epoch_samples.div_ceil(samples.len().max(1)).max(1),
         }
     }
@@ -176,13 +211,15 @@ impl fmt::Display for FewShotPlan {
                 samples,
                 max_samples,
                 templates,
+                depth,
                 weight,
                 copies,
             } => write!(
                 f,
                 "networks and templates: label {fewest:?} has {samples} samples (at most {max_samples}), too few for \
-                 networks alone; {templates} templates matched by DTW carry {:.0} % of the decision, and the \
+                 networks alone; {templates} templates matched by DTW {} carry {:.0} % of the decision, and the \
                  networks see {copies} augmented copies of every sample an epoch",
+                if *depth { "in space" } else { "in the plane" },
                 100.0 * weight
             ),
         }
@@ -191,11 +228,13 @@ impl fmt::Display for FewShotPlan {
 
 /// The template member for these samples (`class_of[i]` the class of sample `i`):
 /// of each class at most [`FewShotConfig::templates_per_label`] samples, spread evenly
-/// over its samples in their order.
+/// over its samples in their order; matching in space when `depth` (the classifier
+/// reads depth).
 pub fn template_member(
     samples: &[Sample],
     class_of: &[usize],
     classes: usize,
+    depth: bool,
     cfg: &FewShotConfig,
 ) -> Templates {
     let mut by_class: Vec<Vec<usize>> = vec![Vec::new(); classes];
@@ -209,18 +248,18 @@ pub fn template_member(
         let keep = idx.len().min(cfg.templates_per_label);
         for k in 0..keep {
             let i = idx[k * idx.len() / keep];
-            templates.push(Template {
-                class,
-                path: Templates::path_of(cfg.points, &samples[i].trajectory()),
-            });
+            let t = samples[i].trajectory();
+            templates.push(Template::of(class, cfg.points, depth, &t));
         }
     }
+    let (direction_weight, weight) = cfg.member(depth);
     Templates {
         points: cfg.points,
+        depth,
         band: cfg.band,
-        direction_weight: cfg.direction_weight,
+        direction_weight,
         temperature: cfg.temperature,
-        weight: cfg.weight,
+        weight,
         templates,
         cache: Default::default(),
     }

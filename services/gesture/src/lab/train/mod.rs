@@ -370,7 +370,7 @@ pub fn train(
                 nets.push(net);
             }
             let templates = matches!(plan, FewShotPlan::WithTemplates { .. }).then(|| {
-                few_shot::template_member(samples, &class_of, labels.len(), &cfg.few_shot)
+                few_shot::template_member(samples, &class_of, labels.len(), depth, &cfg.few_shot)
             });
             Classifier::Mlp {
                 features: fcfg,
