@@ -258,3 +258,48 @@ fn train_says_it_adds_templates_for_a_few_samples_a_label() {
         .len();
     assert_eq!(n, 30);
 }
+
+#[test]
+fn a_gesture_in_space_is_spotted_whole_not_as_the_gestures_it_is_made_of() {
+    // The zigzag towards the camera is a swipe then a push, and the right-push a swipe
+    // with a push at its end: a model without a verifier once published the parts,
+    // each surer than the whole. The parts are drawn too, alone.
+    let p = Isolated::new();
+    let tmp = tempfile::tempdir().unwrap();
+    let rec = tmp.path().join("parts");
+    succeed(
+        p.command("airglyph")
+            .args(["synth", "--seed", "7", "--resolution", "320x240"])
+            .args([
+                "--motion",
+                "draw:zigzag-deep,swipe,right-push,push",
+                "--out",
+            ])
+            .arg(&rec),
+    );
+    let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("../models/air3d-14.json");
+    let out = succeed(
+        p.command("airglyph")
+            .args(["spot", "--truth", "--json", "--model"])
+            .arg(&model)
+            .arg(&rec),
+    );
+    let lines = json_lines(&out.stdout);
+    let found: Vec<(&str, &str)> = lines
+        .iter()
+        .filter(|l| l["event"] == "gesture")
+        .map(|l| {
+            let drawn = l["drawn"].as_str().unwrap_or("(none)");
+            (l["label"].as_str().unwrap(), drawn)
+        })
+        .collect();
+    assert_eq!(
+        found,
+        [
+            ("zigzag-deep", "zigzag-deep"),
+            ("swipe", "swipe"),
+            ("right-push", "right-push"),
+            ("push", "push")
+        ]
+    );
+}

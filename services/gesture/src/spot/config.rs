@@ -79,6 +79,13 @@ pub struct SpotterConfig {
     /// in the air and as `collect` cuts repetitions; reaches from and back to a rest are
     /// not. Unused otherwise.
     pub min_forward: f32,
+    /// For a model without a verifier, which cannot tell a whole gesture from a part of
+    /// one: a stretch that holds the pending gesture whole takes its place when its
+    /// evidence is at least this fraction of the best stretch ending with it (the
+    /// classifier's confidence). A zigzag towards the camera is cut at its corner into a
+    /// swipe and a push, each surer than the whole; the whole is what was drawn (None:
+    /// the surer part wins). Unused with a verifier.
+    pub whole_over_part: Option<f64>,
     /// For a model of symbols drawn in the plane: a stretch along which the hand moves
     /// further in depth (towards or away from the camera) than this many times its
     /// larger side across is not one: a symbol is drawn facing the camera, a reach from
@@ -116,6 +123,7 @@ impl Default for SpotterConfig {
             rank_by: RankBy::default(),
             tracker: TrackerConfig::default(),
             min_forward: 0.7,
+            whole_over_part: Some(0.8),
             // tan 35°: a symbol drawn on a plane turned as far from facing the camera as
             // the 3-D synthetic people turn theirs (`airglyph_synth::air3d`) still passes.
             max_depth_ratio: Some(0.7),

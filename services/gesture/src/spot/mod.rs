@@ -17,7 +17,9 @@
 //! 3. Overlapping accepted candidates compete, ranked by the verifier's probability of
 //!    a whole gesture of the classifier's label times the classifier's confidence
 //!    ([`RankBy`]); the winner is published once nothing better has come for
-//!    `hold_seconds` or the hand rests.
+//!    `hold_seconds` or the hand rests. Without a verifier, a stretch that holds the
+//!    pending gesture whole and is nearly as sure takes its place
+//!    ([`SpotterConfig::whole_over_part`]): the classifier alone is surer of a part.
 //!
 //! With the pen by posture ([`Pen::Posture`]) the posture of the drawing hand, read by
 //! a posture classifier each frame, marks the gestures instead: the stretch between the
@@ -442,16 +444,32 @@ impl Spotter {
         let min_len = (self.cfg.min_seconds * fps) as usize;
         let max_len = (self.cfg.max_seconds * fps) as usize;
         let mut best: Option<Candidate> = None;
+        // The best stretch that holds the pending gesture whole.
+        let mut whole: Option<Candidate> = None;
         for s in self.seg.starts(e, self.barrier, min_len, max_len) {
             let Some(c) = self.score(s, e) else { continue };
             if let Some(t) = self.trace.as_mut() {
                 t.push(c);
             }
-            if c.accepted && best.is_none_or(|b| c.rank > b.rank) {
+            if !c.accepted {
+                continue;
+            }
+            if best.is_none_or(|b| c.rank > b.rank) {
                 best = Some(c);
+            }
+            let holds = self.pending.is_some_and(|p| c.start <= p.start);
+            if holds && whole.is_none_or(|w| c.rank > w.rank) {
+                whole = Some(c);
             }
         }
         let c = best?;
+        let margin = self.cfg.whole_over_part.filter(|_| !self.has_verifier());
+        if let (Some(w), Some(m)) = (whole, margin) {
+            if w.rank >= c.rank + m.max(1e-9).ln() {
+                self.pending = Some(w);
+                return None;
+            }
+        }
         let mut out = None;
         match self.pending {
             Some(p) if c.start >= p.end => {
