@@ -122,8 +122,12 @@ impl Default for SpotterConfig {
             rest_seconds: 0.4,
             rank_by: RankBy::default(),
             tracker: TrackerConfig::default(),
-            min_forward: 0.7,
-            whole_over_part: Some(0.8),
+            // Not 0.7, chosen on the exact skeleton: the pose stage puts the shoulders
+            // on the body's front and the hand nearer the wrist, 0.1 shoulder widths
+            // less forward in the median, and lost 3-D gestures whose ends dip below
+            // 0.7 (NOTES, 2026-12-07).
+            min_forward: 0.5,
+            whole_over_part: Some(0.95),
             // tan 35°: a symbol drawn on a plane turned as far from facing the camera as
             // the 3-D synthetic people turn theirs (`airglyph_synth::air3d`) still passes.
             max_depth_ratio: Some(0.7),
