@@ -76,8 +76,7 @@ pub struct SpotterConfig {
     /// For a model of 3-D gestures without a verifier (its streams are drawn in the
     /// plane; `SpottingModel::train`): a stretch is a gesture only if the hand stays
     /// this far in front of the shoulders all along it (shoulder widths), as one draws
-    /// in the air and as `collect` cuts repetitions; reaches from and back to a rest are
-    /// not. Unused otherwise.
+    /// in the air; reaches from and back to a rest are not. Unused otherwise.
     pub min_forward: f32,
     /// For a model without a verifier, which cannot tell a whole gesture from a part of
     /// one: a stretch that holds the pending gesture whole takes its place when its
