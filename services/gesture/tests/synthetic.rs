@@ -122,6 +122,16 @@ fn every_classifier_learns_synthetic_shapes() {
     }
 }
 
+/// The model's template member; a model without one fails the test.
+fn template_member(model: &Model) -> &airglyph_gesture::model::Templates {
+    match &model.classifier {
+        Classifier::Mlp {
+            templates: Some(t), ..
+        } => t,
+        _ => panic!("no template member in a model from three samples a label"),
+    }
+}
+
 #[test]
 fn a_vocabulary_from_three_samples_a_label_gets_templates_and_is_read_well() {
     // Three samples of each of four shapes, one of them (the stroke) nearly a side of
@@ -137,12 +147,7 @@ fn a_vocabulary_from_three_samples_a_label_gets_templates_and_is_read_well() {
     );
     assert!(plan.to_string().contains("templates"), "{plan}");
     let model = train(&tr, &cfg, &|_, _| {}).unwrap();
-    let Classifier::Mlp {
-        templates: Some(t), ..
-    } = &model.classifier
-    else {
-        panic!("no template member in a model from three samples a label");
-    };
+    let t = template_member(&model);
     assert_eq!(t.templates.len(), 12);
     let acc = accuracy(&model, &te);
     assert!(acc >= 0.95, "accuracy {acc}");
@@ -197,12 +202,7 @@ fn a_vocabulary_in_space_from_three_samples_a_label_is_matched_in_space() {
     // The member deciding alone: in the plane a push is a pull and a helix a circle.
     cfg.few_shot.weight_in_space = 1.0;
     let model = train(&tr, &cfg, &|_, _| {}).unwrap();
-    let Classifier::Mlp {
-        templates: Some(t), ..
-    } = &model.classifier
-    else {
-        panic!("no template member in a model from three samples a label");
-    };
+    let t = template_member(&model);
     assert!(t.depth);
     let acc = accuracy(&model, &te);
     assert!(acc >= 0.95, "the member alone: accuracy {acc}");
