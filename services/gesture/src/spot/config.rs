@@ -56,6 +56,12 @@ pub struct SpotterConfig {
     /// by this log-likelihood margin per code (None: the ratio is only evidence for
     /// the verifier).
     pub margin: Option<f64>,
+    /// [`SpotterConfig::margin`] for a model without a verifier whose gesture HMMs read
+    /// codes on the sphere (trained on 3-D gestures): nothing else tells a reach from a
+    /// gesture there, and the classifier names any movement confidently. A model whose
+    /// HMMs read the circle's codes is not tested (a push is a standing hand there).
+    /// `margin`, when set, takes its place.
+    pub margin_without_verifier: Option<f64>,
     /// Smallest classifier confidence to publish a gesture.
     pub min_score: f64,
     /// Smallest verifier probability that the segment is a whole gesture (None: the
@@ -111,6 +117,10 @@ impl Default for SpotterConfig {
             min_size: 0.3,
             max_size: 2.5,
             margin: None,
+            // Chosen on standing and seated recordings of the 3-D vocabulary (NOTES,
+            // 2026-12-07): −1 loses no standing symbol and finds seated ones that the
+            // reach from the table hid; 0 loses standing ones.
+            margin_without_verifier: Some(-1.0),
             min_score: 0.5,
             min_gesture_prob: None,
             label_bars: true,

@@ -181,6 +181,9 @@ pub struct Spotter {
     trace: Option<Vec<Candidate>>,
     /// The smallest verifier probability of a whole gesture accepted, per label.
     bars: Vec<f64>,
+    /// Lee & Kim's test as a hard one: the least margin a segment's best gesture HMM
+    /// must have over the threshold model.
+    margin: Option<f64>,
     /// Whether the model reads depth: then the hand's depth is kept, counts in its
     /// speed and size, and goes to the classifier.
     in_depth: bool,
@@ -211,11 +214,16 @@ impl Spotter {
                 })
             })
             .collect();
+        let unverified_in_space = sm.verifier.is_none() && !sm.directions.is_circle();
+        let margin = cfg
+            .margin
+            .or(cfg.margin_without_verifier.filter(|_| unverified_in_space));
         let in_depth = model.reads_depth();
         let mut seg = Segmenter::new(&cfg);
         seg.set_in_depth(in_depth);
         Ok(Spotter {
             bars,
+            margin,
             in_depth,
             tracker: HandTracker::new(cfg.tracker),
             seg,
@@ -424,9 +432,8 @@ impl Spotter {
         // The posture says where a gesture is; the verifier, which tells a whole
         // gesture from movement by the motion, only when asked.
         let verified = !pen.verify || c.p_gesture >= self.bars.get(c.class).copied().unwrap_or(0.0);
-        c.accepted = self.cfg.margin.is_none_or(|m| c.ratio > m)
-            && c.score >= self.cfg.min_score
-            && verified;
+        c.accepted =
+            self.margin.is_none_or(|m| c.ratio > m) && c.score >= self.cfg.min_score && verified;
         if let Some(t) = self.trace.as_mut() {
             t.push(c);
         }
@@ -513,7 +520,7 @@ impl Spotter {
             Pen::Gated(pen) => self.postures.lets_through(s, e, &pen),
             _ => true,
         };
-        let accepted = self.cfg.margin.is_none_or(|m| j.ratio > m)
+        let accepted = self.margin.is_none_or(|m| j.ratio > m)
             && j.score >= self.cfg.min_score
             && j.p_gesture >= self.bars.get(j.class).copied().unwrap_or(0.0)
             && gated;
@@ -542,7 +549,7 @@ impl Spotter {
         }
         let post = self.model.posterior(&t);
         input.posterior = post.iter().map(|&p| p as f32).collect();
-        let ratio = self.lee_kim.ratio(&input.segment);
+        let ratio = self.lee_kim.ratio(&t);
         input.ratio = ratio;
         let class = (0..post.len())
             .max_by(|&a, &b| post[a].total_cmp(&post[b]))

@@ -2,8 +2,9 @@
 //! recognition", PAMI 1999): over a stretch's direction codes, one left-right HMM per
 //! label against the ergodic non-gesture HMM made of all their states.
 
+use crate::bezier::Directions;
 use crate::hmm::LogHmm;
-use crate::model::spotting::{sample_codes, STREAM_SYMBOLS};
+use crate::model::spotting::sample_codes;
 use crate::model::{LabelledHmm, SpottingModel};
 use crate::trajectory::Trajectory;
 
@@ -15,6 +16,8 @@ const NEG: f64 = f64::NEG_INFINITY;
 /// gesture model beats it only on a whole gesture of its own.
 #[derive(Debug, Clone)]
 pub struct ThresholdModel {
+    /// Symbols of the gesture HMMs (all alike: `SpottingModel::validate`).
+    symbols: usize,
     stay: Vec<f64>,
     leave: Vec<f64>,
     log_b: Vec<f64>,
@@ -23,6 +26,7 @@ pub struct ThresholdModel {
 impl ThresholdModel {
     pub fn new(models: &[LabelledHmm]) -> Self {
         let (mut stay, mut leave, mut log_b) = (Vec::new(), Vec::new(), Vec::new());
+        let symbols = models.first().map_or(0, |m| m.hmm.n_symbols());
         for lm in models {
             let h = &lm.hmm;
             for i in 0..h.n_states() {
@@ -32,13 +36,18 @@ impl ThresholdModel {
                 log_b.extend(h.b[i].iter().map(|p| p.ln()));
             }
         }
-        Self { stay, leave, log_b }
+        Self {
+            symbols,
+            stay,
+            leave,
+            log_b,
+        }
     }
 
     /// Viterbi log-likelihood of the codes.
     pub fn log_likelihood(&self, codes: &[usize]) -> f64 {
         let n = self.stay.len();
-        let m = STREAM_SYMBOLS;
+        let m = self.symbols;
         if n == 0 || codes.is_empty() {
             return 0.0;
         }
@@ -98,6 +107,7 @@ fn whole_gesture_ll(h: &LogHmm, codes: &[usize], buf: &mut Vec<f64>) -> f64 {
 #[derive(Debug, Clone)]
 pub struct LeeKim {
     step: f64,
+    directions: Directions,
     threshold: ThresholdModel,
     gestures: Vec<LogHmm>,
 }
@@ -106,6 +116,7 @@ impl LeeKim {
     pub fn new(sm: &SpottingModel) -> Self {
         Self {
             step: sm.step,
+            directions: sm.directions,
             threshold: ThresholdModel::new(&sm.models),
             gestures: sm.models.iter().map(|m| m.hmm.to_log()).collect(),
         }
@@ -113,8 +124,9 @@ impl LeeKim {
 
     /// log P(codes | best gesture HMM, ending in its last state) − log P(codes |
     /// threshold model), per code; −∞ when no gesture HMM can end there.
-    pub fn ratio(&self, points: &[[f32; 2]]) -> f64 {
-        let codes = sample_codes(&Trajectory::from_points(points.to_vec()), self.step);
+    /// The codes are taken in space when the model's are (and the segment has depth).
+    pub fn ratio(&self, segment: &Trajectory) -> f64 {
+        let codes = sample_codes(segment, self.step, self.directions);
         if codes.is_empty() {
             return NEG;
         }
@@ -133,14 +145,16 @@ impl LeeKim {
 mod tests {
     use super::*;
     use crate::hmm::DiscreteHmm;
+    use crate::model::spotting::stream_symbols;
 
     /// A left-right HMM of four states over the stream's symbols: the first two emit
     /// `first`, the last two `then` (every other code with a small floor), as a
     /// trained one of a two-stroke gesture does.
     fn two_strokes(label: &str, first: usize, then: usize) -> LabelledHmm {
+        let symbols = stream_symbols(Directions::Circle8);
         let emit = |code: usize| {
-            let mut row = vec![0.01; STREAM_SYMBOLS];
-            row[code] = 1.0 - 0.01 * (STREAM_SYMBOLS - 1) as f64;
+            let mut row = vec![0.01; symbols];
+            row[code] = 1.0 - 0.01 * (symbols - 1) as f64;
             row
         };
         let hmm = DiscreteHmm {

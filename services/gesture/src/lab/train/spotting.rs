@@ -3,10 +3,11 @@
 
 use super::calibrate::calibrate_label_bars;
 use super::TrainConfig;
+use crate::bezier::Directions;
 use crate::hmm::DiscreteHmm;
 use crate::lab::data::Sample;
 use crate::lab::train::hmm::HmmTrainConfig;
-use crate::model::spotting::{sample_codes, STREAM_SYMBOLS};
+use crate::model::spotting::{sample_codes, stream_symbols};
 use crate::model::{LabelledHmm, Model, SpottingModel, Verifier};
 use rayon::prelude::*;
 
@@ -23,9 +24,16 @@ impl SpottingModel {
     pub fn train(samples: &[Sample], classifier: &Model, train: &TrainConfig) -> Self {
         let (step, verifiers) = (train.spotting_step, train.verifiers);
         let labels = &classifier.labels;
+        // Codes on the sphere for gestures drawn in space: on the circle a push is a
+        // hand standing still.
+        let directions = if samples.iter().any(Sample::has_depth) {
+            Directions::Sphere26
+        } else {
+            Directions::Circle8
+        };
         let cfg = HmmTrainConfig {
             states: train.spotting_states,
-            symbols: STREAM_SYMBOLS,
+            symbols: stream_symbols(directions),
             band: 1,
             iterations: 12,
             emission_prior: 0.3,
@@ -38,7 +46,7 @@ impl SpottingModel {
                 let seqs: Vec<Vec<usize>> = samples
                     .iter()
                     .filter(|s| &s.label == l)
-                    .map(|s| sample_codes(&s.trajectory(), step))
+                    .map(|s| sample_codes(&s.trajectory(), step, directions))
                     .filter(|c| !c.is_empty())
                     .collect();
                 LabelledHmm {
@@ -49,6 +57,7 @@ impl SpottingModel {
             .collect();
         let mut model = Self {
             step,
+            directions,
             models,
             verifier: None,
         };

@@ -197,7 +197,7 @@ pub fn stream_examples(
                     }
                     let t = Trajectory::from_points(input.segment.clone());
                     input.posterior = classifier.posterior(&t).iter().map(|&p| p as f32).collect();
-                    input.ratio = lee_kim.ratio(&input.segment);
+                    input.ratio = lee_kim.ratio(&t);
                     let (Some(a), Some(b)) = (seg.point(s), seg.point(e)) else {
                         continue;
                     };
