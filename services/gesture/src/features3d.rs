@@ -24,6 +24,18 @@ pub(crate) fn dim(points: usize, grid: usize) -> usize {
         .saturating_add(6)
 }
 
+/// The bounding box (lowest and highest corner) of points in space.
+pub(crate) fn bbox3<'a>(points: impl IntoIterator<Item = &'a Point3>) -> (Point3, Point3) {
+    let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
+    for p in points {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    (lo, hi)
+}
+
 /// A trajectory in space resampled to `n` points of equal arc length, centred on its
 /// box and divided by the box's largest side.
 pub(crate) struct Resampled3 {
@@ -43,14 +55,7 @@ pub(crate) fn resample3(t: &Trajectory, n: usize) -> Resampled3 {
             sides: [0.0; 3],
         };
     }
-    let mut lo = [f32::MAX; 3];
-    let mut hi = [f32::MIN; 3];
-    for p in &raw {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
+    let (lo, hi) = bbox3(&raw);
     let sides = [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]];
     let s = sides[0].max(sides[1]).max(sides[2]).max(1e-6);
     let c = [0, 1, 2].map(|k| (lo[k] + hi[k]) / 2.0);

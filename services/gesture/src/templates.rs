@@ -230,22 +230,12 @@ fn points3(t: &Template) -> Vec<Point3> {
 }
 
 /// Positions with their directions (central differences, as the networks' features
-/// take them), the directions scaled by [`Templates::direction_weight`].
+/// take them), the directions scaled by [`Templates::direction_weight`]: in the plane,
+/// the steps in space without their depth (a depth of 0 changes no other component).
 fn plane_steps(t: &Template, m: &Templates) -> Vec<[f32; 4]> {
-    let path = &t.path;
-    let n = path.len();
-    (0..n)
-        .map(|i| {
-            let (a, b) = (path[i.saturating_sub(1)], path[(i + 1).min(n - 1)]);
-            let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-            let l = (dx * dx + dy * dy).sqrt();
-            let w = if l > 1e-6 {
-                m.direction_weight / l
-            } else {
-                0.0
-            };
-            [path[i][0], path[i][1], dx * w, dy * w]
-        })
+    space_steps(t, m)
+        .into_iter()
+        .map(|s| [s[0], s[1], s[3], s[4]])
         .collect()
 }
 

@@ -172,13 +172,8 @@ impl RepetitionSegmenter {
         }
         let part = &m[start..=end];
         let secs = part[part.len() - 1].2.saturating_sub(part[0].2) as f64 * 1e-9;
-        let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
-        for p in part {
-            for (k, v) in [p.0[0], p.0[1], p.0[3]].into_iter().enumerate() {
-                lo[k] = lo[k].min(v);
-                hi[k] = hi[k].max(v);
-            }
-        }
+        let in_space: Vec<[f32; 3]> = part.iter().map(|p| [p.0[0], p.0[1], p.0[3]]).collect();
+        let (lo, hi) = crate::features3d::bbox3(&in_space);
         // Its size in space: a push is as much a drawing as a stroke across.
         let size = (0..3).map(|k| hi[k] - lo[k]).fold(0.0f32, f32::max);
         if size < self.cfg.min_size || secs < self.cfg.min_seconds || secs > self.cfg.max_seconds {

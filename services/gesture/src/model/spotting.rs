@@ -144,13 +144,7 @@ pub fn sample_codes(t: &Trajectory, step: f64, directions: Directions) -> Vec<us
         return out;
     }
     let p3 = t.points3();
-    let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
-    for p in &p3 {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
+    let (lo, hi) = crate::features3d::bbox3(&p3);
     let s = (0..3).map(|k| hi[k] - lo[k]).fold(1e-6f32, f32::max);
     for p in &p3 {
         q.push([0, 1, 2].map(|k| (p[k] - lo[k]) / s), |c| out.push(c));

@@ -181,9 +181,6 @@ pub struct Spotter {
     trace: Option<Vec<Candidate>>,
     /// The smallest verifier probability of a whole gesture accepted, per label.
     bars: Vec<f64>,
-    /// Lee & Kim's test as a hard one: the least margin a segment's best gesture HMM
-    /// must have over the threshold model.
-    margin: Option<f64>,
     /// Whether the model reads depth: then the hand's depth is kept, counts in its
     /// speed and size, and goes to the classifier.
     in_depth: bool,
@@ -214,16 +211,11 @@ impl Spotter {
                 })
             })
             .collect();
-        let unverified_in_space = sm.verifier.is_none() && !sm.directions.is_circle();
-        let margin = cfg
-            .margin
-            .or(cfg.margin_without_verifier.filter(|_| unverified_in_space));
         let in_depth = model.reads_depth();
         let mut seg = Segmenter::new(&cfg);
         seg.set_in_depth(in_depth);
         Ok(Spotter {
             bars,
-            margin,
             in_depth,
             tracker: HandTracker::new(cfg.tracker),
             seg,
@@ -433,7 +425,7 @@ impl Spotter {
         // gesture from movement by the motion, only when asked.
         let verified = !pen.verify || c.p_gesture >= self.bars.get(c.class).copied().unwrap_or(0.0);
         c.accepted =
-            self.margin.is_none_or(|m| c.ratio > m) && c.score >= self.cfg.min_score && verified;
+            self.margin().is_none_or(|m| c.ratio > m) && c.score >= self.cfg.min_score && verified;
         if let Some(t) = self.trace.as_mut() {
             t.push(c);
         }
@@ -520,7 +512,7 @@ impl Spotter {
             Pen::Gated(pen) => self.postures.lets_through(s, e, &pen),
             _ => true,
         };
-        let accepted = self.margin.is_none_or(|m| j.ratio > m)
+        let accepted = self.margin().is_none_or(|m| j.ratio > m)
             && j.score >= self.cfg.min_score
             && j.p_gesture >= self.bars.get(j.class).copied().unwrap_or(0.0)
             && gated;
@@ -595,6 +587,21 @@ impl Spotter {
             VerifierInput::cut(&window, s - from, e - from, times, fps),
             None,
         ))
+    }
+
+    /// Lee & Kim's test as a hard one: the least margin a segment's best gesture HMM
+    /// must have over the threshold model. `margin_without_verifier` holds for a model
+    /// without a verifier whose HMMs read codes in space.
+    fn margin(&self) -> Option<f64> {
+        let in_space = self
+            .model
+            .spotting
+            .as_ref()
+            .is_some_and(|s| !s.directions.is_circle());
+        let fallback = self.cfg.margin_without_verifier;
+        self.cfg
+            .margin
+            .or(fallback.filter(|_| in_space && !self.has_verifier()))
     }
 
     fn has_verifier(&self) -> bool {
