@@ -13,7 +13,10 @@
 //!    the gesture HMMs' states, [`LeeKim`]), and the [`Verifier`], a network that weighs
 //!    those with the stretch's coarse shape, size, place, timing and the hand's path
 //!    just before and after it, and tells a whole gesture from movement, part of a
-//!    gesture or a gesture with movement around it.
+//!    gesture or a gesture with movement around it. A model without a verifier (every
+//!    model of 3-D gestures) instead holds a stretch to Lee & Kim's test on codes in
+//!    space ([`SpotterConfig::margin_without_verifier`]) and to the hand held out in
+//!    front of the body ([`SpotterConfig::min_forward`]).
 //! 3. Overlapping accepted candidates compete, ranked by the verifier's probability of
 //!    a whole gesture of the classifier's label times the classifier's confidence
 //!    ([`RankBy`]); the winner is published once nothing better has come for
