@@ -412,8 +412,13 @@ impl PoseEstimator {
         let neck = assigned.limb[Limb::Head.index()]
             .filter(|&mi| !cut[mi] && !foot_seen)
             .and_then(|mi| {
-                let top = s.graph.pos[maxima[mi] as usize];
-                neck_base(&s.points, &s.mask, &torso.pose, &top, 1.0 / k.fx)
+                let head = s.graph.pos[maxima[mi] as usize];
+                let base =
+                    |top: &Point3<f32>| neck_base(&s.points, &s.mask, &torso.pose, top, 1.0 / k.fx);
+                base(&head).or_else(|| {
+                    head_top_maximum(&head, &torso.pose, &whole, &s.graph.pos)
+                        .and_then(|top| base(&top))
+                })
             });
         d.neck_base = neck.clone();
         t.since_foot = if foot_seen {
@@ -546,6 +551,12 @@ impl PoseEstimator {
 /// How far below the neck a leg's tip must lie to be a foot, metres: a seated child's
 /// feet lie farther.
 const FOOT_BELOW_NECK: f32 = 0.8;
+
+/// How far to the side of the head's maximum, and how far above it, the top of the
+/// head is looked for among the maxima, metres: a head is about 0.15 m wide, and the
+/// chin lies about 0.22 m under the top.
+const HEAD_LINE: f32 = 0.08;
+const HEAD_ABOVE: f32 = 0.3;
 
 /// A tracked torso turned further than this from facing the camera (120°) is lost
 /// ([`Tracking::torso_start`])...
@@ -1161,4 +1172,27 @@ struct Fitted {
     hands: [Option<Point3<f32>>; 2],
     /// The top of the head: the head joint reported.
     head_top: Point3<f32>,
+}
+
+/// The highest of the whole maxima on the head's line, above the head's maximum `head`
+/// by at most a head's height (torso frame `torso`, y up): the top of the head when the
+/// head's maximum is its chin, which juts out towards the camera and ends a geodesic
+/// path of its own; the outline read below the chin shows a neck and shoulders but no
+/// head.
+fn head_top_maximum(
+    head: &Point3<f32>,
+    torso: &TorsoPose,
+    whole: &[u32],
+    pos: &[Point3<f32>],
+) -> Option<Point3<f32>> {
+    let inv = torso.inverse();
+    let h = inv.apply(head);
+    whole
+        .iter()
+        .map(|&m| (pos[m as usize], inv.apply(&pos[m as usize])))
+        .filter(|(_, q)| {
+            (q.x - h.x).abs() <= HEAD_LINE && (0.01..=HEAD_ABOVE).contains(&(q.y - h.y))
+        })
+        .max_by(|(_, a), (_, b)| a.y.total_cmp(&b.y))
+        .map(|(p, _)| p)
 }

@@ -558,3 +558,37 @@ fn the_head_is_reported_at_the_top_of_the_head() {
         }
     }
 }
+
+#[test]
+fn a_short_person_close_up_is_measured_from_the_top_of_the_head_not_the_chin() {
+    // Close up, the chin juts out towards the camera and ends a geodesic path of its
+    // own; taken for the head's end, the outline read below it showed a neck and
+    // shoulders but no head, and the neck's base was not found: the torso then sat on
+    // the template's neck, 10–13 cm high on these bodies.
+    for (height_m, distance_m) in [(1.55, 1.0), (1.6, 0.9)] {
+        let body = BodySpec::Procedural(airglyph_synth::ProceduralBody {
+            height_m,
+            build: 1.0,
+        });
+        let cfg = SceneConfig {
+            body,
+            ..at(distance_m, ScriptedPose::ArmsAtSides)
+        };
+        for frame in 0..3 {
+            let (r, truth) = single(upper_body(cfg.clone()), frame);
+            assert!(r.person_found, "{height_m} m body, frame {frame}");
+            let e = error_m(&r.skeleton, &truth.skeleton, Joint::Neck);
+            assert!(
+                e < 0.09,
+                "{height_m} m body, frame {frame}: the neck off by {e:.2} m"
+            );
+            for j in [Joint::LeftShoulder, Joint::RightShoulder] {
+                let e = error_m(&r.skeleton, &truth.skeleton, j);
+                assert!(
+                    e < 0.05,
+                    "{height_m} m body, frame {frame}: {j:?} off by {e:.2} m"
+                );
+            }
+        }
+    }
+}
