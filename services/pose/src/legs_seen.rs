@@ -69,8 +69,14 @@ pub(crate) fn leg_seen(
             foot: false,
         };
     };
+    // A leg cut from view (the image's edge, a table) nearer its hip than the fitted
+    // thigh is long did not show its knee: a seated person's thigh, pointing at the
+    // camera, cut by the image's lower edge, with the knee the fit put inside it. (In
+    // a straight line: the geodesic reach runs over the belly and the thigh's curve.)
+    let thigh = knee_joint.map_or(0.0, |knee| (joint(knee) - hip).norm());
+    let knee_cut_off = end.cut && (end.at - hip).norm() < thigh;
     LegSeen {
-        knee: knee_joint.is_some_and(|k| skeleton.visible[k.index()]),
+        knee: knee_joint.is_some_and(|k| skeleton.visible[k.index()]) && !knee_cut_off,
         foot: skeleton.visible[foot_joint.index()]
             && foot_seen(&end, &hip, &foot, length, up, frame, chair),
     }
@@ -181,6 +187,21 @@ mod tests {
         assert!(!foot(end([0.1, 0.3, 1.0], true, 0.3)));
         // Cut beside the hip, reached the long way round: another limb's.
         assert!(!foot(end([0.3, 0.05, 1.0], true, 0.9)));
+    }
+
+    #[test]
+    fn a_leg_cut_from_view_shows_its_knee_only_when_the_cut_lies_past_it() {
+        let (points, mask, k) = person_before_a_wall();
+        let frame = frame_of(&points, &mask, &k);
+        let s = left_leg(Point3::new(0.1, 0.8, 1.0));
+        let knee = |end| leg_seen(Limb::LeftLeg, &s, end, true, &UP, &frame, None).knee;
+        // Cut at the shin, past the knee 0.4 m below the hip.
+        assert!(knee(end([0.1, 0.6, 1.0], true, 0.6)));
+        // Cut at the thigh: the knee in view is the fit's guess. The geodesic reach
+        // over the belly is no measure of where along the leg the cut lies.
+        assert!(!knee(end([0.1, 0.25, 1.0], true, 0.5)));
+        // An end not at a cut: the knee in view is judged by the view alone.
+        assert!(knee(end([0.1, 0.25, 1.0], false, 0.5)));
     }
 
     #[test]
