@@ -6,7 +6,8 @@
 //!  [upper] [partial] [single] [qvga] [lateral:M] [dist:M] [yaw:DEG] [frames] [oracle|oracle-only]
 //!  [overlays:DIR] [from:N] [every:N] [set:FIELD=VALUE]`; with `SERIES=FILE` a line a frame,
 //!  `DUMP=FILE` the joints, `TORSO=1` the torso step's error each frame, `HIDDENDBG=1` each
-//!  joint out of view but reported visible (where the estimate and the truth project).
+//!  joint out of view but reported visible (its confidence, where the estimate and the
+//!  truth project).
 #![allow(clippy::needless_range_loop)]
 
 mod support;
@@ -305,8 +306,9 @@ fn main() {
                     if r.skeleton.visible[j] && std::env::var_os("HIDDENDBG").is_some() {
                         let (e, t) = (r.skeleton.joints[j], truth.skeleton.joints[j]);
                         eprintln!(
-                            "frame {i} {:?} shown: est {:.2?} px {:?} truth {:.2?} px {:?}",
+                            "frame {i} {:?} shown: conf {:.2} est {:.2?} px {:?} truth {:.2?} px {:?}",
                             Joint::ALL[j],
+                            r.skeleton.confidence[j],
                             e.coords.as_slice(),
                             k.project(&e),
                             t.coords.as_slice(),

@@ -515,6 +515,18 @@ impl PoseEstimator {
         for j in 0..Joint::COUNT {
             skeleton.visible[j] = frame.shows(&skeleton.joints[j]);
         }
+        // The hips of a body cut short of its feet and not seen whole lately, whose
+        // pelvis the camera mostly does not see where the fit puts it: the fit holds
+        // them just above a table's edge or the image's, the segment behind it. (With
+        // a foot in view the legs hold the pelvis, and a standing body's pelvis half
+        // hidden by a forearm, or by its own leg side-on, is seen.)
+        if !foot_seen && !t.seen_whole() {
+            for j in [Joint::Pelvis, Joint::LeftHip, Joint::RightHip] {
+                if skeleton.confidence[j.index()] < PELVIS_SEEN {
+                    skeleton.visible[j.index()] = false;
+                }
+            }
+        }
         // A leg's knee and foot: only what its end in view shows (`legs_seen.rs`).
         for l in [Limb::LeftLeg, Limb::RightLeg] {
             let (hip, knee, foot) = l.joints();
@@ -551,6 +563,10 @@ impl PoseEstimator {
 /// How far below the neck a leg's tip must lie to be a foot, metres: a seated child's
 /// feet lie farther.
 const FOOT_BELOW_NECK: f32 = 0.8;
+
+/// The share of the pelvis the camera must see where the fit puts it, in a body cut
+/// short of its feet, for its hips to be reported visible.
+const PELVIS_SEEN: f32 = 0.5;
 
 /// How far to the side of the head's maximum, and how far above it, the top of the
 /// head is looked for among the maxima, metres: a head is about 0.15 m wide, and the
