@@ -515,12 +515,12 @@ impl PoseEstimator {
         for j in 0..Joint::COUNT {
             skeleton.visible[j] = frame.shows(&skeleton.joints[j]);
         }
-        // The hips of a body cut short of its feet and not seen whole lately, whose
-        // pelvis the camera mostly does not see where the fit puts it: the fit holds
-        // them just above a table's edge or the image's, the segment behind it. (With
-        // a foot in view the legs hold the pelvis, and a standing body's pelvis half
-        // hidden by a forearm, or by its own leg side-on, is seen.)
-        if !foot_seen && !t.seen_whole() {
+        // The hips of a body not seen whole lately (no foot in view, this frame or
+        // lately), whose pelvis the camera mostly does not see where the fit puts it:
+        // the fit holds them just above a table's edge or the image's, the segment
+        // behind it. (With a foot in view the legs hold the pelvis, and a standing
+        // body's pelvis half hidden by a forearm, or by its own leg side-on, is seen.)
+        if !t.seen_whole() {
             for j in [Joint::Pelvis, Joint::LeftHip, Joint::RightHip] {
                 if skeleton.confidence[j.index()] < PELVIS_SEEN {
                     skeleton.visible[j.index()] = false;

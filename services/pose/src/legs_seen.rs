@@ -2,7 +2,8 @@
 //! not yet seen: the fit puts a leg's knee and foot somewhere even when nothing of the
 //! leg's end was in the frame (legs below the image's edge, under a table, a seated
 //! person's thighs pointing at the camera). A leg shows its foot only when its end in
-//! view could be a foot, and its knee only when the leg has an end and a hip in view.
+//! view could be a foot, and its knee only when the leg has an end and a hip in view and
+//! its end is no cut nearer the hip than the knee.
 
 use crate::view::{ChairBehind, Frame};
 use crate::Limb;
