@@ -14,7 +14,7 @@ use crate::graph::{GeoGraph, NONE};
 use crate::hands::{hands_at_fingertips, hands_at_their_points};
 use crate::head_top::head_top_at_its_points;
 use crate::legs_seen::{leg_seen, LegEnd};
-use crate::neck::{neck_base, NeckBase};
+use crate::neck::{head_top_maximum, neck_base, NeckBase};
 use crate::register::{
     drop_borrowed_tips, hidden_limbs, place, starts, tips_strayed, Fit, Frame, OfferedStart,
     Registration,
@@ -567,12 +567,6 @@ const FOOT_BELOW_NECK: f32 = 0.8;
 /// The share of the pelvis the camera must see where the fit puts it, in a body cut
 /// short of its feet, for its hips to be reported visible.
 const PELVIS_SEEN: f32 = 0.5;
-
-/// How far to the side of the head's maximum, and how far above it, the top of the
-/// head is looked for among the maxima, metres: a head is about 0.15 m wide, and the
-/// chin lies about 0.22 m under the top.
-const HEAD_LINE: f32 = 0.08;
-const HEAD_ABOVE: f32 = 0.3;
 
 /// A tracked torso turned further than this from facing the camera (120°) is lost
 /// ([`Tracking::torso_start`])...
@@ -1188,27 +1182,4 @@ struct Fitted {
     hands: [Option<Point3<f32>>; 2],
     /// The top of the head: the head joint reported.
     head_top: Point3<f32>,
-}
-
-/// The highest of the whole maxima on the head's line, above the head's maximum `head`
-/// by at most a head's height (torso frame `torso`, y up): the top of the head when the
-/// head's maximum is its chin, which juts out towards the camera and ends a geodesic
-/// path of its own; the outline read below the chin shows a neck and shoulders but no
-/// head.
-fn head_top_maximum(
-    head: &Point3<f32>,
-    torso: &TorsoPose,
-    whole: &[u32],
-    pos: &[Point3<f32>],
-) -> Option<Point3<f32>> {
-    let inv = torso.inverse();
-    let h = inv.apply(head);
-    whole
-        .iter()
-        .map(|&m| (pos[m as usize], inv.apply(&pos[m as usize])))
-        .filter(|(_, q)| {
-            (q.x - h.x).abs() <= HEAD_LINE && (0.01..=HEAD_ABOVE).contains(&(q.y - h.y))
-        })
-        .max_by(|(_, a), (_, b)| a.y.total_cmp(&b.y))
-        .map(|(p, _)| p)
 }

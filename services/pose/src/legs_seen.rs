@@ -55,9 +55,8 @@ pub(crate) fn leg_seen(
     let (hip_joint, knee_joint, foot_joint) = leg.joints();
     let joint = |j: Joint| skeleton.joints[j.index()];
     let (hip, foot) = (joint(hip_joint), joint(foot_joint));
-    let length = knee_joint.map_or(0.0, |knee| {
-        (joint(knee) - hip).norm() + (foot - joint(knee)).norm()
-    });
+    let thigh = knee_joint.map_or(0.0, |knee| (joint(knee) - hip).norm());
+    let length = knee_joint.map_or(0.0, |knee| thigh + (foot - joint(knee)).norm());
     // A leg with no maximum of its own showed the camera no end at all: its foot and
     // knee are where the fit put them (a thigh bent back into the image to take an
     // arm's points), not where anything was seen. Nor does a leg whose hip lies where
@@ -74,7 +73,6 @@ pub(crate) fn leg_seen(
     // thigh is long did not show its knee: a seated person's thigh, pointing at the
     // camera, cut by the image's lower edge, with the knee the fit put inside it. (In
     // a straight line: the geodesic reach runs over the belly and the thigh's curve.)
-    let thigh = knee_joint.map_or(0.0, |knee| (joint(knee) - hip).norm());
     let knee_cut_off = end.cut && (end.at - hip).norm() < thigh;
     LegSeen {
         knee: knee_joint.is_some_and(|k| skeleton.visible[k.index()]) && !knee_cut_off,

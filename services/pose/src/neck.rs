@@ -23,6 +23,12 @@ const MIN_NECK: f32 = 0.06;
 /// adult's is about 0.5 m up).
 const MIN_CROWN: f32 = 0.3;
 
+/// How far to the side of the head's maximum, and how far above it, the top of the
+/// head is looked for among the maxima, metres: a head is about 0.15 m wide, and the
+/// chin lies about 0.22 m under the top.
+const HEAD_LINE: f32 = 0.08;
+const HEAD_ABOVE: f32 = 0.3;
+
 /// The outline's widths below the top of the head and where its neck ends.
 #[derive(Debug, Clone, PartialEq)]
 pub struct NeckBase {
@@ -161,6 +167,29 @@ pub fn neck_base(
         }
     }
     None
+}
+
+/// The highest of the whole maxima on the head's line, above the head's maximum `head`
+/// by at most a head's height (torso frame `torso`, y up): the top of the head when the
+/// head's maximum is its chin, which juts out towards the camera and ends a geodesic
+/// path of its own; the outline read below the chin shows a neck and shoulders but no
+/// head.
+pub fn head_top_maximum(
+    head: &Point3<f32>,
+    torso: &TorsoPose,
+    whole: &[u32],
+    pos: &[Point3<f32>],
+) -> Option<Point3<f32>> {
+    let inv = torso.inverse();
+    let h = inv.apply(head);
+    whole
+        .iter()
+        .map(|&m| (pos[m as usize], inv.apply(&pos[m as usize])))
+        .filter(|(_, q)| {
+            (q.x - h.x).abs() <= HEAD_LINE && (0.01..=HEAD_ABOVE).contains(&(q.y - h.y))
+        })
+        .max_by(|(_, a), (_, b)| a.y.total_cmp(&b.y))
+        .map(|(p, _)| p)
 }
 
 #[cfg(test)]
