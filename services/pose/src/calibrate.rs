@@ -15,9 +15,10 @@
 //! and forearm, from the frames whose bent elbow tells the two bones apart (a straight
 //! limb cannot; legs are rarely seen bent enough, so they keep one ratio).
 
-use crate::body::{rotation_vector, BodyConfig};
-use crate::register::{Fit, LengthsConfig, PriorsConfig};
+use crate::body::{limb_segments, rotation_vector, BodyConfig, BodyPose, BodyTemplate, Posed};
+use crate::register::{distance_off_others, place, Fit, LengthsConfig, PriorsConfig};
 use crate::Limb;
+use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
 
@@ -92,6 +93,10 @@ struct PairRatio {
     /// The registration's estimates (the ratio each frame's fit asks for); once there
     /// are any, the geodesic samples are not used.
     fitted: Recent,
+    /// What the person's arms were seen to reach at least ([`arms_reaching`]): a
+    /// straight line from shoulder to fingertip is never longer than the arm, bent or
+    /// not, so no frame asks for less. 0 until seen.
+    floor: f32,
 }
 
 impl PairRatio {
@@ -118,7 +123,9 @@ impl PairRatio {
             // person half out of view) cannot drag it.
             self.fitted.quantile(0.5)
         };
-        learned.map_or(1.0, |x| x.clamp(MIN_RATIO, MAX_RATIO))
+        learned
+            .map_or(1.0, |x| x.clamp(MIN_RATIO, MAX_RATIO))
+            .max(self.floor.min(MAX_RATIO))
     }
 }
 
@@ -201,6 +208,14 @@ impl BodyCalibration {
         self.legs.ratio()
     }
 
+    /// Holds the arms at least `ratio` times the default body's from now on: a frame
+    /// showed them reaching that far ([`arms_reaching`]).
+    pub fn arms_at_least(&mut self, ratio: f32) {
+        if ratio.is_finite() {
+            self.arms.floor = self.arms.floor.max(ratio.min(MAX_RATIO));
+        }
+    }
+
     /// Moves the collarbones' rest turns a share `gain` of the way to the turns of the
     /// frame's fit (rotation vectors against the chest, left and right): a person's
     /// shoulders sit higher or lower than the template's, which the collarbone prior
@@ -269,6 +284,58 @@ impl BodyCalibration {
     }
 }
 
+/// How far an arm's end may lie off the line from its fitted shoulder through its
+/// fitted fingertip and still count as its own (metres): about a forearm's thickness.
+/// Farther, the maximum may be another part's (the torso's, cut by the image's edge
+/// between hanging arms).
+const REACH_OFF_LINE: f32 = 0.08;
+
+/// An arm's end this near the surface of another part of the fitted body (metres) may
+/// be that part's: far away, arms hanging against the body are given maxima on the
+/// thighs, along the arms' line below the hands.
+const ON_ANOTHER_PART: f32 = 0.03;
+
+/// The factor the arms of `tpl` must at least be lengthened by for the arms' ends seen
+/// (`ends`, the limbs' geodesic maxima, at a cut or not) to lie within reach of the
+/// shoulders of the body fitted at `pose`: the greatest, over the arms whose end lies
+/// along their fitted arm, of the end's distance from the shoulder over the arm's
+/// straight reach, shoulder to fingertip. A straight line is a lower bound on the arm's
+/// length however the elbow bends, and the arm goes on beyond a cut, so this holds for
+/// any pose. None when no arm's end lies along it.
+///
+/// A single frame learns nothing else of the arms' length: the data term explains a
+/// hanging hand's points beyond a short arm as outliers, and a race over lengths cannot
+/// tell them apart (pose NOTES).
+pub fn arms_reaching(
+    tpl: &BodyTemplate,
+    pose: &BodyPose,
+    ends: &[Option<Point3<f32>>; 5],
+) -> Option<f32> {
+    let posed = Posed::new(tpl, pose);
+    let placed = place(tpl, &posed);
+    [Limb::LeftArm, Limb::RightArm]
+        .into_iter()
+        .filter_map(|l| {
+            let end = ends[l.index()]?;
+            let &[upper, fore] = limb_segments(l) else {
+                return None;
+            };
+            let (seg, local) = tpl.tips[l.index()];
+            debug_assert_eq!(seg, fore);
+            let shoulder = posed.joint[upper.index()];
+            let to_end = end - shoulder;
+            let along = (posed.point(seg, &local) - shoulder).try_normalize(1e-6)?;
+            let off_line = (to_end - along * to_end.dot(&along)).norm();
+            let reach = tpl.origin[fore.index()].norm() + local.coords.norm();
+            let off_others = distance_off_others(&placed, &end, limb_segments(l));
+            (off_others >= ON_ANOTHER_PART
+                && to_end.dot(&along) > 0.0
+                && off_line <= REACH_OFF_LINE)
+                .then(|| to_end.norm() / reach)
+        })
+        .reduce(f32::max)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -317,6 +384,58 @@ mod tests {
             c.measure(&cfg, &base, Limb::LeftLeg, 0.5 * 0.95);
         }
         assert_eq!(c.leg_ratio(), MIN_RATIO);
+    }
+
+    #[test]
+    fn an_end_beyond_an_arm_it_lies_along_asks_for_that_much_more_arm() {
+        use crate::body::{Segment, Shape};
+        use nalgebra::{Rotation3, Vector3};
+        let tpl = BodyTemplate::new(&Shape::makehuman(), &BodyConfig::default());
+        // Facing the camera 2.5 m away, arms hanging (camera y down).
+        let r = Rotation3::from_basis_unchecked(&[Vector3::x(), -Vector3::y(), -Vector3::z()]);
+        let pose = BodyPose {
+            pelvis: Point3::new(0.0, 0.1, 2.5),
+            rotation: [r; Segment::COUNT],
+        };
+        let posed = Posed::new(&tpl, &pose);
+        let (seg, local) = tpl.tips[Limb::LeftArm.index()];
+        let shoulder = posed.joint[Segment::LeftUpperArm.index()];
+        let along = |k: f32| Some(shoulder + (posed.point(seg, &local) - shoulder) * k);
+        let mut tips = [None; 5];
+        assert_eq!(arms_reaching(&tpl, &pose, &tips), None, "no tip seen");
+        tips[Limb::LeftArm.index()] = along(1.25);
+        let k = arms_reaching(&tpl, &pose, &tips).unwrap();
+        assert!((k - 1.25).abs() < 0.01, "{k}");
+        // A nearer tip asks for less; the longer of the two arms' asks wins.
+        tips[Limb::RightArm.index()] = tips[Limb::LeftArm.index()].map(|p| {
+            let m = posed.joint[Segment::RightUpperArm.index()];
+            m + (p - shoulder) * 0.8
+        });
+        assert!((arms_reaching(&tpl, &pose, &tips).unwrap() - 1.25).abs() < 0.01);
+        // An end well off the arm's line is not taken for its own, nor one behind the
+        // shoulder.
+        tips = [None; 5];
+        tips[Limb::LeftArm.index()] = along(1.2).map(|p| p + Vector3::new(0.1, 0.0, 0.0));
+        assert_eq!(arms_reaching(&tpl, &pose, &tips), None);
+        tips[Limb::LeftArm.index()] = along(-1.2);
+        assert_eq!(arms_reaching(&tpl, &pose, &tips), None);
+    }
+
+    #[test]
+    fn arms_held_at_least_as_long_as_seen_until_the_person_is_forgotten() {
+        let mut c = BodyCalibration::default();
+        c.arms_at_least(1.2);
+        c.arms_at_least(1.1);
+        assert!((c.arm_ratio() - 1.2).abs() < 1e-6, "the longest seen holds");
+        for _ in 0..100 {
+            c.refine([Some(-0.2), None]);
+        }
+        assert!((c.arm_ratio() - 1.2).abs() < 1e-6, "no fit asks for less");
+        c.arms_at_least(5.0);
+        assert_eq!(c.arm_ratio(), MAX_RATIO);
+        assert_eq!(c.leg_ratio(), 1.0);
+        c.reset();
+        assert_eq!(c.arm_ratio(), 1.0);
     }
 
     #[test]

@@ -3,8 +3,8 @@
 //! steps' buffers ([`Scratch`]).
 
 use crate::assign::{assign, limb_costs, LimbCosts};
-use crate::body::{segment_of, BodyPose, BodyTemplate, Posed, Segment};
-use crate::calibrate::BodyCalibration;
+use crate::body::{segment_of, BodyConfig, BodyPose, BodyTemplate, Posed, Segment};
+use crate::calibrate::{arms_reaching, BodyCalibration};
 use crate::chains::{limb_chain, LimbState, TargetMarks};
 use crate::config::PoseConfig;
 use crate::debug::{Debug, StepTimes};
@@ -776,6 +776,9 @@ struct Assigned {
     /// Per limb, its tip: the maximum given to it, unless it lies on another limb of
     /// the tracked body.
     tips: [Option<Point3<f32>>; 5],
+    /// Per limb, the maximum given to it, at a cut or not: if it is the limb's, the limb
+    /// reaches at least that far.
+    ends: [Option<Point3<f32>>; 5],
     /// Whether the seed's estimate races the tracked body: when detecting, when nothing
     /// is tracked, or when a limb tip lies far from the tracked body's and off its
     /// surface; otherwise the registration alone follows the body from the last frame.
@@ -861,6 +864,7 @@ fn assign_limbs(
         }
         t.torso_offset = Some(offset);
     }
+    let ends = limb.map(|mi| mi.map(|mi| s.graph.pos[maxima[mi] as usize]));
     // A limb given a maximum at a cut goes on beyond it: it has no tip to pull to.
     let mut tips = [None; 5];
     for l in Limb::ALL {
@@ -882,6 +886,7 @@ fn assign_limbs(
         lengths,
         paths,
         tips,
+        ends,
         race,
     }
 }
@@ -892,6 +897,8 @@ struct Seed {
     skeleton: Skeleton,
     /// The limbs' tips ([`Assigned::tips`]).
     tips: [Option<Point3<f32>>; 5],
+    /// The limbs' maxima, at a cut or not ([`Assigned::ends`]).
+    ends: [Option<Point3<f32>>; 5],
     /// Whether it races the tracked body ([`Assigned::race`]).
     race: bool,
 }
@@ -972,6 +979,7 @@ fn chains(
     Seed {
         skeleton: skel,
         tips: assigned.tips,
+        ends: assigned.ends,
         race: assigned.race,
     }
 }
@@ -1041,7 +1049,7 @@ fn register_body(
     cfg: &PoseConfig,
     d: &mut Debug,
 ) -> Option<Skeleton> {
-    let tpl = body.template;
+    let mut tpl = body.template;
     reg.prepare(frame, &cfg.register.sampling);
     let geodesic = seed
         .race
@@ -1055,23 +1063,26 @@ fn register_body(
         &seed.tips,
         body.side_on,
         body.offered,
-        body.neck,
+        body.neck.clone(),
         &cfg.register,
     );
     // A person found afresh has their arms searched for too. (While tracking, a
     // searched arm won frames it should not: an arm hidden behind the body, which
     // nothing contradicts, searched into the open.)
-    let best = reg.fit(
-        frame,
-        &tpl,
-        &starts,
-        &t.hidden,
-        seed.race && t.body.is_none(),
-    );
+    let afresh = seed.race && t.body.is_none();
+    let mut best = reg.fit(frame, &tpl, &starts, &t.hidden, afresh);
     if seed.race {
         d.geodesic = Some(seed.skeleton);
     }
     let mut placed = None;
+    let mut calib = calib;
+    if let (Some(b), Some(calib), true) = (&mut best, calib.as_deref_mut(), afresh) {
+        if let Some(longer) =
+            arms_to_their_tips(reg, frame, &tpl, b, seed, body.neck, t, calib, cfg)
+        {
+            (tpl, *b) = longer;
+        }
+    }
     if let Some(b) = best {
         if let Some(calib) = calib {
             calib.learn(&b, &cfg.register.lengths);
@@ -1114,6 +1125,52 @@ fn register_body(
     // follows; the head reported is the top of the head.
     skel.set(Joint::Head, head_top);
     Some(skel)
+}
+
+/// The least lengthening of the arms worth fitting the body again for: the tip lies on
+/// the surface, and the sensor's noise moves it.
+const ARMS_LONGER: f32 = 1.05;
+
+/// A person found afresh whose arms' tips lie beyond the reach of the arms fitted in `b`
+/// ([`arms_reaching`]): the body fitted again from `b` with arms long enough, and its
+/// template; the person's arms are held at least that long from now on (`calib`). None
+/// when the arms reach their tips.
+#[allow(clippy::too_many_arguments)]
+fn arms_to_their_tips(
+    reg: &mut Registration,
+    frame: &Frame,
+    tpl: &BodyTemplate,
+    b: &Fit,
+    seed: &Seed,
+    neck: Option<NeckBase>,
+    t: &Tracking,
+    calib: &mut BodyCalibration,
+    cfg: &PoseConfig,
+) -> Option<(BodyTemplate, Fit)> {
+    let k = arms_reaching(tpl, &b.pose, &seed.ends).filter(|&k| k >= ARMS_LONGER)?;
+    let ratio = calib.arm_ratio();
+    calib.arms_at_least(ratio * k);
+    // The factor as the calibration bounds it.
+    let k = calib.arm_ratio() / ratio;
+    let bones = BodyConfig {
+        upper_arm: cfg.body.upper_arm * k,
+        forearm: cfg.body.forearm * k,
+        ..cfg.body.clone()
+    };
+    let longer = BodyTemplate::new(&cfg.register.shape, &bones);
+    let starts = starts(
+        &longer,
+        Some(b.pose),
+        None,
+        None,
+        &seed.tips,
+        None,
+        None,
+        neck,
+        &cfg.register,
+    );
+    let fit = reg.fit(frame, &longer, &starts, &t.hidden, false)?;
+    Some((longer, fit))
 }
 
 /// `depth` reduced by `factor`, each pixel the nearest depth of its block (into

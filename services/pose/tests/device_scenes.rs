@@ -622,3 +622,35 @@ fn hips_held_just_above_a_desk_they_are_behind_are_reported_hidden() {
         }
     }
 }
+
+#[test]
+fn a_tall_persons_hanging_arms_reach_their_hands_in_a_single_frame() {
+    // The template's arms are the MakeHuman body's, 1.67 m tall; a tall person's hands
+    // hang well below them. A single frame learns no length from the fit, but the hand's
+    // geodesic maximum lies along the fitted arm, beyond its reach: the arms were held
+    // short, the hands 15–18 cm high.
+    let body = BodySpec::Procedural(airglyph_synth::ProceduralBody {
+        height_m: 1.9,
+        build: 1.1,
+    });
+    let cfg = SceneConfig {
+        body,
+        ..at(1.8, ScriptedPose::ArmsAtSides)
+    };
+    let k = qvga();
+    for frame in 0..3 {
+        let (r, truth) = single(upper_body(cfg.clone()), frame);
+        assert!(r.person_found, "frame {frame}");
+        visibility_is_consistent(&r, &k);
+        for j in ARMS {
+            assert!(truth.skeleton.visible[j.index()], "{j:?} in view");
+            let e = error_m(&r.skeleton, &truth.skeleton, j);
+            let bound = if matches!(j, Joint::LeftHand | Joint::RightHand) {
+                0.09
+            } else {
+                0.06
+            };
+            assert!(e < bound, "frame {frame}: {j:?} off by {e:.2} m");
+        }
+    }
+}

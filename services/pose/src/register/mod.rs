@@ -33,7 +33,7 @@ mod starts;
 mod tests;
 mod tips;
 
-pub(crate) use capsules::{nearest_is, place, Placed};
+pub(crate) use capsules::{distance_off_others, nearest_is, place, Placed};
 pub use config::{
     EnergyConfig, LengthsConfig, PriorsConfig, RaceConfig, RegisterConfig, SamplingConfig,
     SolverConfig,
