@@ -390,35 +390,65 @@ mod tests {
     fn an_end_beyond_an_arm_it_lies_along_asks_for_that_much_more_arm() {
         use crate::body::{Segment, Shape};
         use nalgebra::{Rotation3, Vector3};
+        use std::f32::consts::FRAC_PI_2;
         let tpl = BodyTemplate::new(&Shape::makehuman(), &BodyConfig::default());
-        // Facing the camera 2.5 m away, arms hanging (camera y down).
+        // Facing the camera 2.5 m away (camera y down), both arms held out straight
+        // to the sides, where nothing else of the body lies beyond the hands.
         let r = Rotation3::from_basis_unchecked(&[Vector3::x(), -Vector3::y(), -Vector3::z()]);
+        let out = |a: f32| r * Rotation3::from_axis_angle(&Vector3::z_axis(), a);
+        let mut rotation = [r; Segment::COUNT];
+        for (s, a) in [
+            (Segment::LeftUpperArm, FRAC_PI_2),
+            (Segment::LeftForearm, FRAC_PI_2),
+            (Segment::RightUpperArm, -FRAC_PI_2),
+            (Segment::RightForearm, -FRAC_PI_2),
+        ] {
+            rotation[s.index()] = out(a);
+        }
         let pose = BodyPose {
             pelvis: Point3::new(0.0, 0.1, 2.5),
-            rotation: [r; Segment::COUNT],
+            rotation,
         };
         let posed = Posed::new(&tpl, &pose);
-        let (seg, local) = tpl.tips[Limb::LeftArm.index()];
-        let shoulder = posed.joint[Segment::LeftUpperArm.index()];
-        let along = |k: f32| Some(shoulder + (posed.point(seg, &local) - shoulder) * k);
-        let mut tips = [None; 5];
-        assert_eq!(arms_reaching(&tpl, &pose, &tips), None, "no tip seen");
-        tips[Limb::LeftArm.index()] = along(1.25);
-        let k = arms_reaching(&tpl, &pose, &tips).unwrap();
+        // The point `k` times the arm's reach from its shoulder, along the arm.
+        let along = |l: Limb, k: f32| {
+            let &[upper, _] = limb_segments(l) else {
+                unreachable!()
+            };
+            let (seg, local) = tpl.tips[l.index()];
+            let shoulder = posed.joint[upper.index()];
+            Some(shoulder + (posed.point(seg, &local) - shoulder) * k)
+        };
+        let mut ends = [None; 5];
+        assert_eq!(arms_reaching(&tpl, &pose, &ends), None, "no end seen");
+        ends[Limb::LeftArm.index()] = along(Limb::LeftArm, 1.25);
+        let k = arms_reaching(&tpl, &pose, &ends).unwrap();
         assert!((k - 1.25).abs() < 0.01, "{k}");
-        // A nearer tip asks for less; the longer of the two arms' asks wins.
-        tips[Limb::RightArm.index()] = tips[Limb::LeftArm.index()].map(|p| {
-            let m = posed.joint[Segment::RightUpperArm.index()];
-            m + (p - shoulder) * 0.8
-        });
-        assert!((arms_reaching(&tpl, &pose, &tips).unwrap() - 1.25).abs() < 0.01);
+        // A nearer end asks for less; the longer of the two arms' asks wins.
+        ends[Limb::RightArm.index()] = along(Limb::RightArm, 0.9);
+        assert!((arms_reaching(&tpl, &pose, &ends).unwrap() - 1.25).abs() < 0.01);
+        ends[Limb::LeftArm.index()] = None;
+        assert!((arms_reaching(&tpl, &pose, &ends).unwrap() - 0.9).abs() < 0.01);
         // An end well off the arm's line is not taken for its own, nor one behind the
         // shoulder.
-        tips = [None; 5];
-        tips[Limb::LeftArm.index()] = along(1.2).map(|p| p + Vector3::new(0.1, 0.0, 0.0));
-        assert_eq!(arms_reaching(&tpl, &pose, &tips), None);
-        tips[Limb::LeftArm.index()] = along(-1.2);
-        assert_eq!(arms_reaching(&tpl, &pose, &tips), None);
+        ends = [None; 5];
+        ends[Limb::LeftArm.index()] =
+            along(Limb::LeftArm, 1.2).map(|p| p + Vector3::new(0.0, 0.1, 0.0));
+        assert_eq!(arms_reaching(&tpl, &pose, &ends), None);
+        ends[Limb::LeftArm.index()] = along(Limb::LeftArm, -1.2);
+        assert_eq!(arms_reaching(&tpl, &pose, &ends), None);
+        // Nor one on another part of the body: an arm hanging at the side, its line
+        // running on down the thigh.
+        let hanging = BodyPose {
+            rotation: [r; Segment::COUNT],
+            ..pose
+        };
+        let posed = Posed::new(&tpl, &hanging);
+        let shoulder = posed.joint[Segment::LeftUpperArm.index()];
+        let (seg, local) = tpl.tips[Limb::LeftArm.index()];
+        let on_the_thigh = shoulder + (posed.point(seg, &local) - shoulder) * 1.3;
+        ends[Limb::LeftArm.index()] = Some(on_the_thigh);
+        assert_eq!(arms_reaching(&tpl, &hanging, &ends), None);
     }
 
     #[test]

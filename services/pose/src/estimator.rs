@@ -560,6 +560,10 @@ impl PoseEstimator {
     }
 }
 
+/// How far below the top of the head the mask shows a head's maximum may lie and still
+/// hold the torso's height, metres: about a third of a head.
+const BELOW_THE_HEADS_TOP: f32 = 0.05;
+
 /// How far below the neck a leg's tip must lie to be a foot, metres: a seated child's
 /// feet lie farther.
 const FOOT_BELOW_NECK: f32 = 0.8;
@@ -841,14 +845,24 @@ fn assign_limbs(
         let px = s.graph.pixel_of_node[top] as usize;
         let mut pose = torso.pose;
         let head_top = &s.graph.pos[top];
-        anchored_at_head_top(
-            &mut pose,
-            &inv,
-            head_top,
-            (px % w, px / w),
-            (w, h),
-            &cfg.torso,
-        );
+        // Where the torso step held the torso at the top of the head the mask shows, a
+        // maximum well below it is no top: a forearm folded back against the head
+        // closes a loop through it, and the head's maximum is then a point of its side
+        // where the two ways round meet.
+        let below_the_top = torso.detecting
+            && !t.seen_whole()
+            && head_top_of_mask(&s.points, &s.mask, w, &pose)
+                .is_some_and(|top| inv.apply(head_top).y < top - BELOW_THE_HEADS_TOP);
+        if !below_the_top {
+            anchored_at_head_top(
+                &mut pose,
+                &inv,
+                head_top,
+                (px % w, px / w),
+                (w, h),
+                &cfg.torso,
+            );
+        }
         d.torso_pose = Some(pose);
         torso.set_pose(pose, cfg);
     }

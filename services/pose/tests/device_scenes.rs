@@ -654,3 +654,30 @@ fn a_tall_persons_hanging_arms_reach_their_hands_in_a_single_frame() {
         }
     }
 }
+
+#[test]
+fn a_forearm_folded_back_against_the_head_does_not_move_the_torso() {
+    // Drawing high, the forearm folds back until the hand touches the head: arm and
+    // head close a loop, and the head's geodesic maximum is a point of its side where
+    // the two ways round meet, well below the top of the head. Taken for the top, it
+    // moved the torso and the shoulders with it.
+    let body = BodySpec::Procedural(airglyph_synth::ProceduralBody {
+        height_m: 1.6,
+        build: 0.9,
+    });
+    let cfg = SceneConfig {
+        body,
+        seed: 51,
+        intrinsics: Intrinsics::default(),
+        sensor_noise: false,
+        motion: MotionSpec::parse("draw:ABCDEFGHIJ", None, false).expect("a motion"),
+        ..at(0.95, ScriptedPose::Neutral)
+    };
+    let (r, truth) = single(upper_body(cfg), 35);
+    assert!(r.person_found);
+    visibility_is_consistent(&r, &Intrinsics::default());
+    for j in [Joint::Neck, Joint::LeftShoulder, Joint::RightShoulder] {
+        let e = error_m(&r.skeleton, &truth.skeleton, j);
+        assert!(e < 0.08, "{j:?} off by {e:.2} m");
+    }
+}
