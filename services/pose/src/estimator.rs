@@ -1164,8 +1164,12 @@ fn arms_to_their_tips(
     let k = arms_reaching(tpl, &b.pose, &seed.ends).filter(|&k| k >= ARMS_LONGER)?;
     let ratio = calib.arm_ratio();
     calib.arms_at_least(ratio * k);
-    // The factor as the calibration bounds it.
+    // The factor as the calibration bounds it: none left when the arms are already
+    // as long as it allows.
     let k = calib.arm_ratio() / ratio;
+    if k <= 1.0 {
+        return None;
+    }
     let bones = BodyConfig {
         upper_arm: cfg.body.upper_arm * k,
         forearm: cfg.body.forearm * k,
