@@ -153,14 +153,14 @@ pub(crate) fn place(t: &BodyTemplate, posed: &Posed) -> Vec<Placed> {
         .collect()
 }
 
-/// Whether `segment`'s capsules hold the surface nearest `p` among the placed ones.
-/// Capsules whose bounding sphere lies beyond the segment's own surface are not
-/// measured.
 /// How far `p` lies outside the surface of the capsules of every segment but `own`.
 pub(crate) fn distance_off_others(placed: &[Placed], p: &Point3<f32>, own: &[Segment]) -> f32 {
     surface_distance(placed.iter().filter(|c| !own.contains(&c.segment)), p)
 }
 
+/// Whether `segment`'s capsules hold the surface nearest `p` among the placed ones.
+/// Capsules whose bounding sphere lies beyond the segment's own surface are not
+/// measured.
 pub(crate) fn nearest_is(placed: &[Placed], p: &Point3<f32>, segment: Segment) -> bool {
     let own = surface_distance(placed.iter().filter(|c| c.segment == segment), p);
     own.is_finite()
