@@ -232,6 +232,64 @@ fn eval_gestures_per_writer_trains_on_each_writers_own_samples() {
 }
 
 #[test]
+fn eval_gestures_trains_on_some_people_and_tests_on_the_others() {
+    let p = Isolated::new();
+    let tmp = tempfile::tempdir().unwrap();
+    let all = tmp.path().join("all.jsonl");
+    succeed(
+        p.command("airglyph")
+            .args(["synth-gestures", "--persons", "5", "--repetitions", "2"])
+            .arg("--out")
+            .arg(&all),
+    );
+    // A public set's split: the first two people to train on, the other three to test.
+    let (train, test) = (
+        tmp.path().join("train.jsonl"),
+        tmp.path().join("test.jsonl"),
+    );
+    let text = std::fs::read_to_string(&all).unwrap();
+    let (tr, te): (Vec<&str>, Vec<&str>) = text
+        .lines()
+        .partition(|l| l.contains("-p00\"") || l.contains("-p01\""));
+    assert_eq!((tr.len(), te.len()), (2 * 14 * 2, 3 * 14 * 2));
+    std::fs::write(&train, tr.join("\n")).unwrap();
+    std::fs::write(&test, te.join("\n")).unwrap();
+    let eval = |test: &Path| {
+        let mut c = p.command("airglyph");
+        c.args([
+            "eval-gestures",
+            "--json",
+            "--baselines",
+            "--no-crf",
+            "--model",
+        ])
+        .arg(shipped_model())
+        .arg("--train-data")
+        .arg(&train)
+        .arg("--data")
+        .arg(test);
+        c
+    };
+    let lines = json_lines(&succeed(&mut eval(&test)).stdout);
+    assert_eq!(lines.len(), 3, "{lines:?}");
+    for (r, name) in lines.iter().zip(["mlp", "dtw", "seed-hmm"]) {
+        assert_eq!(r["classifier"], name, "{r}");
+        assert_eq!(r["samples"], 84, "{r}");
+        // Fourteen labels: chance is 7 %; every method learns them from two people.
+        let acc = r["accuracy"].as_f64().unwrap();
+        assert!(acc >= 0.4, "{r}");
+    }
+    // A label the training people never drew is named, not scored as a miss.
+    let odd = tmp.path().join("odd.jsonl");
+    std::fs::write(&odd, te[0].replacen(r#""label":""#, r#""label":"wave-"#, 1)).unwrap();
+    let err = fail(&mut eval(&odd));
+    assert!(
+        err.contains("wave-") && err.contains("train.jsonl"),
+        "{err}"
+    );
+}
+
+#[test]
 fn train_says_it_adds_templates_for_a_few_samples_a_label() {
     let p = Isolated::new();
     let tmp = tempfile::tempdir().unwrap();

@@ -2,7 +2,9 @@
 //! time of a gesture model; with `--folds K`, writer-independent cross-validation
 //! (retraining the model's classifier with its recorded parameters on the other folds);
 //! with `--baselines`, the template baseline (DTW 1-NN), the seed's pipeline and the CRF
-//! trained on the same data in the same run; with `--per-writer K`, the user-dependent
+//! trained on the same data in the same run; with `--train-data`, every method trained on
+//! those files and tested on `--data` (a public set's own split by person); with
+//! `--per-writer K`, the user-dependent
 //! protocol of the $1 recognizer (each writer's own K samples a label, tested on that
 //! writer's other samples; `per_writer`).
 
@@ -42,6 +44,11 @@ pub struct Args {
     /// Cross-validation by subject with K folds, retraining on the other folds.
     #[arg(long, value_parser = options::within(2usize, 1000), allow_negative_numbers = true)]
     pub folds: Option<usize>,
+    /// Train the model's classifier (with its recorded parameters) and the baselines on
+    /// these trajectory JSONL files, and test them on --data: a split fixed by the data
+    /// set, such as some people to train on and the others to test.
+    #[arg(long, num_args = 1.., conflicts_with_all = ["folds", "per_writer"])]
+    pub train_data: Vec<PathBuf>,
     /// Bezier points of the seed's pipeline among the baselines.
     #[arg(long, value_delimiter = ',', default_value = "15", value_parser = options::within(2, airglyph_gesture::limits::MAX_BEZIER_POINTS), allow_negative_numbers = true)]
     pub seed_points: Vec<usize>,
@@ -246,10 +253,29 @@ fn model_config(model: &Model, args: &Args) -> anyhow::Result<TrainConfig> {
 fn evaluate(args: &Args) -> anyhow::Result<Vec<Scored>> {
     let model = Model::load(&args.model)?;
     let samples = load_many(&args.data)?;
-    let labels = labels_of(&samples);
-    // Cross-validation retrains on the data's labels; otherwise the model must know them.
+    let train_set = if args.train_data.is_empty() {
+        Vec::new()
+    } else {
+        load_many(&args.train_data)?
+    };
+    let retrains = args.folds.is_some() || !train_set.is_empty();
+    let labels = if train_set.is_empty() {
+        labels_of(&samples)
+    } else {
+        let labels = labels_of(&train_set);
+        if let Some(s) = samples.iter().find(|s| !labels.contains(&s.label)) {
+            bail!(
+                "{}: the test data hold label {:?}, which the training data ({}) do not",
+                args.data[0].display(),
+                s.label,
+                args.train_data[0].display()
+            );
+        }
+        labels
+    };
+    // Retraining learns the data's labels; otherwise the model must know them.
     let unknown = labels.iter().find(|l| model.label_index(l).is_none());
-    if let (None, Some(l)) = (args.folds, unknown) {
+    if let (false, Some(l)) = (retrains, unknown) {
         bail!(
             "{}: the data hold label {l:?}, which the model {} does not know",
             args.data[0].display(),
@@ -258,14 +284,17 @@ fn evaluate(args: &Args) -> anyhow::Result<Vec<Scored>> {
     }
     let model_n = model.training.bezier_points;
     let mut methods = Vec::new();
-    if args.folds.is_some() {
+    if retrains {
         let mut cfg = model_config(&model, args)?;
         with_few_shot(&mut cfg, args.few_shot.as_deref())?;
         methods.push(Method::Model(Box::new(cfg)));
     }
     if args.baselines {
-        if args.folds.is_none() {
-            bail!("--baselines trains the baselines by cross-validation: add --folds K");
+        if !retrains {
+            bail!(
+                "--baselines trains the baselines: add --folds K (cross-validation) or \
+                 --train-data FILES (a fixed split)"
+            );
         }
         methods.push(Method::Dtw);
         for &n in &args.seed_points {
@@ -323,6 +352,32 @@ fn evaluate(args: &Args) -> anyhow::Result<Vec<Scored>> {
             results.push((m.name(), m.file_name(), m.bezier_points(model_n), out));
         }
         bar.finish_and_clear();
+    } else if !train_set.is_empty() {
+        eprintln!(
+            "training {} on {} samples, testing on {}",
+            methods
+                .iter()
+                .map(Method::name)
+                .collect::<Vec<_>>()
+                .join(", "),
+            train_set.len(),
+            samples.len()
+        );
+        for m in &methods {
+            let mut out = Outcome {
+                conf: Confusion::new(labels.clone()),
+                decisions: 0,
+                seconds: 0.0,
+            };
+            let p = fit(m, &train_set, &labels)?;
+            let stride = if matches!(m, Method::Dtw) {
+                args.dtw_stride
+            } else {
+                1
+            };
+            test(&p, &samples, &labels, stride, &mut out);
+            results.push((m.name(), m.file_name(), m.bezier_points(model_n), out));
+        }
     } else {
         eprintln!(
             "classifying {} samples with {}",
