@@ -224,6 +224,34 @@ fn test(p: &Predictor, test_set: &[Sample], labels: &[String], stride: usize, ou
     out.decisions += timed as u64;
 }
 
+/// Trains `m` on `train_set` and adds its decisions on `test_set` to `out` (DTW on every
+/// `dtw_stride`-th test sample only: it is slow).
+fn fit_and_test(
+    m: &Method,
+    train_set: &[Sample],
+    test_set: &[Sample],
+    labels: &[String],
+    dtw_stride: usize,
+    out: &mut Outcome,
+) -> anyhow::Result<()> {
+    let p = fit(m, train_set, labels)?;
+    let stride = if matches!(m, Method::Dtw) {
+        dtw_stride
+    } else {
+        1
+    };
+    test(&p, test_set, labels, stride, out);
+    Ok(())
+}
+
+fn names(methods: &[Method]) -> String {
+    methods
+        .iter()
+        .map(Method::name)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 /// One method's results: its name, its file name, its Bezier points, its outcome.
 type Scored = (String, String, usize, Outcome);
 
@@ -308,11 +336,7 @@ fn evaluate(args: &Args) -> anyhow::Result<Vec<Scored>> {
     if let Some(k) = args.folds {
         eprintln!(
             "cross-validating {} over {k} folds by subject on {} samples",
-            methods
-                .iter()
-                .map(Method::name)
-                .collect::<Vec<_>>()
-                .join(", "),
+            names(&methods),
             samples.len()
         );
         let fold = folds_by_subject(&samples, k, args.seed);
@@ -340,13 +364,7 @@ fn evaluate(args: &Args) -> anyhow::Result<Vec<Scored>> {
                     bar.inc(1);
                     continue;
                 }
-                let p = fit(m, &tr, &labels)?;
-                let stride = if matches!(m, Method::Dtw) {
-                    args.dtw_stride
-                } else {
-                    1
-                };
-                test(&p, &te, &labels, stride, &mut out);
+                fit_and_test(m, &tr, &te, &labels, args.dtw_stride, &mut out)?;
                 bar.inc(1);
             }
             results.push((m.name(), m.file_name(), m.bezier_points(model_n), out));
@@ -355,11 +373,7 @@ fn evaluate(args: &Args) -> anyhow::Result<Vec<Scored>> {
     } else if !train_set.is_empty() {
         eprintln!(
             "training {} on {} samples, testing on {}",
-            methods
-                .iter()
-                .map(Method::name)
-                .collect::<Vec<_>>()
-                .join(", "),
+            names(&methods),
             train_set.len(),
             samples.len()
         );
@@ -369,13 +383,7 @@ fn evaluate(args: &Args) -> anyhow::Result<Vec<Scored>> {
                 decisions: 0,
                 seconds: 0.0,
             };
-            let p = fit(m, &train_set, &labels)?;
-            let stride = if matches!(m, Method::Dtw) {
-                args.dtw_stride
-            } else {
-                1
-            };
-            test(&p, &samples, &labels, stride, &mut out);
+            fit_and_test(m, &train_set, &samples, &labels, args.dtw_stride, &mut out)?;
             results.push((m.name(), m.file_name(), m.bezier_points(model_n), out));
         }
     } else {
