@@ -224,32 +224,21 @@ fn test(p: &Predictor, test_set: &[Sample], labels: &[String], stride: usize, ou
     out.decisions += timed as u64;
 }
 
-/// Trains `m` on `train_set` and adds its decisions on `test_set` to `out` (DTW on every
-/// `dtw_stride`-th test sample only: it is slow).
-fn fit_and_test(
-    m: &Method,
-    train_set: &[Sample],
-    test_set: &[Sample],
-    labels: &[String],
-    dtw_stride: usize,
-    out: &mut Outcome,
-) -> anyhow::Result<()> {
-    let p = fit(m, train_set, labels)?;
-    let stride = if matches!(m, Method::Dtw) {
-        dtw_stride
-    } else {
-        1
-    };
-    test(&p, test_set, labels, stride, out);
-    Ok(())
-}
-
-fn names(methods: &[Method]) -> String {
-    methods
-        .iter()
-        .map(Method::name)
-        .collect::<Vec<_>>()
-        .join(", ")
+/// The (training, test) pairs of `k`-fold cross-validation by subject; a fold with no
+/// sample, or holding every sample, is left out.
+fn by_fold(samples: &[Sample], k: usize, seed: u64) -> Vec<(Vec<Sample>, Vec<Sample>)> {
+    let fold = folds_by_subject(samples, k, seed);
+    (0..k)
+        .map(|f| {
+            let (mut train, mut test) = (Vec::new(), Vec::new());
+            for (s, &g) in samples.iter().zip(&fold) {
+                let side = if g == f { &mut test } else { &mut train };
+                side.push(s.clone());
+            }
+            (train, test)
+        })
+        .filter(|(train, test)| !train.is_empty() && !test.is_empty())
+        .collect()
 }
 
 /// One method's results: its name, its file name, its Bezier points, its outcome.
@@ -333,14 +322,31 @@ fn evaluate(args: &Args) -> anyhow::Result<Vec<Scored>> {
         }
     }
     let mut results: Vec<Scored> = Vec::new();
-    if let Some(k) = args.folds {
-        eprintln!(
-            "cross-validating {} over {k} folds by subject on {} samples",
-            names(&methods),
-            samples.len()
-        );
-        let fold = folds_by_subject(&samples, k, args.seed);
-        let bar = ProgressBar::new((k * methods.len()) as u64);
+    if retrains {
+        let names = methods
+            .iter()
+            .map(Method::name)
+            .collect::<Vec<_>>()
+            .join(", ");
+        // Every (training, test) pair, made once for all the methods.
+        let splits = match args.folds {
+            Some(k) => {
+                eprintln!(
+                    "cross-validating {names} over {k} folds by subject on {} samples",
+                    samples.len()
+                );
+                by_fold(&samples, k, args.seed)
+            }
+            None => {
+                eprintln!(
+                    "training {names} on {} samples, testing on {}",
+                    train_set.len(),
+                    samples.len()
+                );
+                vec![(train_set, samples)]
+            }
+        };
+        let bar = ProgressBar::new((splits.len() * methods.len()) as u64);
         bar.set_style(
             ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} {elapsed}")
                 .unwrap_or_else(|_| ProgressStyle::default_bar()),
@@ -351,41 +357,26 @@ fn evaluate(args: &Args) -> anyhow::Result<Vec<Scored>> {
                 decisions: 0,
                 seconds: 0.0,
             };
-            for f in 0..k {
-                bar.set_message(format!("{} fold {}", m.file_name(), f + 1));
-                let (tr, te): (Vec<_>, Vec<_>) = samples
-                    .iter()
-                    .cloned()
-                    .zip(&fold)
-                    .partition(|(_, &g)| g != f);
-                let tr: Vec<Sample> = tr.into_iter().map(|x| x.0).collect();
-                let te: Vec<Sample> = te.into_iter().map(|x| x.0).collect();
-                if tr.is_empty() || te.is_empty() {
-                    bar.inc(1);
-                    continue;
-                }
-                fit_and_test(m, &tr, &te, &labels, args.dtw_stride, &mut out)?;
+            for (i, (tr, te)) in splits.iter().enumerate() {
+                bar.set_message(format!(
+                    "{} split {} of {}",
+                    m.file_name(),
+                    i + 1,
+                    splits.len()
+                ));
+                let p = fit(m, tr, &labels)?;
+                // DTW on every `dtw_stride`-th test sample only: it is slow.
+                let stride = if matches!(m, Method::Dtw) {
+                    args.dtw_stride
+                } else {
+                    1
+                };
+                test(&p, te, &labels, stride, &mut out);
                 bar.inc(1);
             }
             results.push((m.name(), m.file_name(), m.bezier_points(model_n), out));
         }
         bar.finish_and_clear();
-    } else if !train_set.is_empty() {
-        eprintln!(
-            "training {} on {} samples, testing on {}",
-            names(&methods),
-            train_set.len(),
-            samples.len()
-        );
-        for m in &methods {
-            let mut out = Outcome {
-                conf: Confusion::new(labels.clone()),
-                decisions: 0,
-                seconds: 0.0,
-            };
-            fit_and_test(m, &train_set, &samples, &labels, args.dtw_stride, &mut out)?;
-            results.push((m.name(), m.file_name(), m.bezier_points(model_n), out));
-        }
     } else {
         eprintln!(
             "classifying {} samples with {}",
