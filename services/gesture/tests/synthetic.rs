@@ -484,6 +484,32 @@ fn classifiers_trained_on_depth_tell_a_push_from_a_pull_and_2d_ones_cannot() {
     }
 }
 
+/// A tracker's depth of symbols drawn in one plane: a ten-thousandth of their size.
+#[test]
+fn symbols_drawn_nearly_in_one_plane_are_learnt_in_space() {
+    let nearly_flat = |per_class, seed| -> Vec<Sample> {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed + 100);
+        samples_of(4, per_class, seed)
+            .into_iter()
+            .map(|mut s| {
+                let z = s.strokes[0]
+                    .iter()
+                    .map(|_| rng.gen_range(-0.01..0.01))
+                    .collect();
+                s.depth = Some(vec![z]);
+                s
+            })
+            .collect()
+    };
+    let (tr, te) = (nearly_flat(30, 1), nearly_flat(20, 2));
+    let mut cfg = small_config(ClassifierKind::Mlp);
+    cfg.spotting = false;
+    let model = train(&tr, &cfg, &|_, _| {}).unwrap();
+    assert!(model.reads_depth());
+    let acc = accuracy(&model, &te);
+    assert!(acc >= 0.9, "accuracy {acc}");
+}
+
 #[test]
 fn look_alike_labels_are_found_and_distinct_ones_are_not() {
     // "circle" and "O" are the same shape drawn by the same writers; the zigzag and the

@@ -191,11 +191,16 @@ fn validate(raw: RawSample, path: &Path, line: usize) -> Result<Sample, DataErro
         strokes.push(pts);
         depth.push(zs);
     }
+    // A depth that is the same at every point is a recorder's constant (a pen's plane
+    // written as [x, y, 0]), not a hand's: read as drawn in the plane. A classifier of
+    // depth would learn from it only what augmentation turns into it.
+    let mut zs = depth.iter().flatten();
+    let flat = zs.next().is_some_and(|&z0| zs.all(|&z| z == z0));
     Ok(Sample {
         label: raw.label,
         subject: raw.subject.unwrap_or_default(),
         strokes,
-        depth: (dims == 3).then_some(depth),
+        depth: (dims == 3 && !flat).then_some(depth),
     })
 }
 
@@ -316,6 +321,18 @@ mod tests {
         let t = v[0].trajectory();
         assert_eq!(t.points.len(), 3);
         assert_eq!(t.pen_up, vec![false, false, true]);
+    }
+
+    #[test]
+    fn a_depth_the_same_at_every_point_is_read_as_the_plane() {
+        let v = parse(concat!(
+            "{\"label\":\"a\",\"dims\":3,\"strokes\":[[[0,0,0],[1,1,0]],[[2,2,0]]]}\n",
+            "{\"label\":\"b\",\"dims\":3,\"strokes\":[[[0,0,0.5],[1,1,0.5]],[[2,2,0.501]]]}\n",
+        ))
+        .unwrap();
+        assert!(!v[0].has_depth());
+        assert_eq!(v[0].trajectory().points.len(), 3);
+        assert!(v[1].has_depth());
     }
 
     #[test]

@@ -228,6 +228,15 @@ pub enum TrainError {
     /// …or with a label it does not know.
     #[error("its labels differ from the data's: {0:?} is in the data, not in the model")]
     OnlyInData(String),
+    /// A network's weights left the finite numbers while it learnt: written, the model
+    /// would read back as not a model.
+    #[error("network {network} of the ensemble diverged ({why}); if the data's depth is nearly the same at every point, train without it (--flat)")]
+    Diverged {
+        /// Which network, from 1.
+        network: usize,
+        /// What the network's check found.
+        why: String,
+    },
     /// A model recalibrated that has no verifier whose bars could be calibrated.
     #[error("it has no spotting verifier to calibrate; train its spotting part first (`airglyph train --reuse-classifier`)")]
     NoVerifier,
@@ -340,9 +349,14 @@ pub fn train(
             for e in 0..cfg.ensemble.max(1) {
                 let seed = cfg.seed.wrapping_mul(1000).wrapping_add(e as u64);
                 let strength = cfg.augment;
+                // `usize::MAX` asks for the copies the inputs are standardized on (and
+                // the first epoch learns from): the data as drawn, for 2-D data. With
+                // depth, augmented ones: a set drawn nearly in one plane has depth
+                // features that hardly vary as drawn, and turned out of the plane by
+                // augmentation they would stand thousands of deviations off.
                 let feats = |epoch: usize, i: usize| {
                     let mut f = Vec::with_capacity(fcfg.dim());
-                    if epoch == usize::MAX || strength <= 0.0 {
+                    if (epoch == usize::MAX && !depth) || strength <= 0.0 {
                         feature_vector(&trajs[i % n], &fcfg, &mut f);
                     } else {
                         let mut rng = ChaCha8Rng::seed_from_u64(
@@ -367,6 +381,10 @@ pub fn train(
                     feats,
                     |ep| progress((e * cfg.mlp.epochs + ep + 1) as u64, total),
                 );
+                net.validate().map_err(|why| TrainError::Diverged {
+                    network: e + 1,
+                    why,
+                })?;
                 nets.push(net);
             }
             let templates = matches!(plan, FewShotPlan::WithTemplates { .. }).then(|| {
