@@ -287,6 +287,28 @@ fn eval_gestures_trains_on_some_people_and_tests_on_the_others() {
         err.contains("wave-") && err.contains("train.jsonl"),
         "{err}"
     );
+    // Folds by person over a set that names no person are refused, not scored 0.
+    let anonymous = tmp.path().join("anonymous.jsonl");
+    let unnamed: Vec<String> = te
+        .iter()
+        .map(|l| {
+            let mut v: serde_json::Value = serde_json::from_str(l).unwrap();
+            v.as_object_mut().unwrap().remove("subject");
+            v.to_string()
+        })
+        .collect();
+    std::fs::write(&anonymous, unnamed.join("\n")).unwrap();
+    let err = fail(
+        p.command("airglyph")
+            .args(["eval-gestures", "--folds", "3", "--model"])
+            .arg(shipped_model())
+            .arg("--data")
+            .arg(&anonymous),
+    );
+    assert!(
+        err.contains("--folds 3") && err.contains("no sample names one"),
+        "{err}"
+    );
 }
 
 #[test]

@@ -331,6 +331,21 @@ fn evaluate(args: &Args) -> anyhow::Result<Vec<Scored>> {
         // Every (training, test) pair, made once for all the methods.
         let splits = match args.folds {
             Some(k) => {
+                let subjects: std::collections::BTreeSet<&str> =
+                    samples.iter().map(|s| s.subject.as_str()).collect();
+                if subjects.len() < k {
+                    anyhow::bail!(
+                        "--folds {k} holds out the samples of each subject in turn, and the data \
+                         has {} subject(s){}: give each sample a \"subject\", use fewer folds, \
+                         or name a split with --train-data",
+                        subjects.len(),
+                        if subjects.iter().all(|s| s.is_empty()) {
+                            " (no sample names one)"
+                        } else {
+                            ""
+                        }
+                    );
+                }
                 eprintln!(
                     "cross-validating {names} over {k} folds by subject on {} samples",
                     samples.len()
