@@ -183,6 +183,15 @@ fn validate(raw: RawSample, path: &Path, line: usize) -> Result<Sample, DataErro
                     raw.label
                 )));
             }
+            // Beyond f32 a coordinate would be read as infinite: the augmentation's
+            // ranges and every size computed from it would be too.
+            if let Some(v) = p[..dims].iter().find(|v| v.abs() > f64::from(f32::MAX)) {
+                return Err(invalid(format!(
+                    "sample {:?}: stroke {si} point {pi} has the coordinate {v:e}, beyond what is read (±{:e})",
+                    raw.label,
+                    f32::MAX
+                )));
+            }
             pts.push([p[0] as f32, p[1] as f32]);
             if dims == 3 {
                 zs.push(p[2] as f32);
@@ -360,6 +369,28 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("dims"), "{e}");
+    }
+
+    #[test]
+    fn a_coordinate_beyond_single_precision_is_an_error_naming_it() {
+        // It once made `train` panic in the augmentation (a range from infinity).
+        for (line, value) in [
+            ("{\"label\":\"1\",\"strokes\":[[[0,0],[1e300,2]]]}", "1e300"),
+            (
+                "{\"label\":\"1\",\"dims\":3,\"strokes\":[[[0,0,0],[1,2,-4e38]]]}",
+                "-4e38",
+            ),
+        ] {
+            let e = parse(line).unwrap_err().to_string();
+            assert!(
+                e.contains("mem.jsonl:1") && e.contains("point 1") && e.contains(value),
+                "{e}"
+            );
+        }
+        // A time stamp is not a coordinate, and the largest f32 still is one.
+        let v =
+            parse("{\"label\":\"1\",\"strokes\":[[[0,0,1.7e300],[3.4e38,2,1.8e300]]]}").unwrap();
+        assert_eq!(v[0].strokes[0][1], [3.4e38, 2.0]);
     }
 
     #[test]
