@@ -233,6 +233,65 @@ fn a_vocabulary_of_many_samples_a_label_trains_networks_only() {
 }
 
 #[test]
+fn a_vocabulary_in_space_of_many_samples_chooses_its_templates_by_leaving_people_out() {
+    // Five people ("w0"–"w4"), 15 samples a label: above the few-shot bar.
+    let tr = samples_in_space(15, 31);
+    let mut cfg = small_config(ClassifierKind::Mlp);
+    cfg.spotting = false;
+    let plan = few_shot_plan(&tr, &cfg);
+    assert!(
+        matches!(plan, FewShotPlan::ByPerson { people: 5, .. }),
+        "{plan}"
+    );
+    let model = train(&tr, &cfg, &|_, _| {}).unwrap();
+    let choice = model.training.template_share.clone().expect("a choice");
+    assert_eq!((choice.people, choice.folds), (5, 5));
+    // Every sample is left out once.
+    assert_eq!(choice.tested, tr.len());
+    let tried: Vec<f32> = choice.correct.iter().map(|a| a.0).collect();
+    assert_eq!(tried, cfg.few_shot.shares_by_person.to_vec());
+    // The share kept reads the people left out best, and no smaller share as well.
+    let best = choice.correct.iter().map(|a| a.1).max().unwrap();
+    assert!(best * 10 >= tr.len() * 8, "{choice}");
+    let kept = choice.correct.iter().find(|a| a.0 == choice.share).unwrap();
+    assert_eq!(kept.1, best);
+    assert!(choice
+        .correct
+        .iter()
+        .all(|a| a.0 >= choice.share || a.1 < best));
+    match &model.classifier {
+        Classifier::Mlp { templates, .. } => match templates {
+            Some(t) => assert!(choice.share > 0.0 && t.weight == choice.share && t.depth),
+            None => assert_eq!(choice.share, 0.0),
+        },
+        _ => unreachable!(),
+    }
+    let back = Model::from_json_str(&model.to_json(), Path::new("m.json")).unwrap();
+    assert_eq!(back.training.template_share, Some(choice));
+
+    // Nothing is tried for the same samples without depth, by two people, or with
+    // every share 0.
+    let flat: Vec<Sample> = tr.iter().map(|s| s.flattened()).collect();
+    let two: Vec<Sample> = tr
+        .iter()
+        .cloned()
+        .map(|mut s| {
+            s.subject = if s.subject < "w2".into() { "a" } else { "b" }.into();
+            s
+        })
+        .collect();
+    let mut none = cfg.clone();
+    none.few_shot.shares_by_person = [0.0; 3];
+    for (data, cfg) in [(&flat, &cfg), (&two, &cfg), (&tr, &none)] {
+        let plan = few_shot_plan(data, cfg);
+        assert!(matches!(plan, FewShotPlan::NetworksOnly { .. }), "{plan}");
+    }
+    let model = train(&flat, &cfg, &|_, _| {}).unwrap();
+    assert!(model.training.template_share.is_none());
+    assert!(!model.to_json().contains("template_share"));
+}
+
+#[test]
 fn the_shipped_model_file_loads_and_writes_back_unchanged() {
     // A model file from before the template member: read, it has none, and written
     // again it is the same JSON (nothing added, nothing lost).

@@ -193,6 +193,9 @@ fn fit(method: &Method, train_set: &[Sample], labels: &[String]) -> anyhow::Resu
         Method::Crf(n) => base(ClassifierKind::Crf, *n),
     };
     let model = train(train_set, &cfg, &|_, _| {})?;
+    if let Some(choice) = &model.training.template_share {
+        eprintln!("{choice}");
+    }
     let map = model
         .labels
         .iter()

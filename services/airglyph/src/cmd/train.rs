@@ -257,5 +257,8 @@ fn model(args: &Args, cfg: &TrainConfig) -> anyhow::Result<Model> {
         }
     };
     bar.finish_and_clear();
+    if let Some(choice) = &model.training.template_share {
+        eprintln!("{choice}");
+    }
     Ok(model)
 }

@@ -99,6 +99,25 @@ pub struct TrainingInfo {
     pub seed: u64,
     /// Everything else (state counts, epochs, learning rate, …) as JSON.
     pub parameters: serde_json::Value,
+    /// The template member's share, when chosen by leaving people out, and why.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub template_share: Option<TemplateShare>,
+}
+
+/// The template member's share of the decision as `airglyph train` chose it by leaving
+/// people out, and what each share tried read of them.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TemplateShare {
+    /// The share kept (0: networks only).
+    pub share: f32,
+    /// People in the training data…
+    pub people: usize,
+    /// …and the folds they were left out in.
+    pub folds: usize,
+    /// Samples of the people left out…
+    pub tested: usize,
+    /// …and each share tried with how many of them it read right.
+    pub correct: Vec<(f32, usize)>,
 }
 
 /// One HMM per label.
@@ -457,13 +476,7 @@ impl Model {
                 // templates decide alone (their weight 1: no network is run).
                 let nets_share = templates.as_ref().map_or(1.0, |m| 1.0 - m.weight as f64);
                 if nets_share > 0.0 {
-                    let mut f = Vec::with_capacity(features.dim());
-                    feature_vector(t, features, &mut f);
-                    for n in nets {
-                        for (a, lp) in acc.iter_mut().zip(n.log_probs(&f)) {
-                            *a += (lp as f64).exp() / nets.len() as f64;
-                        }
-                    }
+                    acc = networks_posterior(nets, features, t, classes.len());
                 }
                 if let Some(m) = templates {
                     for (a, p) in acc.iter_mut().zip(m.posterior(t, classes.len())) {
@@ -485,6 +498,24 @@ impl Model {
         }
         out
     }
+}
+
+/// The mean posterior of an ensemble's networks for one trajectory, `classes` long.
+pub(crate) fn networks_posterior(
+    nets: &[Mlp],
+    features: &FeatureConfig,
+    t: &Trajectory,
+    classes: usize,
+) -> Vec<f64> {
+    let mut acc = vec![0.0f64; classes];
+    let mut f = Vec::with_capacity(features.dim());
+    feature_vector(t, features, &mut f);
+    for n in nets {
+        for (a, lp) in acc.iter_mut().zip(n.log_probs(&f)) {
+            *a += (lp as f64).exp() / nets.len() as f64;
+        }
+    }
+    acc
 }
 
 /// The seed's descriptor settings: a Bezier point count within bounds and a resting

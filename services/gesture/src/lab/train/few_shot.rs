@@ -42,6 +42,12 @@ pub struct FewShotConfig {
     pub weight_in_space: f32,
     /// Augmented samples each network sees an epoch at least (copies of every sample).
     pub min_epoch_samples: usize,
+    /// A vocabulary with depth and more samples a label than `max_samples`, drawn by
+    /// three people or more: the template member's shares tried by leaving each person
+    /// out (`share.rs`); the best is kept, 0 meaning networks only. All 0: not tried.
+    pub shares_by_person: [f32; 3],
+    /// Templates kept of each label when a share was chosen so.
+    pub templates_by_person: usize,
 }
 
 // Chosen on the user-dependent protocol's tune writers (`eval-gestures --per-writer 3,9
@@ -60,6 +66,8 @@ impl Default for FewShotConfig {
             direction_weight_in_space: 0.0,
             weight_in_space: 0.85,
             min_epoch_samples: 1024,
+            shares_by_person: [0.0, 0.5, 0.85],
+            templates_by_person: 50,
         }
     }
 }
@@ -103,6 +111,20 @@ impl FewShotConfig {
             0,
             1 << 24,
         )?;
+        for (i, w) in self.shares_by_person.iter().enumerate() {
+            finite_within(
+                &format!("few_shot.shares_by_person[{i}]"),
+                *w as f64,
+                0.0,
+                1.0,
+            )?;
+        }
+        within(
+            "few_shot.templates_by_person",
+            self.templates_by_person,
+            1,
+            MAX_TEMPLATES,
+        )?;
         Ok(())
     }
 }
@@ -129,6 +151,18 @@ pub enum FewShotPlan {
         samples: usize,
         /// …and the bar it is above.
         max_samples: usize,
+    },
+    /// Every label above the bar, in space, three people or more: networks, and a
+    /// template member if leaving each person out says so (`share.rs`).
+    ByPerson {
+        /// The label with the fewest samples…
+        fewest: String,
+        /// …its count…
+        samples: usize,
+        /// …and the bar it is above.
+        max_samples: usize,
+        /// People who drew the samples.
+        people: usize,
     },
     /// A label at or under the bar: a template member, and networks trained on copies.
     WithTemplates {
@@ -162,6 +196,20 @@ impl FewShotPlan {
             .iter()
             .min_by_key(|(l, c)| (**c, **l))
             .map_or((String::new(), 0), |(l, c)| (l.to_string(), *c));
+        let depth = samples.iter().any(Sample::has_depth);
+        let people = super::share::people(samples);
+        if n > cfg.max_samples
+            && depth
+            && people >= 3
+            && cfg.shares_by_person.iter().any(|&w| w > 0.0)
+        {
+            return FewShotPlan::ByPerson {
+                fewest,
+                samples: n,
+                max_samples: cfg.max_samples,
+                people,
+            };
+        }
         if n > cfg.max_samples {
             return FewShotPlan::NetworksOnly {
                 fewest,
@@ -173,7 +221,6 @@ impl FewShotPlan {
             .values()
             .map(|&c| c.min(cfg.templates_per_label))
             .sum();
-        let depth = samples.iter().any(Sample::has_depth);
         FewShotPlan::WithTemplates {
             fewest,
             samples: n,
@@ -188,7 +235,7 @@ impl FewShotPlan {
     /// Copies of each sample a network sees an epoch.
     pub fn copies(&self) -> usize {
         match self {
-            FewShotPlan::NetworksOnly { .. } => 1,
+            FewShotPlan::NetworksOnly { .. } | FewShotPlan::ByPerson { .. } => 1,
             FewShotPlan::WithTemplates { copies, .. } => *copies,
         }
     }
@@ -205,6 +252,18 @@ impl fmt::Display for FewShotPlan {
                 f,
                 "networks only: every label has more than {max_samples} samples (the fewest, {fewest:?}, {samples}), \
                  enough for the networks; a template member would cost time at every decision for nothing"
+            ),
+            FewShotPlan::ByPerson {
+                fewest,
+                samples,
+                max_samples,
+                people,
+            } => write!(
+                f,
+                "networks, and templates if they read people left out better: every label has more than \
+                 {max_samples} samples (the fewest, {fewest:?}, {samples}), and {people} people drew them in \
+                 space; whether DTW in space beats networks there depends on how alike they draw, so each \
+                 person is left out in turn to choose"
             ),
             FewShotPlan::WithTemplates {
                 fewest,

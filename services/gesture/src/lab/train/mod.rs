@@ -8,6 +8,7 @@ mod hmm;
 mod look_alike;
 mod mlp;
 mod reuse;
+mod share;
 mod spotting;
 mod verifier;
 
@@ -34,6 +35,7 @@ use crate::model::{
     MODEL_FORMAT, MODEL_VERSION,
 };
 use crate::tracker::TrackerConfig;
+use crate::trajectory::Trajectory;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -283,6 +285,7 @@ pub fn train(
     } else {
         Directions::Circle8
     };
+    let mut template_share = None;
     let classifier = match cfg.classifier {
         ClassifierKind::Hmm => {
             let codes = seed_codes(samples, cfg, directions);
@@ -334,62 +337,55 @@ pub fn train(
         ClassifierKind::Mlp => {
             let trajs: Vec<_> = samples.iter().map(|s| s.trajectory()).collect();
             let plan = FewShotPlan::new(samples, &labels, &cfg.few_shot);
-            // Copy `i` of sample `i % n` is augmented afresh (its own index seeds it); with
-            // one copy this is the training of every model before few-shot ones.
-            let n = trajs.len();
-            let copies = plan.copies();
-            let copy_class: Vec<usize> = (0..n * copies).map(|i| class_of[i % n]).collect();
             let fcfg = FeatureConfig {
                 depth,
                 ..cfg.features
             };
-            let tracker = TrackerConfig::default();
-            let total = (cfg.mlp.epochs * cfg.ensemble.max(1)) as u64;
-            let mut nets = Vec::new();
-            for e in 0..cfg.ensemble.max(1) {
-                let seed = cfg.seed.wrapping_mul(1000).wrapping_add(e as u64);
-                let strength = cfg.augment;
-                // `usize::MAX` asks for the copies the inputs are standardized on (and
-                // the first epoch learns from): the data as drawn, for 2-D data. With
-                // depth, augmented ones: a set drawn nearly in one plane has depth
-                // features that hardly vary as drawn, and turned out of the plane by
-                // augmentation they would stand thousands of deviations off.
-                let feats = |epoch: usize, i: usize| {
-                    let mut f = Vec::with_capacity(fcfg.dim());
-                    if (epoch == usize::MAX && !depth) || strength <= 0.0 {
-                        feature_vector(&trajs[i % n], &fcfg, &mut f);
-                    } else {
-                        let mut rng = ChaCha8Rng::seed_from_u64(
-                            seed ^ ((epoch as u64) << 32) ^ (i as u64).wrapping_mul(0x9E37_79B9),
-                        );
-                        let mut t = augment(&trajs[i % n], &mut rng, strength);
-                        if cfg.stream_augment > 0.0 && rng.gen::<f32>() < cfg.stream_augment {
-                            let scfg = training_stream(&mut rng);
-                            t = drawn_in_stream(&t, &scfg, &tracker, &mut rng);
-                        }
-                        feature_vector(&t, &fcfg, &mut f);
-                    }
-                    f
-                };
-                let mcfg = MlpTrainConfig { seed, ..cfg.mlp };
-                let net = Mlp::train(
-                    copy_class.len(),
-                    fcfg.dim(),
-                    &copy_class,
+            let ensemble = cfg.ensemble.max(1);
+            // Leaving people out trains an ensemble a fold before the model's.
+            let folds = match plan {
+                FewShotPlan::ByPerson { people, .. } => people.min(share::MAX_FOLDS),
+                _ => 0,
+            };
+            let total = ((folds + 1) * ensemble * cfg.mlp.epochs) as u64;
+            let data = Labelled {
+                samples,
+                trajs: &trajs,
+                class_of: &class_of,
+                classes: labels.len(),
+            };
+            let share = match plan {
+                FewShotPlan::ByPerson { .. } => Some(share::choose(&data, &fcfg, cfg, &|done| {
+                    progress(done, total)
+                })?),
+                _ => None,
+            };
+            let nets = train_networks(
+                &data,
+                plan.copies(),
+                &fcfg,
+                cfg,
+                (0..ensemble).map(|e| cfg.seed.wrapping_mul(1000).wrapping_add(e as u64)),
+                &|done| progress((folds * ensemble * cfg.mlp.epochs) as u64 + done, total),
+            )?;
+            let templates = match (&plan, &share) {
+                (FewShotPlan::WithTemplates { .. }, _) => Some(few_shot::template_member(
+                    samples,
+                    &class_of,
                     labels.len(),
-                    &mcfg,
-                    feats,
-                    |ep| progress((e * cfg.mlp.epochs + ep + 1) as u64, total),
-                );
-                net.validate().map_err(|why| TrainError::Diverged {
-                    network: e + 1,
-                    why,
-                })?;
-                nets.push(net);
-            }
-            let templates = matches!(plan, FewShotPlan::WithTemplates { .. }).then(|| {
-                few_shot::template_member(samples, &class_of, labels.len(), depth, &cfg.few_shot)
-            });
+                    depth,
+                    &cfg.few_shot,
+                )),
+                (_, Some(choice)) if choice.share > 0.0 => Some(share::template_member(
+                    samples,
+                    &class_of,
+                    labels.len(),
+                    choice.share,
+                    &cfg.few_shot,
+                )),
+                _ => None,
+            };
+            template_share = share;
             Classifier::Mlp {
                 features: fcfg,
                 classes: labels.clone(),
@@ -411,6 +407,7 @@ pub fn train(
             data: cfg.data.clone(),
             seed: cfg.seed,
             parameters,
+            template_share,
         },
         classifier,
         spotting: None,
@@ -419,6 +416,76 @@ pub fn train(
         model.spotting = Some(SpottingModel::train(samples, &model, cfg));
     }
     Ok(model)
+}
+
+/// Samples with what training reads of them: their trajectories and classes.
+struct Labelled<'a> {
+    samples: &'a [Sample],
+    trajs: &'a [Trajectory],
+    /// Index into the vocabulary's labels, a sample.
+    class_of: &'a [usize],
+    classes: usize,
+}
+
+/// One network for each of `seeds`, each on `copies` augmented copies of every
+/// trajectory an epoch; `progress` gets the epochs done over all of them.
+fn train_networks(
+    data: &Labelled,
+    copies: usize,
+    fcfg: &FeatureConfig,
+    cfg: &TrainConfig,
+    seeds: impl Iterator<Item = u64>,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<Vec<Mlp>, TrainError> {
+    let (trajs, class_of, classes) = (data.trajs, data.class_of, data.classes);
+    // Copy `i` of sample `i % n` is augmented afresh (its own index seeds it); with
+    // one copy this is the training of every model before few-shot ones.
+    let n = trajs.len();
+    let copy_class: Vec<usize> = (0..n * copies).map(|i| class_of[i % n]).collect();
+    let depth = fcfg.depth;
+    let tracker = TrackerConfig::default();
+    let strength = cfg.augment;
+    let mut nets = Vec::new();
+    for (e, seed) in seeds.enumerate() {
+        // `usize::MAX` asks for the copies the inputs are standardized on (and the
+        // first epoch learns from): the data as drawn, for 2-D data. With depth,
+        // augmented ones: a set drawn nearly in one plane has depth features that
+        // hardly vary as drawn, and turned out of the plane by augmentation they would
+        // stand thousands of deviations off.
+        let feats = |epoch: usize, i: usize| {
+            let mut f = Vec::with_capacity(fcfg.dim());
+            if (epoch == usize::MAX && !depth) || strength <= 0.0 {
+                feature_vector(&trajs[i % n], fcfg, &mut f);
+            } else {
+                let mut rng = ChaCha8Rng::seed_from_u64(
+                    seed ^ ((epoch as u64) << 32) ^ (i as u64).wrapping_mul(0x9E37_79B9),
+                );
+                let mut t = augment(&trajs[i % n], &mut rng, strength);
+                if cfg.stream_augment > 0.0 && rng.gen::<f32>() < cfg.stream_augment {
+                    let scfg = training_stream(&mut rng);
+                    t = drawn_in_stream(&t, &scfg, &tracker, &mut rng);
+                }
+                feature_vector(&t, fcfg, &mut f);
+            }
+            f
+        };
+        let mcfg = MlpTrainConfig { seed, ..cfg.mlp };
+        let net = Mlp::train(
+            copy_class.len(),
+            fcfg.dim(),
+            &copy_class,
+            classes,
+            &mcfg,
+            feats,
+            |ep| progress((e * cfg.mlp.epochs + ep + 1) as u64),
+        );
+        net.validate().map_err(|why| TrainError::Diverged {
+            network: e + 1,
+            why,
+        })?;
+        nets.push(net);
+    }
+    Ok(nets)
 }
 
 /// The seed's codes of every sample, with the directions `directions`.
