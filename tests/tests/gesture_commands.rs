@@ -340,6 +340,76 @@ fn train_says_it_adds_templates_for_a_few_samples_a_label() {
 }
 
 #[test]
+fn train_in_space_says_what_leaving_each_person_out_chose() {
+    // Three people, 12 samples a label: above the few-shot bar, so the templates' share
+    // is chosen on the people themselves.
+    let p = Isolated::new();
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("people.jsonl");
+    succeed(
+        p.command("airglyph")
+            .args(["synth-gestures", "--persons", "3", "--repetitions", "4"])
+            .arg("--out")
+            .arg(&data),
+    );
+    let model = tmp.path().join("people.json");
+    let out = succeed(
+        p.command("airglyph")
+            .args(["train", "--no-spotting", "--epochs", "2", "--data"])
+            .arg(&data)
+            .arg("--out")
+            .arg(&model),
+    );
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        said.contains("3 people drew them in space")
+            && said.contains("leaving the 3 people out (3 folds"),
+        "{said}"
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap();
+    let choice = &json["training"]["template_share"];
+    assert_eq!(choice["tested"], 3 * 14 * 4, "{choice}");
+    let share = choice["share"].as_f64().unwrap();
+    let templates = &json["classifier"]["templates"];
+    if share > 0.0 {
+        assert_eq!(templates["weight"].as_f64().unwrap(), share, "{templates}");
+    } else {
+        assert!(templates.is_null(), "{templates}");
+    }
+    // Asked not to: networks only, nothing left out.
+    let out = succeed(
+        p.command("airglyph")
+            .args(["train", "--no-spotting", "--epochs", "2"])
+            .args(["--few-shot", r#"{"shares_by_person":[0,0,0]}"#, "--data"])
+            .arg(&data)
+            .arg("--out")
+            .arg(&model),
+    );
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        said.contains("networks only") && !said.contains("leaving"),
+        "{said}"
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap();
+    assert!(json["training"]["template_share"].is_null());
+    assert!(json["classifier"]["templates"].is_null());
+    // A setting that is not one is named.
+    let err = fail(
+        p.command("airglyph")
+            .args(["train", "--few-shot", r#"{"shares":[0]}"#, "--data"])
+            .arg(&data)
+            .arg("--out")
+            .arg(&model),
+    );
+    assert!(
+        err.contains("--few-shot") && err.contains("\"shares\""),
+        "{err}"
+    );
+}
+
+#[test]
 fn a_gesture_in_space_is_spotted_whole_not_as_the_gestures_it_is_made_of() {
     // The zigzag towards the camera is a swipe then a push, and the right-push a swipe
     // with a push at its end: a model without a verifier once published the parts,

@@ -13,7 +13,7 @@ mod per_writer;
 use crate::interrupt::unless_interrupted;
 use airglyph_gesture::lab::{
     folds_by_subject, labels_of, load_many, train, ClassifierKind, Confusion, Dtw3dClassifier,
-    DtwClassifier, FewShotConfig, Sample, TrainConfig,
+    DtwClassifier, Sample, TrainConfig,
 };
 use airglyph_gesture::Model;
 use airglyph_ipc::options;
@@ -86,26 +86,12 @@ pub struct Args {
 /// The few-shot settings of `cfg` with the fields of the JSON object `over` replaced
 /// (an unknown field is an error).
 fn with_few_shot(cfg: &mut TrainConfig, over: Option<&str>) -> anyhow::Result<()> {
-    let Some(over) = over else { return Ok(()) };
-    let mut v = serde_json::to_value(cfg.few_shot)?;
-    let o: serde_json::Value =
-        serde_json::from_str(over).context("--few-shot: not a JSON object")?;
-    let (Some(fields), Some(obj)) = (v.as_object_mut(), o.as_object()) else {
-        bail!("--few-shot: not a JSON object");
-    };
-    for (k, x) in obj {
-        if !fields.contains_key(k) {
-            bail!(
-                "--few-shot: unknown field {k:?} (fields: {})",
-                fields.keys().cloned().collect::<Vec<_>>().join(", ")
-            );
-        }
-        fields.insert(k.clone(), x.clone());
+    if let Some(over) = over {
+        cfg.few_shot = cfg
+            .few_shot
+            .overridden(over)
+            .map_err(|e| anyhow::anyhow!("--few-shot: {e}"))?;
     }
-    cfg.few_shot = serde_json::from_value::<FewShotConfig>(v).context("--few-shot")?;
-    cfg.few_shot
-        .validate()
-        .map_err(|e| anyhow::anyhow!("--few-shot: {e}"))?;
     Ok(())
 }
 

@@ -106,6 +106,12 @@ pub struct Args {
     /// "0/O: 18 % of "0" read as "O""). 0 skips the check (as --recalibrate does).
     #[arg(long, default_value_t = LOOK_ALIKE_THRESHOLD, value_parser = options::within(0.0f64, 1.0), allow_negative_numbers = true)]
     pub look_alike: f64,
+    /// Settings of the template member (vocabularies of a few samples a label, and of
+    /// gestures in space drawn by three people or more), as a JSON object whose fields
+    /// replace the defaults, e.g. '{"shares_by_person":[0,0,0]}' to train networks only
+    /// without leaving people out (see `FewShotConfig`).
+    #[arg(long, value_name = "JSON")]
+    pub few_shot: Option<String>,
 }
 
 /// The training configuration the arguments describe (their ranges are checked as
@@ -138,6 +144,12 @@ pub fn config(args: &Args) -> anyhow::Result<TrainConfig> {
     cfg.spotting = !args.no_spotting;
     cfg.generator = Generator::parse(&args.generator)
         .with_context(|| format!("unknown generator {:?}", args.generator))?;
+    if let Some(over) = &args.few_shot {
+        cfg.few_shot = cfg
+            .few_shot
+            .overridden(over)
+            .map_err(|e| anyhow::anyhow!("--few-shot: {e}"))?;
+    }
     Ok(cfg)
 }
 

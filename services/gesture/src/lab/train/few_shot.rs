@@ -130,6 +130,30 @@ impl FewShotConfig {
 }
 
 impl FewShotConfig {
+    /// These settings with the fields of the JSON object `over` replaced (a command
+    /// line's `--few-shot '{"weight":0.7}'`); an unknown field or a value out of bounds
+    /// is an error naming it.
+    pub fn overridden(&self, over: &str) -> Result<Self, String> {
+        let mut v = serde_json::to_value(self).map_err(|e| e.to_string())?;
+        let o: serde_json::Value =
+            serde_json::from_str(over).map_err(|e| format!("not a JSON object: {e}"))?;
+        let (Some(fields), Some(obj)) = (v.as_object_mut(), o.as_object()) else {
+            return Err("not a JSON object".into());
+        };
+        for (k, x) in obj {
+            if !fields.contains_key(k) {
+                return Err(format!(
+                    "unknown field {k:?} (fields: {})",
+                    fields.keys().cloned().collect::<Vec<_>>().join(", ")
+                ));
+            }
+            fields.insert(k.clone(), x.clone());
+        }
+        let cfg: Self = serde_json::from_value(v).map_err(|e| e.to_string())?;
+        cfg.validate()?;
+        Ok(cfg)
+    }
+
     /// The member's direction weight and share, matching in space or in the plane.
     fn member(&self, depth: bool) -> (f32, f32) {
         if depth {
@@ -321,5 +345,30 @@ pub fn template_member(
         weight,
         templates,
         cache: Default::default(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn settings_are_overridden_field_by_field_and_checked() {
+        let d = FewShotConfig::default();
+        let o = d
+            .overridden(r#"{"shares_by_person":[0,0,0],"weight":0.6}"#)
+            .unwrap();
+        assert_eq!(o.shares_by_person, [0.0; 3]);
+        assert_eq!(o.weight, 0.6);
+        assert_eq!(o.templates_by_person, d.templates_by_person);
+        for (bad, says) in [
+            (r#"{"wieght":0.6}"#, "unknown field \"wieght\""),
+            (r#"{"shares_by_person":[0,2,0]}"#, "shares_by_person[1]"),
+            ("[1]", "not a JSON object"),
+            (r#"{"weight":"x"}"#, "invalid type"),
+        ] {
+            let e = d.overridden(bad).unwrap_err();
+            assert!(e.contains(says), "{bad}: {e}");
+        }
     }
 }
