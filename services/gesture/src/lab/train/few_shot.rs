@@ -221,7 +221,7 @@ impl FewShotPlan {
             .min_by_key(|(l, c)| (**c, **l))
             .map_or((String::new(), 0), |(l, c)| (l.to_string(), *c));
         let depth = samples.iter().any(Sample::has_depth);
-        let people = super::share::people(samples);
+        let people = people(samples);
         if n > cfg.max_samples
             && depth
             && people >= 3
@@ -309,6 +309,18 @@ impl fmt::Display for FewShotPlan {
     }
 }
 
+/// People (non-empty subject names) in `samples`.
+fn people(samples: &[Sample]) -> usize {
+    let mut names: Vec<&str> = samples
+        .iter()
+        .map(|s| s.subject.as_str())
+        .filter(|s| !s.is_empty())
+        .collect();
+    names.sort_unstable();
+    names.dedup();
+    names.len()
+}
+
 /// The template member for these samples (`class_of[i]` the class of sample `i`):
 /// of each class at most [`FewShotConfig::templates_per_label`] samples, spread evenly
 /// over its samples in their order; matching in space when `depth` (the classifier
@@ -370,5 +382,16 @@ mod tests {
             let e = d.overridden(bad).unwrap_err();
             assert!(e.contains(says), "{bad}: {e}");
         }
+    }
+
+    #[test]
+    fn people_are_named_subjects() {
+        let s = |subject: &str| Sample {
+            label: "a".into(),
+            subject: subject.into(),
+            strokes: vec![vec![[0.0, 0.0], [1.0, 1.0]]],
+            depth: None,
+        };
+        assert_eq!(people(&[s("p1"), s("p2"), s("p1"), s("")]), 2);
     }
 }

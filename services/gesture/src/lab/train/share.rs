@@ -49,18 +49,6 @@ impl fmt::Display for TemplateShare {
     }
 }
 
-/// People (non-empty subject names) in `samples`.
-pub fn people(samples: &[Sample]) -> usize {
-    let mut names: Vec<&str> = samples
-        .iter()
-        .map(|s| s.subject.as_str())
-        .filter(|s| !s.is_empty())
-        .collect();
-    names.sort_unstable();
-    names.dedup();
-    names.len()
-}
-
 /// Leaves each fold of people out in turn (samples without a subject always train) and
 /// keeps the share of [`FewShotConfig::shares_by_person`] that reads them best.
 pub(super) fn choose(
@@ -168,16 +156,5 @@ mod tests {
         assert_eq!(best_share(&[(0.0, 95), (0.5, 95), (0.85, 96)]), 0.85);
         assert_eq!(best_share(&[(0.85, 95), (0.0, 95), (0.5, 95)]), 0.0);
         assert_eq!(best_share(&[]), 0.0);
-    }
-
-    #[test]
-    fn people_are_named_subjects() {
-        let s = |subject: &str| Sample {
-            label: "a".into(),
-            subject: subject.into(),
-            strokes: vec![vec![[0.0, 0.0], [1.0, 1.0]]],
-            depth: None,
-        };
-        assert_eq!(people(&[s("p1"), s("p2"), s("p1"), s("")]), 2);
     }
 }
