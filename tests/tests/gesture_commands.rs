@@ -200,6 +200,7 @@ fn eval_gestures_per_writer_trains_on_each_writers_own_samples() {
     let tmp = tempfile::tempdir().unwrap();
     let data = tmp.path().join("mine.jsonl");
     write_one_writer(&data, "0123456789", 6);
+    let plots = tmp.path().join("plots");
     let out = succeed(
         p.command("airglyph")
             .args([
@@ -212,7 +213,9 @@ fn eval_gestures_per_writer_trains_on_each_writers_own_samples() {
             ])
             .arg(shipped_model())
             .arg("--data")
-            .arg(&data),
+            .arg(&data)
+            .arg("--plots")
+            .arg(&plots),
     );
     let lines = json_lines(&out.stdout);
     assert_eq!(lines.len(), 2, "{lines:?}");
@@ -225,10 +228,19 @@ fn eval_gestures_per_writer_trains_on_each_writers_own_samples() {
         assert_eq!(r["samples"], 30, "{r}");
         let acc = r["accuracy"].as_f64().unwrap();
         assert!(acc >= 0.9, "{r}");
+        // A recall for each of the writer's ten labels, as cross-validation gives.
+        let recall = r["per_class_recall"].as_object().unwrap();
+        assert_eq!(recall.len(), 10, "{r}");
+        assert!(recall.values().all(|v| v.is_f64()), "{r}");
     }
     // The default says what it chose for three samples a label.
     let plan = lines[0]["plan"].as_str().unwrap();
     assert!(plan.contains("templates"), "{plan}");
+    // --plots draws each method's confusion matrix here too (it was ignored).
+    for name in ["mlp", "dtw"] {
+        let png = plots.join(format!("confusion-{name}-per-writer-3.png"));
+        assert!(png.is_file(), "no {}", png.display());
+    }
 }
 
 #[test]

@@ -82,6 +82,10 @@ pub fn png(
     airglyph_core::file::write_whole(path, encoded.into_inner()).map_err(|e| fail(e.to_string()))
 }
 
+/// The size of a confusion matrix's labels, and the most a character of them takes.
+const LABEL_FONT_PX: u32 = 13;
+const LABEL_CHAR_PX: u32 = 8;
+
 /// Draws a confusion matrix `m[truth][predicted]` over `labels` as a PNG heat map, each
 /// row normalized (white to dark blue, by the square root so small confusions show),
 /// with the counts written in the cells when `counts`.
@@ -94,13 +98,25 @@ pub fn confusion(
 ) -> Result<(), PlotError> {
     let n = labels.len().max(1);
     let cell = if n <= 12 { 56 } else { 24 };
-    let size = (cell * n as u32 + 140, cell * n as u32 + 150);
+    // Labels wider than a cell (a vocabulary of words, not of symbols) would run into
+    // each other under the columns: they are written downwards, and the margins fit them.
+    let longest = labels.iter().map(|l| l.chars().count()).max().unwrap_or(0) as u32;
+    let label_px = LABEL_CHAR_PX * longest + 12;
+    let upright = label_px > cell;
+    let (x_area, y_area) = (
+        if upright { label_px + 20 } else { 40 },
+        label_px.max(58) + 12,
+    );
+    let size = (
+        cell * n as u32 + y_area + 70,
+        cell * n as u32 + x_area + 110,
+    );
     png(path, size, |root| {
         let mut chart = ChartBuilder::on(root)
             .caption(title, ("sans-serif", 16))
             .margin(10)
-            .x_label_area_size(40)
-            .y_label_area_size(70)
+            .x_label_area_size(x_area)
+            .y_label_area_size(y_area)
             .build_cartesian_2d((0..n - 1).into_segmented(), (0..n - 1).into_segmented())?;
         let (lx, ly) = (labels.to_vec(), labels.to_vec());
         chart
@@ -108,10 +124,14 @@ pub fn confusion(
             .disable_mesh()
             .x_labels(n)
             .y_labels(n)
+            .x_label_style(("sans-serif", LABEL_FONT_PX))
+            .y_label_style(("sans-serif", LABEL_FONT_PX))
             .x_desc("predicted")
             .y_desc("true")
+            // (Upright labels are drawn below; asking plotters for no labels at all
+            // loops forever in its key points.)
             .x_label_formatter(&move |v| match v {
-                SegmentValue::CenterOf(i) => lx.get(*i).cloned().unwrap_or_default(),
+                SegmentValue::CenterOf(i) if !upright => lx.get(*i).cloned().unwrap_or_default(),
                 _ => String::new(),
             })
             .y_label_formatter(&move |v| match v {
@@ -152,6 +172,21 @@ pub fn confusion(
         }
         chart.draw_series(rects)?;
         chart.draw_series(texts)?;
+        if upright {
+            // Under each column, reading downwards from just below the matrix.
+            let style = ("sans-serif", LABEL_FONT_PX)
+                .into_font()
+                .transform(FontTransform::Rotate90);
+            for (j, label) in labels.iter().enumerate() {
+                let (x, y) =
+                    chart.backend_coord(&(SegmentValue::CenterOf(j), SegmentValue::Exact(0)));
+                root.draw(&Text::new(
+                    label.clone(),
+                    (x + LABEL_FONT_PX as i32 / 2, y + 9),
+                    style.clone(),
+                ))?;
+            }
+        }
         Ok(())
     })
 }
@@ -173,6 +208,43 @@ mod tests {
         let inked = picture.pixels().filter(|p| p.0[0] < 128).count();
         // Nine glyphs at 30 px ink a few hundred pixels; a missing font none at all.
         assert!(inked > 200, "{inked} dark pixels");
+    }
+
+    /// Rows below the matrix's last cell with grey ink (text) in them.
+    fn rows_inked_below_the_matrix(path: &Path) -> usize {
+        let picture = image::open(path).unwrap().to_rgb8();
+        let row_has = |y: u32, f: &dyn Fn(&image::Rgb<u8>) -> bool| {
+            (0..picture.width()).any(|x| f(picture.get_pixel(x, y)))
+        };
+        let blue = |p: &image::Rgb<u8>| p.0[2] == 255 && p.0[0] < 100;
+        let grey = |p: &image::Rgb<u8>| {
+            let (lo, hi) = (p.0.iter().min().unwrap(), p.0.iter().max().unwrap());
+            *hi < 160 && hi - lo < 30
+        };
+        let bottom = (0..picture.height()).rfind(|&y| row_has(y, &blue)).unwrap();
+        (bottom + 3..picture.height())
+            .filter(|&y| row_has(y, &grey))
+            .count()
+    }
+
+    #[test]
+    fn labels_wider_than_a_column_are_written_upright_and_whole() {
+        let dir = tempfile::tempdir().unwrap();
+        let m = vec![vec![3, 1, 0], vec![0, 4, 0], vec![1, 0, 3]];
+        let words: Vec<String> = ["circle-side", "zigzag-deep", "helix-out"]
+            .map(String::from)
+            .to_vec();
+        let path = dir.path().join("words.png");
+        confusion(&path, "words", &words, &m, true).unwrap();
+        // Eleven characters written downwards: ink some 70 rows tall, and the axis's
+        // name (written across, the labels ran into each other in one line's height).
+        let rows = rows_inked_below_the_matrix(&path);
+        assert!(rows > 60, "{rows} rows");
+        let symbols: Vec<String> = ["0", "O", "Q"].map(String::from).to_vec();
+        let path = dir.path().join("symbols.png");
+        confusion(&path, "symbols", &symbols, &m, true).unwrap();
+        let rows = rows_inked_below_the_matrix(&path);
+        assert!(rows < 35, "{rows} rows");
     }
 
     #[test]

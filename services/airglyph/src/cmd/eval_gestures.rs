@@ -420,12 +420,7 @@ fn evaluate(args: &Args) -> anyhow::Result<Vec<Scored>> {
 fn print_and_plot(args: &Args, results: &[Scored]) -> anyhow::Result<()> {
     for (name, file, n, out) in results {
         let ms = 1e3 * out.seconds / out.decisions.max(1) as f64;
-        let recall: serde_json::Map<String, serde_json::Value> = out
-            .conf
-            .recall()
-            .into_iter()
-            .map(|(l, r)| (l, r.map_or(serde_json::Value::Null, |v| json!(v))))
-            .collect();
+        let recall = recall_json(&out.conf);
         if args.json {
             println!(
                 "{}",
@@ -462,13 +457,34 @@ fn print_and_plot(args: &Args, results: &[Scored]) -> anyhow::Result<()> {
     }
     // The pictures after every figure: one that fails loses none of them.
     if let Some(dir) = &args.plots {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("{}: cannot create plot directory", dir.display()))?;
-        for (_, file, _, out) in results {
-            let title = format!("{file}: {:.2} %", 100.0 * out.conf.accuracy());
-            out.conf
-                .plot(&dir.join(format!("confusion-{file}.png")), &title)?;
-        }
+        plot_confusions(
+            dir,
+            results
+                .iter()
+                .map(|(_, file, _, out)| (file.as_str(), &out.conf)),
+        )?;
+    }
+    Ok(())
+}
+
+/// Each class's recall, by label (null for a class never tested).
+fn recall_json(conf: &Confusion) -> serde_json::Map<String, serde_json::Value> {
+    conf.recall()
+        .into_iter()
+        .map(|(l, r)| (l, r.map_or(serde_json::Value::Null, |v| json!(v))))
+        .collect()
+}
+
+/// Writes `confusion-<name>.png` in `dir` for each named confusion matrix.
+fn plot_confusions<'a>(
+    dir: &std::path::Path,
+    confusions: impl IntoIterator<Item = (&'a str, &'a Confusion)>,
+) -> anyhow::Result<()> {
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("{}: cannot create plot directory", dir.display()))?;
+    for (name, conf) in confusions {
+        let title = format!("{name}: {:.2} %", 100.0 * conf.accuracy());
+        conf.plot(&dir.join(format!("confusion-{name}.png")), &title)?;
     }
     Ok(())
 }

@@ -2,7 +2,9 @@
 //! writers of pen data. Every method is trained per writer and draw on that writer's K
 //! samples a label and tested on the writer's other samples; one result a K and method.
 
-use super::{fit, model_config, with_few_shot, Args, Method, Predictor};
+use super::{
+    fit, model_config, plot_confusions, recall_json, with_few_shot, Args, Method, Predictor,
+};
 use crate::interrupt::unless_interrupted;
 use airglyph_gesture::lab::{
     few_shot_plan, labels_of, load_many, writer_splits, Confusion, WriterGroup, WriterSplit,
@@ -19,6 +21,8 @@ use std::time::Instant;
 struct Scored {
     k: usize,
     method: String,
+    /// The name its confusion matrix is plotted under.
+    file: String,
     conf: Confusion,
     /// Correct and tested, per writer (over its draws).
     by_writer: BTreeMap<String, (u64, u64)>,
@@ -44,6 +48,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     })??;
     for r in &results {
         print(&args, r);
+    }
+    // The pictures after every figure: one that fails loses none of them.
+    if let Some(dir) = &args.plots {
+        plot_confusions(dir, results.iter().map(|r| (r.file.as_str(), &r.conf)))?;
     }
     Ok(())
 }
@@ -97,6 +105,7 @@ fn evaluate(args: &Args) -> anyhow::Result<Vec<Scored>> {
             let mut r = Scored {
                 k,
                 method: m.name(),
+                file: format!("{}-per-writer-{k}", m.file_name()),
                 conf: Confusion::new(labels.clone()),
                 by_writer: BTreeMap::new(),
                 decisions: 0,
@@ -167,6 +176,7 @@ fn print(args: &Args, r: &Scored) {
                 "mean_writer_accuracy": mean,
                 "worst_writer": worst.map(|(w, &c)| json!({"subject": w, "accuracy": acc(c)})),
                 "ms_per_decision": ms,
+                "per_class_recall": recall_json(&r.conf),
                 "plan": r.plan,
             })
         );
